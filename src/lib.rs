@@ -1,0 +1,2 @@
+//! fleetdyn: heavy-truck fleet logs to physics.
+#![deny(missing_docs)]
