@@ -1,2 +1,19 @@
 //! fleetdyn: heavy-truck fleet logs to physics.
+//!
+//! Inputs (MCAP, Parquet) become one canonical drive-log table ([`ingest`], [`schema`]), which is
+//! resampled to travelled distance ([`signal::distance`]), filtered without phase lag
+//! ([`signal`], [`road`]) and written as Parquet with units and provenance ([`io`]).
+//! The binary `fleetdyn` is a thin shell over this library.
 #![deny(missing_docs)]
+
+pub mod ingest;
+pub mod io;
+pub mod model;
+pub mod pipeline;
+pub mod report;
+pub mod road;
+pub mod schema;
+pub mod signal;
+pub mod table;
+pub mod time_fmt;
+pub mod units;

@@ -1,0 +1,234 @@
+//! A channel: one signal as its source recorded it, at its own times, before alignment.
+//!
+//! Checks done here, on source rows (so errors name the row a user can find in the file):
+//! exact duplicates (same time, same value) are dropped and counted; the same time with another
+//! value is an error; time going backwards is an error unless [`TimeRepair::Sort`]; values outside
+//! the schema's physical range are rejected.
+
+use super::IngestError;
+use crate::schema::Interpolation;
+use std::path::Path;
+
+/// What to do when a channel's time goes backwards.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TimeRepair {
+    /// Reject the drive (default): a logger clock jump is a fault worth seeing.
+    #[default]
+    Error,
+    /// Sort samples by time (stable), then apply the duplicate rules.
+    Sort,
+}
+
+/// One signal at its own sample times, already converted to SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// Column name (canonical or pass-through).
+    pub column: String,
+    /// Unit of `values`.
+    pub unit: String,
+    /// How to carry the signal between samples.
+    pub interpolation: Interpolation,
+    /// Sample times, ns since the Unix epoch.
+    pub t_ns: Vec<i64>,
+    /// Values; NaN where the source had none.
+    pub values: Vec<f64>,
+    /// Source row of each sample (Parquet row, or message index within the MCAP topic).
+    pub rows: Vec<u64>,
+}
+
+impl Channel {
+    /// An empty channel.
+    pub fn new(column: &str, unit: &str, interpolation: Interpolation) -> Self {
+        Self {
+            column: column.into(),
+            unit: unit.into(),
+            interpolation,
+            t_ns: Vec::new(),
+            values: Vec::new(),
+            rows: Vec::new(),
+        }
+    }
+
+    /// Appends one sample.
+    #[inline]
+    pub fn push(&mut self, t_ns: i64, value: f64, row: u64) {
+        self.t_ns.push(t_ns);
+        self.values.push(value);
+        self.rows.push(row);
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_ns.len()
+    }
+
+    /// True without samples.
+    pub fn is_empty(&self) -> bool {
+        self.t_ns.is_empty()
+    }
+
+    /// Median sample period, ns (0 with fewer than two samples).
+    pub fn median_period_ns(&self) -> i64 {
+        let mut d: Vec<i64> = self.t_ns.windows(2).map(|w| w[1] - w[0]).collect();
+        if d.is_empty() {
+            return 0;
+        }
+        let mid = d.len() / 2;
+        *d.select_nth_unstable(mid).1
+    }
+
+    /// Enforces time order and drops exact duplicates; returns how many were dropped.
+    ///
+    /// # Errors
+    /// [`IngestError::NonMonotonicTime`] (with [`TimeRepair::Error`]) and
+    /// [`IngestError::DuplicateTimestamp`].
+    pub fn order_and_dedup(&mut self, file: &Path, repair: TimeRepair) -> Result<u64, IngestError> {
+        if repair == TimeRepair::Sort && self.t_ns.windows(2).any(|w| w[1] < w[0]) {
+            let mut idx: Vec<usize> = (0..self.len()).collect();
+            idx.sort_by_key(|&i| self.t_ns[i]);
+            self.t_ns = idx.iter().map(|&i| self.t_ns[i]).collect();
+            self.values = idx.iter().map(|&i| self.values[i]).collect();
+            self.rows = idx.iter().map(|&i| self.rows[i]).collect();
+        }
+        let mut keep = 0usize;
+        let mut dropped = 0u64;
+        for i in 0..self.len() {
+            if keep > 0 {
+                let (tp, vp) = (self.t_ns[keep - 1], self.values[keep - 1]);
+                let (t, v) = (self.t_ns[i], self.values[i]);
+                if t < tp {
+                    return Err(IngestError::NonMonotonicTime {
+                        file: file.into(),
+                        column: self.column.clone(),
+                        row: self.rows[i],
+                        time_ns: t,
+                        previous_ns: tp,
+                    });
+                }
+                if t == tp {
+                    if v == vp || (v.is_nan() && vp.is_nan()) {
+                        dropped += 1;
+                        continue;
+                    }
+                    return Err(IngestError::DuplicateTimestamp {
+                        file: file.into(),
+                        column: self.column.clone(),
+                        row: self.rows[i],
+                        time_ns: t,
+                        value: v,
+                        previous: vp,
+                    });
+                }
+            }
+            self.t_ns[keep] = self.t_ns[i];
+            self.values[keep] = self.values[i];
+            self.rows[keep] = self.rows[i];
+            keep += 1;
+        }
+        self.t_ns.truncate(keep);
+        self.values.truncate(keep);
+        self.rows.truncate(keep);
+        Ok(dropped)
+    }
+
+    /// Rejects the first finite value outside `[min, max]` (NaN is "missing", not out of range).
+    ///
+    /// # Errors
+    /// [`IngestError::OutOfRange`] naming the source row, time and value.
+    pub fn check_range(&self, file: &Path, min: f64, max: f64) -> Result<(), IngestError> {
+        check_range(
+            file,
+            &self.column,
+            &self.unit,
+            &self.t_ns,
+            &self.values,
+            Some(&self.rows),
+            min,
+            max,
+        )
+    }
+}
+
+/// Range check over parallel slices; `rows` maps positions to source rows (identity if `None`).
+///
+/// # Errors
+/// [`IngestError::OutOfRange`] for the first offending value.
+#[allow(clippy::too_many_arguments)]
+pub fn check_range(
+    file: &Path,
+    column: &str,
+    unit: &str,
+    t_ns: &[i64],
+    values: &[f64],
+    rows: Option<&[u64]>,
+    min: f64,
+    max: f64,
+) -> Result<(), IngestError> {
+    if let Some(i) = values
+        .iter()
+        .position(|v| !v.is_nan() && !(min..=max).contains(v))
+    {
+        return Err(IngestError::OutOfRange {
+            file: file.into(),
+            column: column.into(),
+            row: rows.map_or(i as u64, |r| r[i]),
+            time_ns: t_ns[i],
+            value: values[i],
+            unit: unit.into(),
+            min,
+            max,
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ch(t: &[i64], v: &[f64]) -> Channel {
+        let mut c = Channel::new("vehicle_speed", "m/s", Interpolation::Linear);
+        for (i, (&t, &v)) in t.iter().zip(v).enumerate() {
+            c.push(t, v, i as u64 + 10);
+        }
+        c
+    }
+
+    #[test]
+    fn exact_duplicates_are_dropped_and_counted() {
+        let mut c = ch(&[0, 1, 1, 2, 2, 3], &[0.0, 1.0, 1.0, 2.0, 2.0, 3.0]);
+        assert_eq!(
+            c.order_and_dedup(Path::new("f"), TimeRepair::Error)
+                .unwrap(),
+            2
+        );
+        assert_eq!(c.t_ns, [0, 1, 2, 3]);
+        assert_eq!(c.rows, [10, 11, 13, 15]);
+    }
+
+    #[test]
+    fn conflicting_duplicate_and_backwards_time_name_the_row() {
+        let mut c = ch(&[0, 1, 1], &[0.0, 1.0, 1.5]);
+        match c.order_and_dedup(Path::new("f"), TimeRepair::Error) {
+            Err(IngestError::DuplicateTimestamp { row, .. }) => assert_eq!(row, 12),
+            other => panic!("{other:?}"),
+        }
+        let mut c = ch(&[0, 5, 3], &[0.0, 1.0, 2.0]);
+        match c.order_and_dedup(Path::new("f"), TimeRepair::Error) {
+            Err(IngestError::NonMonotonicTime {
+                row,
+                time_ns,
+                previous_ns,
+                ..
+            }) => {
+                assert_eq!((row, time_ns, previous_ns), (12, 3, 5))
+            }
+            other => panic!("{other:?}"),
+        }
+        let mut c = ch(&[0, 5, 3], &[0.0, 1.0, 2.0]);
+        c.order_and_dedup(Path::new("f"), TimeRepair::Sort).unwrap();
+        assert_eq!(c.t_ns, [0, 3, 5]);
+        assert_eq!(c.values, [0.0, 2.0, 1.0]);
+    }
+}

@@ -1,0 +1,196 @@
+//! Ingest errors: each names the file, and where it applies the column, row, time and value.
+
+use crate::time_fmt::rfc3339_ns;
+use crate::units::UnitError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+fn t(ns: &i64) -> String {
+    rfc3339_ns(*ns)
+}
+
+/// Why a file could not become a canonical drive log.
+#[derive(Debug, Error)]
+pub enum IngestError {
+    /// The file could not be opened or read.
+    #[error("{file}: {source}")]
+    Io {
+        /// Input file.
+        file: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Neither Parquet (`PAR1`) nor MCAP magic at the start of the file.
+    #[error("{file}: not a Parquet or MCAP file (first bytes {head})")]
+    UnknownFormat {
+        /// Input file.
+        file: PathBuf,
+        /// First bytes, hex.
+        head: String,
+    },
+    /// The Parquet reader rejected the file (truncated, corrupt, not Parquet).
+    #[error("{file}: invalid Parquet: {source}")]
+    Parquet {
+        /// Input file.
+        file: PathBuf,
+        /// Cause.
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+    /// The MCAP reader rejected the file (bad magic, truncated record or chunk, CRC mismatch).
+    #[error("{file}: invalid MCAP after {messages} messages: {source}")]
+    Mcap {
+        /// Input file.
+        file: PathBuf,
+        /// Messages read before the error.
+        messages: u64,
+        /// Cause.
+        #[source]
+        source: mcap::McapError,
+    },
+    /// A JSON message that does not parse.
+    #[error(
+        "{file}: topic {topic}, message {index} at {}: bad JSON: {source}",
+        t(time_ns)
+    )]
+    Json {
+        /// Input file.
+        file: PathBuf,
+        /// MCAP topic.
+        topic: String,
+        /// Message index within the topic.
+        index: u64,
+        /// Message log time.
+        time_ns: i64,
+        /// Cause.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A mapping file that cannot be used.
+    #[error("mapping {mapping}: {message}")]
+    Mapping {
+        /// Mapping file (or `<embedded:name>`).
+        mapping: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A unit the mapping names that fleetdyn cannot convert.
+    #[error("mapping {mapping}: column {column}: {source}")]
+    Unit {
+        /// Mapping file.
+        mapping: String,
+        /// Canonical column.
+        column: String,
+        /// Cause.
+        #[source]
+        source: UnitError,
+    },
+    /// A column required by a requested stage is absent.
+    #[error("{file}: missing column {column} (source {source_name}), needed by stage {stage}")]
+    MissingColumn {
+        /// Input file.
+        file: PathBuf,
+        /// Canonical column.
+        column: String,
+        /// Where the mapping looked for it.
+        source_name: String,
+        /// Stage that needs it.
+        stage: String,
+    },
+    /// A column of a type that cannot hold the signal.
+    #[error("{file}: column {column} has type {found}, expected {expected}")]
+    WrongDtype {
+        /// Input file.
+        file: PathBuf,
+        /// Source column or field.
+        column: String,
+        /// Type found.
+        found: String,
+        /// Type expected.
+        expected: String,
+    },
+    /// Time goes backwards.
+    #[error(
+        "{file}: {column}: time goes backwards at row {row}: {} after {}",
+        t(time_ns),
+        t(previous_ns)
+    )]
+    NonMonotonicTime {
+        /// Input file.
+        file: PathBuf,
+        /// Column / channel.
+        column: String,
+        /// Source row (Parquet row, or message index within the MCAP topic).
+        row: u64,
+        /// Offending time.
+        time_ns: i64,
+        /// Time of the row before.
+        previous_ns: i64,
+    },
+    /// Two samples at the same time with different values.
+    #[error("{file}: {column}: duplicate timestamp {} at row {row} with a different value ({value} vs {previous})", t(time_ns))]
+    DuplicateTimestamp {
+        /// Input file.
+        file: PathBuf,
+        /// Column / channel.
+        column: String,
+        /// Source row.
+        row: u64,
+        /// The repeated time.
+        time_ns: i64,
+        /// Value at this row (SI).
+        value: f64,
+        /// Value at the row before (SI).
+        previous: f64,
+    },
+    /// A physically impossible value.
+    #[error(
+        "{file}: {column} = {value} {unit} at row {row} ({}) is outside [{min}, {max}]",
+        t(time_ns)
+    )]
+    OutOfRange {
+        /// Input file.
+        file: PathBuf,
+        /// Canonical column.
+        column: String,
+        /// Source row.
+        row: u64,
+        /// Sample time.
+        time_ns: i64,
+        /// Value (SI).
+        value: f64,
+        /// Unit of value, min and max.
+        unit: String,
+        /// Smallest allowed.
+        min: f64,
+        /// Largest allowed.
+        max: f64,
+    },
+    /// A run of missing values longer than the configured limit in a required column.
+    #[error("{file}: {column}: {samples} missing values ({seconds:.2} s) from row {row} ({}), limit {limit_s} s", t(time_ns))]
+    NanRun {
+        /// Input file.
+        file: PathBuf,
+        /// Canonical column.
+        column: String,
+        /// First row of the run (row of the aligned table).
+        row: u64,
+        /// Time of that row.
+        time_ns: i64,
+        /// Length of the run in rows.
+        samples: u64,
+        /// Length in seconds.
+        seconds: f64,
+        /// Configured limit.
+        limit_s: f64,
+    },
+    /// Nothing usable in the file.
+    #[error("{file}: {what}")]
+    NoData {
+        /// Input file.
+        file: PathBuf,
+        /// What is missing.
+        what: String,
+    },
+}

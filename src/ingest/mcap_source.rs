@@ -1,0 +1,141 @@
+//! MCAP sources: JSON-encoded messages, one topic per CAN message group at its own rate.
+//!
+//! Messages are streamed with `mcap::io::MessageReader` (memory scales with the largest chunk,
+//! not the file); every chunk's CRC is checked before its messages are used, as are the data and
+//! summary section CRCs, so a corrupt file fails the drive instead of yielding wrong samples.
+//! Only mapped topics are decoded. A sample's time is the message's `log_time` (ns, epoch).
+//! A mapped field that is absent or `null` in a message becomes NaN (counted downstream); a
+//! field of another JSON type (string, object) is an error naming the topic and message.
+
+use super::channel::Channel;
+use super::mapping::Mapping;
+use super::IngestError;
+use crate::schema::drive_log;
+use mcap::sans_io::LinearReaderOptions;
+use serde_json::Value;
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+/// Largest record we accept (bounds memory on corrupt length fields), bytes.
+const RECORD_LIMIT_BYTES: usize = 512 << 20;
+
+/// What an MCAP file yielded.
+#[derive(Debug)]
+pub struct McapRead {
+    /// One channel per mapped signal.
+    pub channels: Vec<Channel>,
+    /// Messages read (all topics).
+    pub messages: u64,
+    /// Topics present but not mapped.
+    pub ignored: Vec<String>,
+}
+
+fn lookup<'a>(v: &'a Value, path: &[String]) -> Option<&'a Value> {
+    path.iter().try_fold(v, |v, k| v.get(k))
+}
+
+/// Reads the mapped signals of an MCAP file.
+///
+/// # Errors
+/// [`IngestError::Mcap`] for bad magic, truncated records/chunks and CRC mismatches;
+/// [`IngestError::Json`] and [`IngestError::WrongDtype`] for undecodable messages.
+pub fn read_mcap(path: &Path, mapping: &Mapping) -> Result<McapRead, IngestError> {
+    let file = File::open(path).map_err(|e| IngestError::Io {
+        file: path.into(),
+        source: e,
+    })?;
+    let resolved = mapping.resolve()?;
+    let canonical = drive_log();
+    let mut channels: Vec<Channel> = resolved
+        .iter()
+        .map(|r| {
+            let spec = canonical.column(&r.column).expect("resolved");
+            Channel::new(&r.column, &spec.unit, spec.interpolation)
+        })
+        .collect();
+    // topic -> indices of the signals it carries
+    let mut by_topic: HashMap<&str, Vec<usize>> = HashMap::new();
+    for (i, r) in resolved.iter().enumerate() {
+        by_topic.entry(r.source.as_str()).or_default().push(i);
+    }
+    let options = LinearReaderOptions::default()
+        .with_prevalidate_chunk_crcs(true)
+        .with_validate_data_section_crc(true)
+        .with_validate_summary_section_crc(true)
+        .with_record_length_limit(RECORD_LIMIT_BYTES);
+    let reader = mcap::io::MessageReader::new_with_options(BufReader::new(file), options);
+    let mut messages = 0u64;
+    let mut per_topic: HashMap<String, u64> = HashMap::new();
+    let mut ignored: Vec<String> = Vec::new();
+    for msg in reader {
+        let msg = msg.map_err(|e| IngestError::Mcap {
+            file: path.into(),
+            messages,
+            source: e,
+        })?;
+        messages += 1;
+        let topic = msg.channel.topic.as_str();
+        let index = {
+            let n = per_topic.entry(topic.to_string()).or_insert(0);
+            *n += 1;
+            *n - 1
+        };
+        let Some(targets) = by_topic.get(topic) else {
+            if !ignored.iter().any(|t| t == topic) {
+                ignored.push(topic.to_string());
+            }
+            continue;
+        };
+        let time_ns = i64::try_from(msg.log_time).unwrap_or(i64::MAX);
+        if msg.channel.message_encoding != "json" {
+            return Err(IngestError::WrongDtype {
+                file: path.into(),
+                column: topic.into(),
+                found: format!("message encoding {:?}", msg.channel.message_encoding),
+                expected: "json".into(),
+            });
+        }
+        let value: Value = serde_json::from_slice(&msg.data).map_err(|e| IngestError::Json {
+            file: path.into(),
+            topic: topic.into(),
+            index,
+            time_ns,
+            source: e,
+        })?;
+        for &k in targets {
+            let r = &resolved[k];
+            let x = match lookup(&value, &r.field_path) {
+                None | Some(Value::Null) => f64::NAN,
+                Some(Value::Number(n)) => n.as_f64().unwrap_or(f64::NAN),
+                Some(Value::Bool(b)) => f64::from(u8::from(*b)),
+                Some(other) => {
+                    return Err(IngestError::WrongDtype {
+                        file: path.into(),
+                        column: format!("{topic}:{}", r.field_path.join(".")),
+                        found: format!("JSON {} in message {index}", json_kind(other)),
+                        expected: "a JSON number".into(),
+                    })
+                }
+            };
+            channels[k].push(time_ns, r.conversion.apply(x), index);
+        }
+    }
+    Ok(McapRead {
+        channels,
+        messages,
+        ignored,
+    })
+}
+
+fn json_kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "bool",
+        Value::Number(_) => "number",
+        Value::String(_) => "string",
+        Value::Array(_) => "array",
+        Value::Object(_) => "object",
+    }
+}

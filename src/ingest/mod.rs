@@ -1,0 +1,433 @@
+//! Ingest: every supported input becomes the canonical drive log (`schemas/drive-log.toml`).
+//!
+//! Formats (detected from the file's magic bytes, not its name):
+//! - Parquet, canonical wide layout (canonical names; `unit` field metadata converted if not SI);
+//! - Parquet exports with other names and units, wide or long (time, signal, value), through a
+//!   mapping file (`schemas/mappings/*.toml`, see [`mapping`]);
+//! - MCAP with JSON messages, one topic per CAN message group at its own rate, through a topic
+//!   mapping.
+//!
+//! Multi-rate sources are aligned onto one time base ([`align`]); wide tables keep their own.
+//! Checks, each an [`IngestError`] naming file, column, row, time and value: required columns of
+//! the requested stages, dtypes, units, time order and duplicates, physical ranges (the vehicle's
+//! gearbox narrows the gear range), and runs of missing values longer than the limit. Nothing is
+//! written here; a failed drive leaves no output.
+
+pub mod align;
+pub mod channel;
+mod error;
+pub mod mapping;
+mod mcap_source;
+mod parquet_source;
+
+pub use align::TimeBase;
+pub use channel::TimeRepair;
+pub use error::IngestError;
+pub use mapping::{Mapping, SourceFormat};
+
+use crate::schema::{drive_log, Stage};
+use crate::table::{DriveLog, DriveMeta, Signal};
+use channel::{check_range, Channel};
+use std::io::Read;
+use std::path::Path;
+
+/// Ingest settings.
+#[derive(Debug, Clone)]
+pub struct IngestOptions {
+    /// Mapping to use; `None` selects one automatically (see [`ingest_file`]).
+    pub mapping: Option<Mapping>,
+    /// Stages the drive is read for; their `needed_by` columns are required.
+    pub stages: Vec<Stage>,
+    /// Time base for multi-rate sources.
+    pub time_base: TimeBase,
+    /// Longest run of missing values accepted in a required column, s.
+    pub max_nan_run_s: f64,
+    /// Valid gear range (from the vehicle file); the schema's wide range when `None`.
+    pub gear_range: Option<(i16, i16)>,
+    /// Backwards time handling.
+    pub time_repair: TimeRepair,
+    /// Drive id override (default: source metadata, else the file stem).
+    pub drive_id: Option<String>,
+    /// Vehicle id override.
+    pub vehicle_id: Option<String>,
+}
+
+impl Default for IngestOptions {
+    fn default() -> Self {
+        Self {
+            mapping: None,
+            stages: vec![Stage::Ingest],
+            time_base: TimeBase::Fastest,
+            max_nan_run_s: 2.0,
+            gear_range: None,
+            time_repair: TimeRepair::Error,
+            drive_id: None,
+            vehicle_id: None,
+        }
+    }
+}
+
+/// Facts about one ingest, for the summary and the run report.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct IngestReport {
+    /// `parquet-wide`, `parquet-long` or `mcap-json`.
+    pub format: String,
+    /// Mapping used (`canonical` for the canonical layout).
+    pub mapping: String,
+    /// Rows (Parquet) or messages (MCAP) in the source.
+    pub source_rows: u64,
+    /// Exact duplicates dropped (all channels).
+    pub duplicates_dropped: u64,
+    /// Per mapped channel: (column, samples, median rate Hz) — multi-rate sources only.
+    pub channel_rates: Vec<(String, usize, f64)>,
+    /// Rate of the aligned time base, Hz (multi-rate sources only).
+    pub time_base_hz: Option<f64>,
+    /// Non-canonical columns kept.
+    pub passthrough: Vec<String>,
+    /// Columns, signals or topics not used.
+    pub ignored: Vec<String>,
+}
+
+/// A drive in canonical form, with what happened on the way.
+#[derive(Debug, Clone)]
+pub struct Ingested {
+    /// The canonical table.
+    pub log: DriveLog,
+    /// Ingest facts.
+    pub report: IngestReport,
+}
+
+const PARQUET_MAGIC: &[u8] = b"PAR1";
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+/// Reads one file into the canonical drive log.
+///
+/// Mapping selection when `opts.mapping` is `None`: a Parquet file with `timestamp` and
+/// `vehicle_speed` columns is canonical; otherwise the first embedded mapping whose
+/// `detect_columns` are all present; an MCAP file uses the embedded `mcap-json` mapping.
+///
+/// # Errors
+/// Any [`IngestError`]; the message names the file and, where it applies, column, row, time
+/// and value.
+pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, IngestError> {
+    let mut head = [0u8; 8];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .map_err(|e| IngestError::Io {
+            file: path.into(),
+            source: e,
+        })?;
+    let head = &head[..n];
+    let is_parquet = head.starts_with(PARQUET_MAGIC);
+    let is_mcap = head.starts_with(MCAP_MAGIC);
+    if !is_parquet && !is_mcap {
+        return Err(IngestError::UnknownFormat {
+            file: path.into(),
+            head: head
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+        });
+    }
+    let mapping = match &opts.mapping {
+        Some(m) => {
+            let fits = match m.format {
+                SourceFormat::McapJson => is_mcap,
+                _ => is_parquet,
+            };
+            if !fits {
+                return Err(IngestError::Mapping {
+                    mapping: m.origin.clone(),
+                    message: format!(
+                        "is for {:?} sources but {} is {}",
+                        m.format,
+                        path.display(),
+                        if is_mcap { "MCAP" } else { "Parquet" }
+                    ),
+                });
+            }
+            Some(m.clone())
+        }
+        None => auto_mapping(path, is_mcap)?,
+    };
+
+    let mut report = IngestReport {
+        mapping: mapping
+            .as_ref()
+            .map_or_else(|| "canonical".into(), |m| m.name.clone()),
+        ..Default::default()
+    };
+    let schema = drive_log();
+    let mut required: Vec<(&str, &str)> = Vec::new(); // (column, stage)
+    for stage in &opts.stages {
+        for c in schema.required_for(&[*stage]) {
+            if !required.iter().any(|r| r.0 == c.name) {
+                required.push((&c.name, stage.name()));
+            }
+        }
+    }
+    if let Some(m) = &mapping {
+        for (col, stage) in &required {
+            if !m.signals.contains_key(*col) {
+                return Err(IngestError::MissingColumn {
+                    file: path.into(),
+                    column: (*col).into(),
+                    source_name: format!("<not in mapping {}>", m.name),
+                    stage: (*stage).into(),
+                });
+            }
+        }
+    }
+
+    let mut kv = Default::default();
+    let (t_ns, mut signals) = match mapping.as_ref().map(|m| m.format) {
+        None | Some(SourceFormat::ParquetWide) => {
+            report.format = "parquet-wide".into();
+            let mut read = parquet_source::read_wide(path, mapping.as_ref())?;
+            report.source_rows = read.source_rows;
+            report.passthrough = read.passthrough;
+            report.ignored = read.ignored;
+            kv = read.kv;
+            let mut w = read.wide.take().expect("wide read");
+            for (col, stage) in &required {
+                if !w.columns.iter().any(|c| c.0 == *col) {
+                    let source_name = mapping
+                        .as_ref()
+                        .and_then(|m| m.signals.get(*col))
+                        .and_then(|s| s.source.clone())
+                        .unwrap_or_else(|| (*col).into());
+                    return Err(IngestError::MissingColumn {
+                        file: path.into(),
+                        column: (*col).into(),
+                        source_name,
+                        stage: (*stage).into(),
+                    });
+                }
+            }
+            report.duplicates_dropped = parquet_source::order_wide(path, &mut w, opts.time_repair)?;
+            for (name, unit, values) in &w.columns {
+                range_check(path, name, unit, &w.t_ns, values, Some(&w.rows), opts)?;
+            }
+            let signals = w
+                .columns
+                .into_iter()
+                .map(|(name, unit, values)| Signal { name, unit, values })
+                .collect();
+            (w.t_ns, signals)
+        }
+        Some(fmt) => {
+            let m = mapping.as_ref().expect("mapped format");
+            let (channels, ignored, rows) = if fmt == SourceFormat::McapJson {
+                report.format = "mcap-json".into();
+                let r = mcap_source::read_mcap(path, m)?;
+                (r.channels, r.ignored, r.messages)
+            } else {
+                report.format = "parquet-long".into();
+                let r = parquet_source::read_long(path, m)?;
+                kv = r.kv;
+                (r.channels, r.ignored, r.source_rows)
+            };
+            report.source_rows = rows;
+            report.ignored = ignored;
+            align_channels(path, channels, &required, opts, m, &mut report)?
+        }
+    };
+
+    check_nan_runs(path, &t_ns, &signals, &required, opts.max_nan_run_s)?;
+    let file_stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let meta = DriveMeta {
+        drive_id: opts
+            .drive_id
+            .clone()
+            .or_else(|| kv.get("drive_id").cloned())
+            .unwrap_or(file_stem),
+        vehicle_id: opts
+            .vehicle_id
+            .clone()
+            .or_else(|| kv.get("vehicle_id").cloned())
+            .or_else(|| mapping.as_ref().and_then(|m| m.vehicle_id.clone())),
+        source_file: path.display().to_string(),
+    };
+    signals.retain(|s| !s.name.is_empty());
+    let mut log = DriveLog {
+        meta,
+        timestamp_ns: t_ns,
+        signals,
+    };
+    log.sort_columns();
+    Ok(Ingested { log, report })
+}
+
+fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestError> {
+    let embedded = Mapping::embedded();
+    if is_mcap {
+        let mut mcap = embedded
+            .into_iter()
+            .filter(|m| m.format == SourceFormat::McapJson);
+        return match (mcap.next(), mcap.next()) {
+            (Some(m), None) => Ok(Some(m)),
+            _ => Err(IngestError::Mapping {
+                mapping: "<auto>".into(),
+                message: "MCAP input needs a topic mapping: pass --mapping".into(),
+            }),
+        };
+    }
+    let names = parquet_source::column_names(path)?;
+    let has = |c: &str| names.iter().any(|n| n == c);
+    if has("timestamp") && has("vehicle_speed") {
+        return Ok(None);
+    }
+    embedded
+        .into_iter()
+        .find(|m| !m.detect_columns.is_empty() && m.detect_columns.iter().all(|c| has(c)))
+        .map(Some)
+        .ok_or_else(|| IngestError::MissingColumn {
+            file: path.into(),
+            column: "timestamp".into(),
+            source_name: format!(
+                "not canonical and no bundled mapping fits the columns [{}]; pass --mapping",
+                names.join(", ")
+            ),
+            stage: "all".into(),
+        })
+}
+
+fn range_check(
+    path: &Path,
+    name: &str,
+    unit: &str,
+    t_ns: &[i64],
+    values: &[f64],
+    rows: Option<&[u64]>,
+    opts: &IngestOptions,
+) -> Result<(), IngestError> {
+    let Some(spec) = drive_log().column(name) else {
+        return Ok(());
+    };
+    let (mut lo, mut hi) = (
+        spec.valid_min.unwrap_or(f64::NEG_INFINITY),
+        spec.valid_max.unwrap_or(f64::INFINITY),
+    );
+    if let (Some((g0, g1)), "gear") = (opts.gear_range, name) {
+        lo = f64::from(g0);
+        hi = f64::from(g1);
+    }
+    check_range(path, name, unit, t_ns, values, rows, lo, hi)
+}
+
+fn align_channels(
+    path: &Path,
+    mut channels: Vec<Channel>,
+    required: &[(&str, &str)],
+    opts: &IngestOptions,
+    mapping: &Mapping,
+    report: &mut IngestReport,
+) -> Result<(Vec<i64>, Vec<Signal>), IngestError> {
+    for c in &mut channels {
+        report.duplicates_dropped += c.order_and_dedup(path, opts.time_repair)?;
+        range_check(
+            path,
+            &c.column,
+            &c.unit,
+            &c.t_ns,
+            &c.values,
+            Some(&c.rows),
+            opts,
+        )?;
+    }
+    for (col, stage) in required {
+        let present = channels
+            .iter()
+            .any(|c| c.column == *col && c.values.iter().any(|v| !v.is_nan()));
+        if !present {
+            let src = &mapping.signals[*col];
+            let source_name = match (&src.topic, &src.field) {
+                (Some(t), Some(f)) => format!("{t}:{f}"),
+                _ => src.source.clone().unwrap_or_default(),
+            };
+            return Err(IngestError::MissingColumn {
+                file: path.into(),
+                column: (*col).into(),
+                source_name,
+                stage: (*stage).into(),
+            });
+        }
+    }
+    // Mapped optional signals absent from this file are dropped, not kept as all-NaN columns.
+    channels.retain(|c| !c.is_empty());
+    report.channel_rates = channels
+        .iter()
+        .map(|c| {
+            let p = c.median_period_ns();
+            (
+                c.column.clone(),
+                c.len(),
+                if p > 0 { 1e9 / p as f64 } else { 0.0 },
+            )
+        })
+        .collect();
+    let req: Vec<&str> = required.iter().map(|r| r.0).collect();
+    let a = align::align(path, &channels, &req, opts.time_base)?;
+    report.time_base_hz = Some(1e9 / a.period_ns as f64);
+    Ok((a.t_ns, a.signals))
+}
+
+/// Rejects runs of missing values in required columns longer than `limit_s`.
+fn check_nan_runs(
+    path: &Path,
+    t_ns: &[i64],
+    signals: &[Signal],
+    required: &[(&str, &str)],
+    limit_s: f64,
+) -> Result<(), IngestError> {
+    for s in signals {
+        if !required.iter().any(|r| r.0 == s.name) {
+            continue;
+        }
+        let mut i = 0;
+        while i < s.values.len() {
+            if !s.values[i].is_nan() {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            while i < s.values.len() && s.values[i].is_nan() {
+                i += 1;
+            }
+            // A run lasts from the last valid sample before it to the first valid one after
+            // (from / to the table's edge when it touches one).
+            let before = t_ns[start.saturating_sub(1)];
+            let after = t_ns[i.min(t_ns.len() - 1)];
+            let seconds = (after - before) as f64 * 1e-9;
+            if seconds > limit_s {
+                return Err(IngestError::NanRun {
+                    file: path.into(),
+                    column: s.name.clone(),
+                    row: start as u64,
+                    time_ns: t_ns[start],
+                    samples: (i - start) as u64,
+                    seconds,
+                    limit_s,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Missing values per column, in column order.
+pub fn nan_counts(log: &DriveLog) -> Vec<(String, usize)> {
+    log.signals
+        .iter()
+        .map(|s| {
+            (
+                s.name.clone(),
+                s.values.iter().filter(|v| v.is_nan()).count(),
+            )
+        })
+        .collect()
+}

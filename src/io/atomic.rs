@@ -1,0 +1,103 @@
+//! Atomic file creation: write to a hidden temporary name in the target folder, then rename.
+//!
+//! A reader (or a resumed nightly job) therefore sees either no file or a complete one. The
+//! temporary file is removed when the writer is dropped without [`AtomicFile::commit`], so an
+//! error anywhere in between leaves nothing behind.
+
+use std::fs::File;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A file being written under a temporary name next to its final path.
+#[derive(Debug)]
+pub struct AtomicFile {
+    file: Option<File>,
+    tmp: PathBuf,
+    target: PathBuf,
+}
+
+impl AtomicFile {
+    /// Creates `.<name>.tmp-<pid>-<n>` in the target's folder (creating the folder if needed).
+    ///
+    /// # Errors
+    /// Any I/O error creating the folder or the file.
+    pub fn create(target: &Path) -> io::Result<Self> {
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let dir = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&dir)?;
+        let name = target
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+        let file = File::create(&tmp)?;
+        Ok(Self {
+            file: Some(file),
+            tmp,
+            target: target.to_path_buf(),
+        })
+    }
+
+    /// The open temporary file.
+    pub fn file(&mut self) -> &mut File {
+        self.file.as_mut().expect("file is open until commit")
+    }
+
+    /// A second handle to the temporary file (for writers that take ownership).
+    ///
+    /// # Errors
+    /// I/O error from `try_clone`.
+    pub fn try_clone_file(&self) -> io::Result<File> {
+        self.file
+            .as_ref()
+            .expect("file is open until commit")
+            .try_clone()
+    }
+
+    /// Flushes to disk and renames to the final path.
+    ///
+    /// # Errors
+    /// I/O error from sync or rename; the temporary file is then removed.
+    pub fn commit(mut self) -> io::Result<()> {
+        let file = self.file.take().expect("commit once");
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&self.tmp, &self.target)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.file.is_some() || self.tmp.exists() {
+            self.file.take();
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    #[test]
+    fn dropped_writer_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("x.parquet");
+        {
+            let mut f = AtomicFile::create(&target).unwrap();
+            f.file().write_all(b"partial").unwrap();
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let mut f = AtomicFile::create(&target).unwrap();
+        f.file().write_all(b"whole").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,9 @@
+//! File output: Parquet tables with units, provenance metadata and atomic writes.
+
+mod atomic;
+mod parquet_out;
+
+pub use atomic::AtomicFile;
+pub use parquet_out::{
+    config_hash, drive_log_columns, write_table, OutColumn, OutData, OutputError, TableMeta,
+};

@@ -1,0 +1,305 @@
+//! Parquet writer for every fleetdyn table.
+//!
+//! Conventions of every file we write:
+//! - zstd compression (level 3), one row group per 1 Mi rows;
+//! - every field carries a `unit` metadata entry (SI units inside fleetdyn);
+//! - key–value metadata: `table` (output schema name), `drive_id`, `vehicle_id`,
+//!   `schema_version`, `source_file`, `fleetdyn_version`, `config_hash`, plus stage extras;
+//! - missing values are Parquet nulls (NaN inside fleetdyn ↔ null on disk);
+//! - the table is checked against its output schema (`schemas/outputs/`) before a byte is
+//!   written, and the file appears atomically (temporary name + rename) or not at all.
+
+use super::AtomicFile;
+use crate::schema::{drive_log, output_schema, Dtype, SchemaError};
+use crate::table::DriveLog;
+use arrow::array::{ArrayRef, Float64Array, Int16Array, TimestampNanosecondArray};
+use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
+use arrow::record_batch::RecordBatch;
+use parquet::arrow::ArrowWriter;
+use parquet::basic::{Compression, ZstdLevel};
+use parquet::file::metadata::KeyValue;
+use parquet::file::properties::WriterProperties;
+use sha2::{Digest, Sha256};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Column data to write.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OutData {
+    /// ns since the Unix epoch, written as `timestamp[ns, UTC]`.
+    Timestamp(Vec<i64>),
+    /// Floats; NaN is written as null.
+    F64(Vec<f64>),
+    /// Integers held as floats (NaN → null), written as `int16`; values are rounded.
+    I16(Vec<f64>),
+}
+
+impl OutData {
+    fn len(&self) -> usize {
+        match self {
+            OutData::Timestamp(v) => v.len(),
+            OutData::F64(v) | OutData::I16(v) => v.len(),
+        }
+    }
+    fn dtype(&self) -> Dtype {
+        match self {
+            OutData::Timestamp(_) => Dtype::TimestampNsUtc,
+            OutData::F64(_) => Dtype::F64,
+            OutData::I16(_) => Dtype::I16,
+        }
+    }
+}
+
+/// One named column with its unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutColumn {
+    /// Column name.
+    pub name: String,
+    /// Unit for the `unit` field metadata.
+    pub unit: String,
+    /// Values.
+    pub data: OutData,
+}
+
+impl OutColumn {
+    /// A float column.
+    pub fn f64(name: &str, unit: &str, values: Vec<f64>) -> Self {
+        Self {
+            name: name.into(),
+            unit: unit.into(),
+            data: OutData::F64(values),
+        }
+    }
+    /// A `timestamp[ns, UTC]` column named `timestamp`.
+    pub fn timestamp(values: Vec<i64>) -> Self {
+        Self {
+            name: "timestamp".into(),
+            unit: "ns".into(),
+            data: OutData::Timestamp(values),
+        }
+    }
+}
+
+/// Table-level metadata.
+#[derive(Debug, Clone, Default)]
+pub struct TableMeta {
+    /// Output schema name (`schemas/outputs/`), or `drive_log` for the canonical table.
+    pub table: String,
+    /// Drive identifier.
+    pub drive_id: String,
+    /// Vehicle identifier, if known.
+    pub vehicle_id: Option<String>,
+    /// Source file of the drive.
+    pub source_file: String,
+    /// Hash of the configuration that produced the table (see [`config_hash`]).
+    pub config_hash: String,
+    /// Further stage-specific entries (e.g. filter settings, measured gains).
+    pub extra: Vec<(String, String)>,
+}
+
+/// Why a table could not be written.
+#[derive(Debug, Error)]
+pub enum OutputError {
+    /// The table does not match its schema (a bug, reported instead of writing a bad file).
+    #[error(transparent)]
+    Schema(#[from] SchemaError),
+    /// Columns of unequal length.
+    #[error("table {table}: column {column} has {len} rows, expected {expected}")]
+    Ragged {
+        /// Output table.
+        table: String,
+        /// Offending column.
+        column: String,
+        /// Its length.
+        len: usize,
+        /// Length of the first column.
+        expected: usize,
+    },
+    /// File-system error.
+    #[error("writing {path}: {source}")]
+    Io {
+        /// Target path.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Arrow/Parquet encoder error.
+    #[error("writing {path}: {source}")]
+    Parquet {
+        /// Target path.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: parquet::errors::ParquetError,
+    },
+}
+
+/// Hex SHA-256 of configuration text (the canonical serialisation the caller chose), used in
+/// file metadata so results can be matched to the configuration that made them.
+pub fn config_hash(parts: &[&[u8]]) -> String {
+    let mut h = Sha256::new();
+    for p in parts {
+        h.update((p.len() as u64).to_le_bytes());
+        h.update(p);
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The canonical drive log as output columns: `timestamp`, then every signal with its schema
+/// dtype and unit.
+pub fn drive_log_columns(log: &DriveLog) -> Vec<OutColumn> {
+    let mut cols = Vec::with_capacity(log.signals.len() + 1);
+    cols.push(OutColumn::timestamp(log.timestamp_ns.clone()));
+    for s in &log.signals {
+        let data = match s.dtype() {
+            Dtype::I16 => OutData::I16(s.values.clone()),
+            _ => OutData::F64(s.values.clone()),
+        };
+        cols.push(OutColumn {
+            name: s.name.clone(),
+            unit: s.unit.clone(),
+            data,
+        });
+    }
+    cols
+}
+
+fn check_drive_log(cols: &[(&str, Dtype, &str)]) -> Result<(), SchemaError> {
+    let dl = drive_log();
+    let mismatch = |message: String| SchemaError::Mismatch {
+        table: "drive_log".into(),
+        message,
+    };
+    if cols.first().map(|c| c.0) != Some("timestamp") {
+        return Err(mismatch("first column must be timestamp".into()));
+    }
+    for (name, dtype, unit) in cols {
+        match dl.column(name) {
+            Some(c) if c.dtype != *dtype || c.unit != *unit => {
+                return Err(mismatch(format!(
+                    "{name} as {dtype:?} [{unit}], schema says {:?} [{}]",
+                    c.dtype, c.unit
+                )))
+            }
+            None if *dtype != Dtype::F64 => {
+                return Err(mismatch(format!("pass-through column {name} must be f64")))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Writes `cols` as a Parquet file at `path`, atomically.
+///
+/// # Errors
+/// [`OutputError::Schema`] if the columns do not match the schema named by `meta.table`
+/// (`drive_log` checks against the canonical schema); [`OutputError::Ragged`] for unequal
+/// lengths; I/O and encoder errors. On any error no file is left at `path`.
+pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<(), OutputError> {
+    let described: Vec<(&str, Dtype, &str)> = cols
+        .iter()
+        .map(|c| (c.name.as_str(), c.data.dtype(), c.unit.as_str()))
+        .collect();
+    if meta.table == "drive_log" {
+        check_drive_log(&described)?;
+    } else {
+        let schema = output_schema(&meta.table).ok_or_else(|| SchemaError::Mismatch {
+            table: meta.table.clone(),
+            message: "no such output schema".into(),
+        })?;
+        schema.check(&described)?;
+    }
+    let n = cols.first().map(|c| c.data.len()).unwrap_or(0);
+    for c in cols {
+        if c.data.len() != n {
+            return Err(OutputError::Ragged {
+                table: meta.table.clone(),
+                column: c.name.clone(),
+                len: c.data.len(),
+                expected: n,
+            });
+        }
+    }
+
+    let fields: Vec<Field> = cols
+        .iter()
+        .map(|c| {
+            let dt = match c.data {
+                OutData::Timestamp(_) => {
+                    DataType::Timestamp(TimeUnit::Nanosecond, Some("UTC".into()))
+                }
+                OutData::F64(_) => DataType::Float64,
+                OutData::I16(_) => DataType::Int16,
+            };
+            let nullable = !matches!(c.data, OutData::Timestamp(_));
+            Field::new(&c.name, dt, nullable)
+                .with_metadata(HashMap::from([("unit".to_string(), c.unit.clone())]))
+        })
+        .collect();
+    let schema = Arc::new(Schema::new(fields));
+    let arrays: Vec<ArrayRef> = cols
+        .iter()
+        .map(|c| -> ArrayRef {
+            match &c.data {
+                OutData::Timestamp(v) => {
+                    Arc::new(TimestampNanosecondArray::from(v.clone()).with_timezone("UTC"))
+                }
+                OutData::F64(v) => Arc::new(Float64Array::from_iter(
+                    v.iter().map(|x| (!x.is_nan()).then_some(*x)),
+                )),
+                OutData::I16(v) => Arc::new(Int16Array::from_iter(
+                    v.iter().map(|x| (x.is_finite()).then(|| x.round() as i16)),
+                )),
+            }
+        })
+        .collect();
+    let io_err = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let pq_err = |source| OutputError::Parquet {
+        path: path.to_path_buf(),
+        source,
+    };
+    let batch = RecordBatch::try_new(schema.clone(), arrays)
+        .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;
+
+    let mut kv = vec![
+        ("table", meta.table.clone()),
+        ("drive_id", meta.drive_id.clone()),
+        ("schema_version", drive_log().schema_version.clone()),
+        ("source_file", meta.source_file.clone()),
+        ("fleetdyn_version", env!("CARGO_PKG_VERSION").to_string()),
+        ("config_hash", meta.config_hash.clone()),
+    ];
+    if let Some(v) = &meta.vehicle_id {
+        kv.push(("vehicle_id", v.clone()));
+    }
+    let mut kv: Vec<KeyValue> = kv
+        .into_iter()
+        .map(|(k, v)| KeyValue::new(k.to_string(), v))
+        .collect();
+    kv.extend(
+        meta.extra
+            .iter()
+            .map(|(k, v)| KeyValue::new(k.clone(), v.clone())),
+    );
+    let props = WriterProperties::builder()
+        .set_compression(Compression::ZSTD(
+            ZstdLevel::try_new(3).expect("valid level"),
+        ))
+        .set_max_row_group_row_count(Some(1 << 20))
+        .set_key_value_metadata(Some(kv))
+        .build();
+
+    let tmp = AtomicFile::create(path).map_err(io_err)?;
+    let handle = tmp.try_clone_file().map_err(io_err)?;
+    let mut writer = ArrowWriter::try_new(handle, schema, Some(props)).map_err(pq_err)?;
+    writer.write(&batch).map_err(pq_err)?;
+    writer.close().map_err(pq_err)?;
+    tmp.commit().map_err(io_err)
+}

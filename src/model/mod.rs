@@ -1,0 +1,3 @@
+//! Vehicle models and their parameter files.
+
+pub mod vehicle;

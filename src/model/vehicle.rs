@@ -1,0 +1,179 @@
+//! Vehicle files (`fixtures/vehicles/*.toml`): the parameters models need, with units in the
+//! key names.
+//!
+//! This first version carries identification and the gearbox (ingest uses it to reject gears
+//! outside the gearbox); the driveline (physics.md §1) and axle (§3) sections are added by the
+//! model issues and are accepted here as opaque tables until then.
+
+use serde::Deserialize;
+use std::path::Path;
+use thiserror::Error;
+
+/// Gearbox description.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Gearbox {
+    /// Number of forward gears (gear 1 … n).
+    pub forward_gears: u8,
+    /// Number of reverse gears (gear −1 … −n).
+    #[serde(default)]
+    pub reverse_gears: u8,
+    /// Ratio of each forward gear, lowest first (i_t, dimensionless), if known.
+    #[serde(default)]
+    pub ratios: Vec<f64>,
+}
+
+/// A parsed vehicle file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleFile {
+    /// Vehicle id as it appears in drive metadata and manifests.
+    pub vehicle_id: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Gearbox.
+    pub gearbox: Gearbox,
+    /// Driveline parameters (physics.md §1) — filled by the driveline issue.
+    #[serde(default)]
+    pub driveline: Option<toml::Table>,
+    /// Axle-load parameters (physics.md §3) — filled by the axle-load issue.
+    #[serde(default)]
+    pub axles: Option<toml::Table>,
+}
+
+/// A vehicle file that cannot be used; names the file and the key.
+#[derive(Debug, Error)]
+pub enum VehicleError {
+    /// Read error.
+    #[error("{file}: {source}")]
+    Io {
+        /// File.
+        file: String,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Syntax, unknown key or wrong type.
+    #[error("{file}: {source}")]
+    Parse {
+        /// File.
+        file: String,
+        /// Cause (names the key and line).
+        #[source]
+        source: toml::de::Error,
+    },
+    /// A value outside its range.
+    #[error("{file}: {key} = {value}: {rule}")]
+    Range {
+        /// File.
+        file: String,
+        /// Key.
+        key: String,
+        /// Value.
+        value: String,
+        /// The rule it breaks.
+        rule: String,
+    },
+}
+
+impl VehicleFile {
+    /// Reads and validates a vehicle file.
+    ///
+    /// # Errors
+    /// [`VehicleError`] naming the file and offending key.
+    pub fn load(path: &Path) -> Result<Self, VehicleError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| VehicleError::Io {
+            file: file.clone(),
+            source: e,
+        })?;
+        Self::parse(&text, &file)
+    }
+
+    /// Parses and validates vehicle-file text; `file` names it in errors.
+    ///
+    /// # Errors
+    /// [`VehicleError::Parse`] or [`VehicleError::Range`].
+    pub fn parse(text: &str, file: &str) -> Result<Self, VehicleError> {
+        let v: VehicleFile = toml::from_str(text).map_err(|e| VehicleError::Parse {
+            file: file.into(),
+            source: e,
+        })?;
+        let range = |key: &str, value: String, rule: &str| VehicleError::Range {
+            file: file.into(),
+            key: key.into(),
+            value,
+            rule: rule.into(),
+        };
+        let g = &v.gearbox;
+        if g.forward_gears == 0 || g.forward_gears > 32 {
+            return Err(range(
+                "gearbox.forward_gears",
+                g.forward_gears.to_string(),
+                "must be 1 … 32",
+            ));
+        }
+        if !g.ratios.is_empty() {
+            if g.ratios.len() != usize::from(g.forward_gears) {
+                return Err(range(
+                    "gearbox.ratios",
+                    format!("{} entries", g.ratios.len()),
+                    "needs one ratio per forward gear",
+                ));
+            }
+            if g.ratios.iter().any(|r| !(r.is_finite() && *r > 0.0))
+                || g.ratios.windows(2).any(|w| w[1] > w[0])
+            {
+                return Err(range(
+                    "gearbox.ratios",
+                    format!("{:?}", g.ratios),
+                    "ratios must be positive and non-increasing from gear 1",
+                ));
+            }
+        }
+        Ok(v)
+    }
+
+    /// Valid gear range for ingest checks: (−reverse_gears, forward_gears).
+    pub fn gear_range(&self) -> (i16, i16) {
+        (
+            -i16::from(self.gearbox.reverse_gears),
+            i16::from(self.gearbox.forward_gears),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixture_vehicle_parses() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/vehicles/truck-40t.toml");
+        let v = VehicleFile::load(&p).unwrap();
+        assert_eq!(v.gear_range(), (-2, 12));
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let e = VehicleFile::parse(
+            "vehicle_id = \"x\"\n[gearbox]\nforward_gears = 0\n",
+            "v.toml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("gearbox.forward_gears"), "{e}");
+        let e = VehicleFile::parse(
+            "vehicle_id = \"x\"\n[gearbox]\nforward_gears = 2\nratios = [1.0, 2.0]\n",
+            "v.toml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("gearbox.ratios"), "{e}");
+        let e = VehicleFile::parse(
+            "vehicle_id = \"x\"\ncolour = 1\n[gearbox]\nforward_gears = 2\n",
+            "v.toml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("colour"), "{e}");
+    }
+}

@@ -1,0 +1,102 @@
+//! The `ingest` stage: a file becomes the canonical drive log (`drive_log.parquet`).
+
+use crate::ingest::{
+    ingest_file, IngestError, IngestOptions, Ingested, Mapping, TimeBase, TimeRepair,
+};
+use crate::io::{config_hash, drive_log_columns, write_table, OutputError, TableMeta};
+use crate::model::vehicle::VehicleFile;
+use crate::schema::Stage;
+use crate::table::DriveLog;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// `[ingest]` settings of a pipeline file (also the `fleetdyn ingest` flags).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct IngestConfig {
+    /// Mapping file; automatic selection when absent.
+    pub mapping: Option<PathBuf>,
+    /// Aligned time base for multi-rate sources, Hz; the fastest channel's rate when absent.
+    pub time_base_hz: Option<f64>,
+    /// Longest accepted run of missing values in a required column, s.
+    pub max_nan_run_s: f64,
+    /// `error` (default) or `sort` for time going backwards.
+    pub time_repair: TimeRepair,
+}
+
+impl Default for IngestConfig {
+    fn default() -> Self {
+        Self {
+            mapping: None,
+            time_base_hz: None,
+            max_nan_run_s: 2.0,
+            time_repair: TimeRepair::Error,
+        }
+    }
+}
+
+impl IngestConfig {
+    /// Resolves the configuration into ingest options for `stages` (loads the mapping once).
+    ///
+    /// # Errors
+    /// The mapping file cannot be read or is invalid.
+    pub fn options(
+        &self,
+        stages: &[Stage],
+        vehicle: Option<&VehicleFile>,
+    ) -> Result<IngestOptions, IngestError> {
+        let mapping = match &self.mapping {
+            Some(p) => Some(Mapping::load(p)?),
+            None => None,
+        };
+        Ok(IngestOptions {
+            mapping,
+            stages: stages.to_vec(),
+            time_base: self
+                .time_base_hz
+                .map_or(TimeBase::Fastest, TimeBase::RateHz),
+            max_nan_run_s: self.max_nan_run_s,
+            gear_range: vehicle.map(VehicleFile::gear_range),
+            time_repair: self.time_repair,
+            drive_id: None,
+            vehicle_id: vehicle.map(|v| v.vehicle_id.clone()),
+        })
+    }
+
+    /// Canonical text of the settings that change the output, for the config hash.
+    pub fn fingerprint(&self, opts: &IngestOptions) -> String {
+        format!(
+            "ingest:v1 mapping={:?} time_base_hz={:?} max_nan_run_s={} time_repair={:?} stages={:?} gears={:?}",
+            opts.mapping.as_ref().map(|m| (&m.name, m.resolve().map(|r| r.len()).ok())),
+            self.time_base_hz,
+            self.max_nan_run_s,
+            self.time_repair,
+            opts.stages,
+            opts.gear_range
+        )
+    }
+}
+
+/// Ingests `input` with `opts`.
+///
+/// # Errors
+/// See [`ingest_file`].
+pub fn run(input: &Path, opts: &IngestOptions) -> Result<Ingested, IngestError> {
+    ingest_file(input, opts)
+}
+
+/// Writes the canonical drive log as Parquet (atomically, with units and metadata).
+///
+/// # Errors
+/// [`OutputError`]; nothing is left at `path` on error.
+pub fn write(path: &Path, log: &DriveLog, config_fingerprint: &str) -> Result<(), OutputError> {
+    let meta = TableMeta {
+        table: "drive_log".into(),
+        drive_id: log.meta.drive_id.clone(),
+        vehicle_id: log.meta.vehicle_id.clone(),
+        source_file: log.meta.source_file.clone(),
+        config_hash: config_hash(&[config_fingerprint.as_bytes()]),
+        extra: Vec::new(),
+    };
+    write_table(path, &meta, &drive_log_columns(log))
+}

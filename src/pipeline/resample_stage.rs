@@ -1,0 +1,50 @@
+//! The `resample` stage: the drive on a uniform distance grid (`distance_log.parquet`).
+
+use crate::io::{config_hash, write_table, OutColumn, OutData, OutputError, TableMeta};
+use crate::schema::Dtype;
+use crate::signal::distance::{DistanceLog, ResampleConfig};
+use std::path::Path;
+
+/// Canonical text of the resample settings, for the config hash.
+pub fn fingerprint(cfg: &ResampleConfig) -> String {
+    format!("resample:v1 {cfg:?}")
+}
+
+/// Writes a distance log (schema `distance_log`).
+///
+/// # Errors
+/// [`OutputError`]; nothing is left at `path` on error.
+pub fn write(path: &Path, d: &DistanceLog, config_fingerprint: &str) -> Result<(), OutputError> {
+    let mut cols = vec![
+        OutColumn::f64("distance", "m", d.distance_m.clone()),
+        OutColumn::timestamp(d.timestamp_ns.clone()),
+    ];
+    for s in &d.signals {
+        let data = match s.dtype() {
+            Dtype::I16 => OutData::I16(s.values.clone()),
+            _ => OutData::F64(s.values.clone()),
+        };
+        cols.push(OutColumn {
+            name: s.name.clone(),
+            unit: s.unit.clone(),
+            data,
+        });
+    }
+    let meta = TableMeta {
+        table: "distance_log".into(),
+        drive_id: d.meta.drive_id.clone(),
+        vehicle_id: d.meta.vehicle_id.clone(),
+        source_file: d.meta.source_file.clone(),
+        config_hash: config_hash(&[config_fingerprint.as_bytes()]),
+        extra: vec![
+            ("step_m".into(), d.step_m.to_string()),
+            (
+                "distance_source".into(),
+                format!("{:?}", d.map.source).to_lowercase(),
+            ),
+            ("collapsed_samples".into(), d.collapsed_samples.to_string()),
+            ("reverse_samples".into(), d.map.reverse_samples.to_string()),
+        ],
+    };
+    write_table(path, &meta, &cols)
+}

@@ -1,0 +1,5 @@
+//! Reports: human-readable summaries and machine-readable run reports.
+
+mod ingest_summary;
+
+pub use ingest_summary::IngestSummary;

@@ -1,0 +1,59 @@
+//! Schemas as code: the canonical drive-log schema and the output table schemas.
+//!
+//! The machine-readable files live in `schemas/` at the repository top; they are embedded at
+//! build time (so the binary needs no data files) and parsed once. Ingest enforces the drive-log
+//! schema (required columns per stage, dtypes, units, value bounds, interpolation kind); every
+//! Parquet writer checks its table against an output schema before anything reaches disk.
+
+mod drive_log;
+mod output;
+
+pub use drive_log::{drive_log, ColumnSpec, DriveLogSchema, Interpolation, Stage};
+pub use output::{output_schema, OutputColumn, OutputSchema};
+
+use thiserror::Error;
+
+/// Logical column type of a schema column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+pub enum Dtype {
+    /// `timestamp[ns, UTC]`.
+    #[serde(rename = "timestamp_ns_utc")]
+    TimestampNsUtc,
+    /// 64-bit float.
+    #[serde(rename = "f64")]
+    F64,
+    /// 16-bit signed integer (nullable).
+    #[serde(rename = "i16")]
+    I16,
+}
+
+/// A schema file that does not parse or contradicts itself. These are build-time assets, so
+/// this only shows up if someone edits `schemas/` wrongly; the tests load every schema.
+#[derive(Debug, Error)]
+pub enum SchemaError {
+    /// TOML syntax or shape error.
+    #[error("schema {name}: {source}")]
+    Parse {
+        /// Schema file name.
+        name: String,
+        /// Parser error.
+        #[source]
+        source: toml::de::Error,
+    },
+    /// An inconsistency inside a schema file.
+    #[error("schema {name}: {message}")]
+    Invalid {
+        /// Schema file name.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A table does not match the output schema it is written under.
+    #[error("table {table} does not match its schema: {message}")]
+    Mismatch {
+        /// Output schema name.
+        table: String,
+        /// What differs.
+        message: String,
+    },
+}

@@ -1,0 +1,90 @@
+//! The canonical drive log in memory: one time axis and SI signal columns.
+//!
+//! All signal columns are held as `f64` with NaN for "no value"; integer columns of the schema
+//! (gear) are converted at the Parquet edge (NaN → null). Columns follow the canonical order of
+//! `schemas/drive-log.toml`, then pass-through columns in source order.
+
+use crate::schema::{drive_log, Dtype};
+
+/// Where a drive came from and what it is called.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DriveMeta {
+    /// Drive identifier (from the source's metadata, else the file stem).
+    pub drive_id: String,
+    /// Vehicle identifier, when the source or the mapping names one.
+    pub vehicle_id: Option<String>,
+    /// Path of the source file as given.
+    pub source_file: String,
+}
+
+/// One signal column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Signal {
+    /// Column name (canonical, or the source name for pass-through columns).
+    pub name: String,
+    /// Unit (SI for canonical columns; as declared by the source for pass-through ones).
+    pub unit: String,
+    /// Values in `unit`, NaN where missing.
+    pub values: Vec<f64>,
+}
+
+impl Signal {
+    /// The column's type in the canonical schema (`f64` for pass-through columns).
+    pub fn dtype(&self) -> Dtype {
+        drive_log()
+            .column(&self.name)
+            .map(|c| c.dtype)
+            .unwrap_or(Dtype::F64)
+    }
+
+    /// True when the column is part of the canonical schema.
+    pub fn is_canonical(&self) -> bool {
+        drive_log().column(&self.name).is_some()
+    }
+}
+
+/// A drive on one time base, in canonical form.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DriveLog {
+    /// Identification and provenance.
+    pub meta: DriveMeta,
+    /// Sample times, ns since the Unix epoch (UTC), strictly increasing.
+    pub timestamp_ns: Vec<i64>,
+    /// Signal columns, each as long as `timestamp_ns`.
+    pub signals: Vec<Signal>,
+}
+
+impl DriveLog {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.timestamp_ns.len()
+    }
+
+    /// True when the log has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.timestamp_ns.is_empty()
+    }
+
+    /// Values of a column by name.
+    pub fn signal(&self, name: &str) -> Option<&[f64]> {
+        self.signals
+            .iter()
+            .find(|s| s.name == name)
+            .map(|s| s.values.as_slice())
+    }
+
+    /// Duration from the first to the last sample, s.
+    pub fn duration_s(&self) -> f64 {
+        match (self.timestamp_ns.first(), self.timestamp_ns.last()) {
+            (Some(a), Some(b)) => (b - a) as f64 * 1e-9,
+            _ => 0.0,
+        }
+    }
+
+    /// Sorts the signal columns into canonical order, pass-through columns last (stable).
+    pub fn sort_columns(&mut self) {
+        let schema = drive_log();
+        self.signals
+            .sort_by_key(|s| schema.position(&s.name).unwrap_or(usize::MAX));
+    }
+}
