@@ -1,7 +1,6 @@
 //! `fleetdyn`: the command-line shell over the library. Exit codes: 0 ok, 1 some drive failed,
 //! 2 usage or configuration error.
 
-use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use fleetdyn::ingest::TimeRepair;
 use fleetdyn::model::vehicle::VehicleFile;
@@ -202,9 +201,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let (cfg, opts) = ingest.resolve(&[Stage::Resample])?;
             let rcfg = resample.config();
             let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
-            let d = resample_to_distance(&ing.log, &rcfg)
-                .with_context(|| format!("resampling {}", input.display()))
-                .map_err(drive)?;
+            let d = resample_to_distance(&ing.log, &rcfg).map_err(drive)?;
             let fp = format!(
                 "{}\n{}",
                 cfg.fingerprint(&opts),
@@ -231,7 +228,7 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("error: {:#}", f.error);
+            eprintln!("error: {}", f.error);
             ExitCode::from(f.code)
         }
     }

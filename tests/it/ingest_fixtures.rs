@@ -1,0 +1,81 @@
+//! The bundled fixture drives ingest into the canonical table, and the result matches the truth
+//! the generator recorded before sensor effects.
+
+use crate::common::*;
+use fleetdyn::ingest::{ingest_file, IngestOptions};
+use fleetdyn::schema::Stage;
+
+fn opts() -> IngestOptions {
+    IngestOptions {
+        stages: vec![Stage::Slope, Stage::Driveline],
+        ..Default::default()
+    }
+}
+
+#[test]
+fn every_fixture_ingests_with_canonical_units() {
+    for (file, format) in [
+        ("fixtures/drives/truck-0001.mcap", "mcap-json"),
+        ("fixtures/drives/truck-0002-lz4.mcap", "mcap-json"),
+        ("fixtures/drives/truck-0003-export.parquet", "parquet-wide"),
+        ("fixtures/drives/truck-0004-long.parquet", "parquet-long"),
+    ] {
+        let ing = ingest_file(&fixture(file), &opts()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(ing.report.format, format, "{file}");
+        let log = &ing.log;
+        assert!(log.timestamp_ns.windows(2).all(|w| w[1] > w[0]), "{file}");
+        let schema = fleetdyn::schema::drive_log();
+        for s in &log.signals {
+            if let Some(c) = schema.column(&s.name) {
+                assert_eq!(s.unit, c.unit, "{file}: {}", s.name);
+            }
+        }
+        // whole-percent slope sensor, as the generator wrote it
+        let q = fleetdyn::signal::quantization::estimate_quantization(
+            log.signal("road_slope").unwrap(),
+        )
+        .unwrap();
+        assert!((q.step - 0.01).abs() < 1e-9, "{file}: {q:?}");
+        // speeds of a truck in m/s, engine in rad/s
+        let vmax = log
+            .signal("vehicle_speed")
+            .unwrap()
+            .iter()
+            .cloned()
+            .fold(0.0, f64::max);
+        assert!((15.0..=25.0).contains(&vmax), "{file}: vmax {vmax}");
+        let wmax = log
+            .signal("engine_speed")
+            .unwrap()
+            .iter()
+            .cloned()
+            .fold(0.0, f64::max);
+        assert!(
+            (150.0..=230.0).contains(&wmax),
+            "{file}: engine max {wmax} rad/s"
+        );
+    }
+}
+
+#[test]
+fn multi_rate_mcap_aligns_on_the_fastest_rate() {
+    let ing = ingest_file(&fixture("fixtures/drives/truck-0001.mcap"), &opts()).unwrap();
+    assert_eq!(ing.report.time_base_hz, Some(50.0));
+    let rates: Vec<_> = ing
+        .report
+        .channel_rates
+        .iter()
+        .map(|c| (c.0.as_str(), c.2.round()))
+        .collect();
+    assert!(
+        rates.contains(&("vehicle_speed", 10.0)) && rates.contains(&("engine_speed", 50.0)),
+        "{rates:?}"
+    );
+    // gear is held: only whole gears on the 50 Hz grid
+    assert!(ing
+        .log
+        .signal("gear")
+        .unwrap()
+        .iter()
+        .all(|g| g.fract() == 0.0));
+}

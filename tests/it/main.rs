@@ -1,0 +1,5 @@
+//! fleetdyn integration tests (one binary, one module per area).
+
+mod common;
+mod ingest_errors;
+mod ingest_fixtures;
