@@ -6,6 +6,11 @@ use fleetdyn::ingest::TimeRepair;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
 use fleetdyn::pipeline::resample_stage;
+use fleetdyn::pipeline::run::run_plan;
+use fleetdyn::pipeline::slope_stage;
+use fleetdyn::pipeline::spec::PipelineSpec;
+use fleetdyn::report::spectrum;
+use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
 use fleetdyn::report::IngestSummary;
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
@@ -49,6 +54,75 @@ enum Command {
         #[command(flatten)]
         resample: ResampleArgs,
     },
+    /// Ingest, resample to distance and filter the road slope (seed 000 §5): zero-phase and causal
+    /// Butterworth low-pass, on the distance grid and mapped back to time.
+    Slope {
+        /// Input file (MCAP or Parquet).
+        input: PathBuf,
+        /// Output folder: slope_distance.parquet and slope_time.parquet are written there.
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        ingest: IngestArgs,
+        #[command(flatten)]
+        resample: ResampleArgs,
+        /// Cut-off spatial frequency, 1/m.
+        #[arg(long, default_value_t = 4e-3)]
+        cutoff_per_m: f64,
+        /// Order of the zero-phase filter.
+        #[arg(long, default_value_t = 3)]
+        order: usize,
+        /// Zero-phase edge treatment: matched (fleetdyn default) or scipy (sosfiltfilt defaults).
+        #[arg(long, value_enum, default_value = "matched")]
+        edge: EdgeArg,
+    },
+    /// Welch power spectral density of one column, in distance (1/m) or time (Hz).
+    Spectrum {
+        /// Input file (MCAP or Parquet).
+        input: PathBuf,
+        /// Output Parquet file (spectrum table).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Column to analyse.
+        #[arg(long, default_value = "road_slope")]
+        column: String,
+        /// Domain: distance (resampled on the grid of --step-m, frequency in 1/m) or time (Hz).
+        #[arg(long, value_enum, default_value = "distance")]
+        domain: DomainArg,
+        /// Welch segment length, samples (scipy default 256).
+        #[arg(long)]
+        nperseg: Option<usize>,
+        /// Confidence level of the PSD bounds.
+        #[arg(long, default_value_t = 0.95)]
+        confidence: f64,
+        #[command(flatten)]
+        ingest: IngestArgs,
+        #[command(flatten)]
+        resample: ResampleArgs,
+    },
+    /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
+    Run {
+        /// Pipeline file.
+        pipeline: PathBuf,
+        /// Inputs instead of the pipeline's (files, folders, `*` globs).
+        #[arg(long)]
+        input: Vec<PathBuf>,
+        /// Output folder instead of the pipeline's output_dir.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EdgeArg {
+    Matched,
+    Scipy,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DomainArg {
+    Distance,
+    Time,
 }
 
 #[derive(Args)]
@@ -218,6 +292,80 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 d.collapsed_samples,
                 output.display()
             );
+            Ok(())
+        }
+        Command::Slope { input, output, ingest, resample, cutoff_per_m, order, edge } => {
+            let (cfg, opts) = ingest.resolve(&[Stage::Resample, Stage::Slope])?;
+            let rcfg = resample.config();
+            let scfg = SlopeFilterConfig {
+                cutoff_per_m,
+                order,
+                edge: match edge {
+                    EdgeArg::Matched => SlopeEdge::Matched,
+                    EdgeArg::Scipy => SlopeEdge::Scipy,
+                },
+                ..Default::default()
+            };
+            let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let d = resample_to_distance(&ing.log, &rcfg).map_err(drive)?;
+            let f = filter_slope(&d, &scfg).map_err(drive)?;
+            let fp = format!(
+                "{}\n{}\n{}",
+                cfg.fingerprint(&opts),
+                resample_stage::fingerprint(&rcfg),
+                slope_stage::fingerprint(&scfg)
+            );
+            let (a, b) = (output.join("slope_distance.parquet"), output.join("slope_time.parquet"));
+            slope_stage::write(&a, &b, &ing.log, &d, &f, &scfg, &fp).map_err(drive)?;
+            println!("{}: {:.3} km, slope filter cut-off {} 1/m", d.meta.drive_id, d.map.total_m() / 1000.0, scfg.cutoff_per_m);
+            println!(
+                "  gain at {} 1/m: design (order {}) {:.1} dB, zero-phase {:.1} dB, causal (order {}) {:.1} dB (required <= -{} dB)",
+                scfg.stop_per_m, scfg.order, f.design_gain_at_stop_db, f.zero_phase_gain_at_stop_db,
+                f.causal_order, f.causal_gain_at_stop_db, scfg.required_attenuation_db
+            );
+            match f.quantization {
+                Some(q) => println!("  slope sensor quantisation step {} ({} %)", q.step, q.step * 100.0),
+                None => println!("  slope sensor not quantised"),
+            }
+            println!("  wrote {} and {}", a.display(), b.display());
+            Ok(())
+        }
+        Command::Spectrum { input, output, column, domain, nperseg, confidence, ingest, resample } => {
+            let (cfg, opts) = ingest.resolve(&[Stage::Resample])?;
+            let rcfg = resample.config();
+            let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let sp = match domain {
+                DomainArg::Distance => {
+                    let d = resample_to_distance(&ing.log, &rcfg).map_err(drive)?;
+                    spectrum::of_distance_log(&d, &column, nperseg, confidence)
+                }
+                DomainArg::Time => spectrum::of_drive_log(&ing.log, &column, nperseg, confidence),
+            }
+            .map_err(drive)?;
+            let fp = format!("{}\n{}\nspectrum:v1 {column} {nperseg:?} {confidence}", cfg.fingerprint(&opts), resample_stage::fingerprint(&rcfg));
+            spectrum::write(&output, &ing.log.meta, &sp, &fp).map_err(drive)?;
+            println!(
+                "{}: {} PSD, {} segments of {} samples (equivalent dof {:.1}); 90 % of power below {:.3e} {}, 99 % below {:.3e} {} -> {}",
+                ing.log.meta.drive_id, column, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
+                sp.knee_90, sp.freq_unit, sp.knee_99, sp.freq_unit, output.display()
+            );
+            Ok(())
+        }
+        Command::Run { pipeline, input, out } => {
+            let spec = PipelineSpec::load(&pipeline).map_err(usage)?;
+            let inputs = (!input.is_empty()).then_some(input.as_slice());
+            let plan = spec.plan(&pipeline.display().to_string(), inputs).map_err(usage)?;
+            let out_root = out.unwrap_or_else(|| plan.spec.output_dir.clone());
+            println!("pipeline {}: {} drives, stages {:?} -> {}", plan.spec.name, plan.inputs.len(), plan.spec.stages, out_root.display());
+            let report = run_plan(&plan, &out_root, |o| match &o.error {
+                None => println!("  ok      {:<24} {:>8.3} km  {}", o.drive_id, o.distance_m.unwrap_or(0.0) / 1000.0, o.input),
+                Some(e) => println!("  FAILED  {:<24} at {}: {e}", o.drive_id, o.failed_stage.unwrap_or("?")),
+            })
+            .map_err(usage)?;
+            println!("{} ok, {} failed; report {}", report.ok, report.failed, out_root.join("run_report.json").display());
+            if report.failed > 0 {
+                return Err(drive(anyhow::anyhow!("{} of {} drives failed", report.failed, report.ok + report.failed)));
+            }
             Ok(())
         }
     }

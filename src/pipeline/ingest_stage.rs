@@ -59,7 +59,7 @@ impl IngestConfig {
             gear_range: vehicle.map(VehicleFile::gear_range),
             time_repair: self.time_repair,
             drive_id: None,
-            vehicle_id: vehicle.map(|v| v.vehicle_id.clone()),
+            vehicle_id: None,
         })
     }
 

@@ -3,3 +3,6 @@
 
 pub mod ingest_stage;
 pub mod resample_stage;
+pub mod run;
+pub mod slope_stage;
+pub mod spec;

@@ -1,5 +1,6 @@
 //! Reports: human-readable summaries and machine-readable run reports.
 
 mod ingest_summary;
+pub mod spectrum;
 
 pub use ingest_summary::IngestSummary;

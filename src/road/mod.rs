@@ -1,1 +1,3 @@
-//! Roads: slope filtering (seed 000 §5); synthetic roads come later.
+//! Roads: the road-slope filter of seed 000 §5 (synthetic roads and their spectra follow).
+
+pub mod slope_filter;

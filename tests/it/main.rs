@@ -3,3 +3,5 @@
 mod common;
 mod ingest_errors;
 mod ingest_fixtures;
+mod resample_truth;
+mod slope_pipeline;

@@ -1,0 +1,83 @@
+//! The `slope` stage: filtered road slope on the distance grid (`slope_distance.parquet`) and
+//! mapped back onto the drive's time axis (`slope_time.parquet`), with the filter's measured
+//! gains and the sensor's quantisation step in the file metadata.
+
+use crate::io::{config_hash, write_table, OutColumn, OutputError, TableMeta};
+use crate::road::slope_filter::{SlopeFilterConfig, SlopeFiltered};
+use crate::signal::distance::DistanceLog;
+use crate::table::DriveLog;
+use std::path::Path;
+
+/// Canonical text of the slope settings, for the config hash.
+pub fn fingerprint(cfg: &SlopeFilterConfig) -> String {
+    format!("slope:v1 {cfg:?}")
+}
+
+/// Table metadata of a slope table (`slope_distance` or `slope_time`).
+pub fn meta(table: &str, d: &DistanceLog, f: &SlopeFiltered, cfg: &SlopeFilterConfig, fp: &str) -> TableMeta {
+    TableMeta {
+        table: table.into(),
+        drive_id: d.meta.drive_id.clone(),
+        vehicle_id: d.meta.vehicle_id.clone(),
+        source_file: d.meta.source_file.clone(),
+        config_hash: config_hash(&[fp.as_bytes()]),
+        extra: vec![
+            ("cutoff_per_m".into(), cfg.cutoff_per_m.to_string()),
+            ("zero_phase_order".into(), cfg.order.to_string()),
+            ("causal_order".into(), f.causal_order.to_string()),
+            ("edge".into(), format!("{:?}", cfg.edge).to_lowercase()),
+            ("stop_per_m".into(), cfg.stop_per_m.to_string()),
+            ("design_gain_at_stop_db".into(), format!("{:.3}", f.design_gain_at_stop_db)),
+            ("zero_phase_gain_at_stop_db".into(), format!("{:.3}", f.zero_phase_gain_at_stop_db)),
+            ("causal_gain_at_stop_db".into(), format!("{:.3}", f.causal_gain_at_stop_db)),
+            (
+                "slope_quantization_step".into(),
+                f.quantization.map_or("none".into(), |q| format!("{}", q.step)),
+            ),
+            ("step_m".into(), d.step_m.to_string()),
+        ],
+    }
+}
+
+/// The two slope tables, ready to write: (distance-domain columns, time-domain columns).
+pub fn tables(log: &DriveLog, d: &DistanceLog, f: &SlopeFiltered) -> (Vec<OutColumn>, Vec<OutColumn>) {
+    let dist = vec![
+        OutColumn::f64("distance", "m", d.distance_m.clone()),
+        OutColumn::timestamp(d.timestamp_ns.clone()),
+        OutColumn::f64("road_slope", "1", f.raw.clone()),
+        OutColumn::f64("road_slope_zero_phase", "1", f.zero_phase.clone()),
+        OutColumn::f64("road_slope_causal", "1", f.causal.clone()),
+    ];
+    let time = vec![
+        OutColumn::timestamp(log.timestamp_ns.clone()),
+        OutColumn::f64("distance", "m", d.map.x_m.clone()),
+        OutColumn::f64(
+            "road_slope",
+            "1",
+            log.signal("road_slope").map_or_else(Vec::new, <[f64]>::to_vec),
+        ),
+        OutColumn::f64("road_slope_zero_phase", "1", f.zero_phase_time.clone()),
+        OutColumn::f64("road_slope_causal", "1", f.causal_time.clone()),
+    ];
+    (dist, time)
+}
+
+/// Writes both slope tables.
+///
+/// # Errors
+/// [`OutputError`]; both files are written or neither.
+pub fn write(
+    distance_path: &Path,
+    time_path: &Path,
+    log: &DriveLog,
+    d: &DistanceLog,
+    f: &SlopeFiltered,
+    cfg: &SlopeFilterConfig,
+    fp: &str,
+) -> Result<(), OutputError> {
+    let (dist, time) = tables(log, d, f);
+    write_table(distance_path, &meta("slope_distance", d, f, cfg, fp), &dist)?;
+    write_table(time_path, &meta("slope_time", d, f, cfg, fp), &time).inspect_err(|_| {
+        let _ = std::fs::remove_file(distance_path);
+    })
+}
