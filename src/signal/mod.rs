@@ -1,3 +1,36 @@
-//! Signal processing (temporary module root; merged with the filter work).
+//! Signal processing for fleet logs: resampling to distance ([`distance`]), sensor
+//! quantisation ([`quantization`]), Butterworth design in second-order
+//! sections, causal and zero-phase filtering, Welch spectra.
+//!
+//! The functions mirror scipy.signal (`butter(..., output='sos')`,
+//! `sosfilt`, `sosfilt_zi`, `sosfiltfilt`, `welch`, `sosfreqz`) and are
+//! tested against scipy reference vectors; [`EdgeMode::Matched`] is our own
+//! edge treatment for zero-phase filtering of slowly varying signals such as
+//! road slope (seed 000 §5: 3rd-order Butterworth low-pass in distance,
+//! cut-off 4e-3 1/m).
+//!
+//! Conventions: frequencies and sampling rates share one unit (Hz for time
+//! series, 1/m for distance-sampled series); sections are scipy rows
+//! `[b0, b1, b2, a0, a1, a2]` with `a0 = 1`; PSDs are one-sided densities
+//! (unit² per frequency unit).
+
+mod butterworth;
 pub mod distance;
+mod error;
+mod filtfilt;
 pub mod quantization;
+mod sos;
+mod spectrum;
+mod welch;
+
+pub use butterworth::{
+    butter, lowest_order_meeting, try_lowest_order_meeting, BandType, Sos, MAX_SEARCH_ORDER,
+};
+pub use error::SignalError;
+pub use filtfilt::{
+    impulse_decay_len, matched_default_fit_len, ramp_zi, scipy_default_padlen, sosfiltfilt,
+    EdgeMode, MATCHED_DECAY_THRESHOLD,
+};
+pub use sos::{sosfilt, sosfilt_in_place, sosfilt_zi};
+pub use spectrum::{cumulative_power, knee_frequency};
+pub use welch::{chi2_ppf, equivalent_dof, hann_periodic, welch, WelchConfig, WelchPsd};
