@@ -10,8 +10,8 @@ use fleetdyn::pipeline::run::run_plan;
 use fleetdyn::pipeline::slope_stage;
 use fleetdyn::pipeline::spec::PipelineSpec;
 use fleetdyn::report::spectrum;
-use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
 use fleetdyn::report::IngestSummary;
+use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
     resample_to_distance, DistanceSource, ResampleConfig, ReversePolicy,
@@ -294,7 +294,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
             );
             Ok(())
         }
-        Command::Slope { input, output, ingest, resample, cutoff_per_m, order, edge } => {
+        Command::Slope {
+            input,
+            output,
+            ingest,
+            resample,
+            cutoff_per_m,
+            order,
+            edge,
+        } => {
             let (cfg, opts) = ingest.resolve(&[Stage::Resample, Stage::Slope])?;
             let rcfg = resample.config();
             let scfg = SlopeFilterConfig {
@@ -315,22 +323,43 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 resample_stage::fingerprint(&rcfg),
                 slope_stage::fingerprint(&scfg)
             );
-            let (a, b) = (output.join("slope_distance.parquet"), output.join("slope_time.parquet"));
+            let (a, b) = (
+                output.join("slope_distance.parquet"),
+                output.join("slope_time.parquet"),
+            );
             slope_stage::write(&a, &b, &ing.log, &d, &f, &scfg, &fp).map_err(drive)?;
-            println!("{}: {:.3} km, slope filter cut-off {} 1/m", d.meta.drive_id, d.map.total_m() / 1000.0, scfg.cutoff_per_m);
+            println!(
+                "{}: {:.3} km, slope filter cut-off {} 1/m",
+                d.meta.drive_id,
+                d.map.total_m() / 1000.0,
+                scfg.cutoff_per_m
+            );
             println!(
                 "  gain at {} 1/m: design (order {}) {:.1} dB, zero-phase {:.1} dB, causal (order {}) {:.1} dB (required <= -{} dB)",
                 scfg.stop_per_m, scfg.order, f.design_gain_at_stop_db, f.zero_phase_gain_at_stop_db,
                 f.causal_order, f.causal_gain_at_stop_db, scfg.required_attenuation_db
             );
             match f.quantization {
-                Some(q) => println!("  slope sensor quantisation step {} ({} %)", q.step, q.step * 100.0),
+                Some(q) => println!(
+                    "  slope sensor quantisation step {} ({} %)",
+                    q.step,
+                    q.step * 100.0
+                ),
                 None => println!("  slope sensor not quantised"),
             }
             println!("  wrote {} and {}", a.display(), b.display());
             Ok(())
         }
-        Command::Spectrum { input, output, column, domain, nperseg, confidence, ingest, resample } => {
+        Command::Spectrum {
+            input,
+            output,
+            column,
+            domain,
+            nperseg,
+            confidence,
+            ingest,
+            resample,
+        } => {
             let (cfg, opts) = ingest.resolve(&[Stage::Resample])?;
             let rcfg = resample.config();
             let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
@@ -342,7 +371,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 DomainArg::Time => spectrum::of_drive_log(&ing.log, &column, nperseg, confidence),
             }
             .map_err(drive)?;
-            let fp = format!("{}\n{}\nspectrum:v1 {column} {nperseg:?} {confidence}", cfg.fingerprint(&opts), resample_stage::fingerprint(&rcfg));
+            let fp = format!(
+                "{}\n{}\nspectrum:v1 {column} {nperseg:?} {confidence}",
+                cfg.fingerprint(&opts),
+                resample_stage::fingerprint(&rcfg)
+            );
             spectrum::write(&output, &ing.log.meta, &sp, &fp).map_err(drive)?;
             println!(
                 "{}: {} PSD, {} segments of {} samples (equivalent dof {:.1}); 90 % of power below {:.3e} {}, 99 % below {:.3e} {} -> {}",
@@ -351,20 +384,50 @@ fn run(cli: Cli) -> Result<(), Failure> {
             );
             Ok(())
         }
-        Command::Run { pipeline, input, out } => {
+        Command::Run {
+            pipeline,
+            input,
+            out,
+        } => {
             let spec = PipelineSpec::load(&pipeline).map_err(usage)?;
             let inputs = (!input.is_empty()).then_some(input.as_slice());
-            let plan = spec.plan(&pipeline.display().to_string(), inputs).map_err(usage)?;
+            let plan = spec
+                .plan(&pipeline.display().to_string(), inputs)
+                .map_err(usage)?;
             let out_root = out.unwrap_or_else(|| plan.spec.output_dir.clone());
-            println!("pipeline {}: {} drives, stages {:?} -> {}", plan.spec.name, plan.inputs.len(), plan.spec.stages, out_root.display());
+            println!(
+                "pipeline {}: {} drives, stages {:?} -> {}",
+                plan.spec.name,
+                plan.inputs.len(),
+                plan.spec.stages,
+                out_root.display()
+            );
             let report = run_plan(&plan, &out_root, |o| match &o.error {
-                None => println!("  ok      {:<24} {:>8.3} km  {}", o.drive_id, o.distance_m.unwrap_or(0.0) / 1000.0, o.input),
-                Some(e) => println!("  FAILED  {:<24} at {}: {e}", o.drive_id, o.failed_stage.unwrap_or("?")),
+                None => println!(
+                    "  ok      {:<24} {:>8.3} km  {}",
+                    o.drive_id,
+                    o.distance_m.unwrap_or(0.0) / 1000.0,
+                    o.input
+                ),
+                Some(e) => println!(
+                    "  FAILED  {:<24} at {}: {e}",
+                    o.drive_id,
+                    o.failed_stage.unwrap_or("?")
+                ),
             })
             .map_err(usage)?;
-            println!("{} ok, {} failed; report {}", report.ok, report.failed, out_root.join("run_report.json").display());
+            println!(
+                "{} ok, {} failed; report {}",
+                report.ok,
+                report.failed,
+                out_root.join("run_report.json").display()
+            );
             if report.failed > 0 {
-                return Err(drive(anyhow::anyhow!("{} of {} drives failed", report.failed, report.ok + report.failed)));
+                return Err(drive(anyhow::anyhow!(
+                    "{} of {} drives failed",
+                    report.failed,
+                    report.ok + report.failed
+                )));
             }
             Ok(())
         }

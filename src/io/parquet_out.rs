@@ -240,7 +240,6 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
                 .with_metadata(HashMap::from([("unit".to_string(), c.unit.clone())]))
         })
         .collect();
-    let schema = Arc::new(Schema::new(fields));
     let arrays: Vec<ArrayRef> = cols
         .iter()
         .map(|c| -> ArrayRef {
@@ -265,8 +264,6 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
         path: path.to_path_buf(),
         source,
     };
-    let batch = RecordBatch::try_new(schema.clone(), arrays)
-        .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;
 
     let mut kv = vec![
         ("table", meta.table.clone()),
@@ -288,6 +285,15 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
             .iter()
             .map(|(k, v)| KeyValue::new(k.clone(), v.clone())),
     );
+    // The same entries go into the Arrow schema metadata, so readers that surface only the
+    // embedded Arrow schema (pyarrow's `schema.metadata`) see them too.
+    let schema = Arc::new(
+        Schema::new(fields).with_metadata(
+            kv.iter()
+                .map(|e| (e.key.clone(), e.value.clone().unwrap_or_default()))
+                .collect::<HashMap<String, String>>(),
+        ),
+    );
     let props = WriterProperties::builder()
         .set_compression(Compression::ZSTD(
             ZstdLevel::try_new(3).expect("valid level"),
@@ -296,6 +302,8 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
         .set_key_value_metadata(Some(kv))
         .build();
 
+    let batch = RecordBatch::try_new(schema.clone(), arrays)
+        .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;
     let tmp = AtomicFile::create(path).map_err(io_err)?;
     let handle = tmp.try_clone_file().map_err(io_err)?;
     let mut writer = ArrowWriter::try_new(handle, schema, Some(props)).map_err(pq_err)?;

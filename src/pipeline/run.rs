@@ -114,7 +114,10 @@ pub fn run_drive(plan: &Plan, input: &Path, out_root: &Path) -> DriveOutcome {
             resample_stage::write(&p, d, fp)?;
             written.push(p);
             if let Some(f) = &slope {
-                let (a, b) = (dir.join("slope_distance.parquet"), dir.join("slope_time.parquet"));
+                let (a, b) = (
+                    dir.join("slope_distance.parquet"),
+                    dir.join("slope_time.parquet"),
+                );
                 slope_stage::write(&a, &b, &log, d, f, &plan.spec.slope, fp)?;
                 written.extend([a, b]);
             }
@@ -149,12 +152,20 @@ pub fn run_plan(
     let mut drives: Vec<DriveOutcome> = Vec::with_capacity(plan.inputs.len());
     for input in &plan.inputs {
         let mut o = run_drive(plan, input, out_root);
-        if o.status == "ok" && drives.iter().any(|d| d.status == "ok" && d.drive_id == o.drive_id) {
+        if o.status == "ok"
+            && drives
+                .iter()
+                .any(|d| d.status == "ok" && d.drive_id == o.drive_id)
+        {
             for p in &o.outputs {
                 let _ = std::fs::remove_file(p);
             }
             let id = o.drive_id.clone();
-            o = fail(o, Stage::Ingest, format!("drive id {id} is not unique in this run"));
+            o = fail(
+                o,
+                Stage::Ingest,
+                format!("drive id {id} is not unique in this run"),
+            );
             o.outputs.clear();
         }
         on_drive(&o);

@@ -14,7 +14,13 @@ pub fn fingerprint(cfg: &SlopeFilterConfig) -> String {
 }
 
 /// Table metadata of a slope table (`slope_distance` or `slope_time`).
-pub fn meta(table: &str, d: &DistanceLog, f: &SlopeFiltered, cfg: &SlopeFilterConfig, fp: &str) -> TableMeta {
+pub fn meta(
+    table: &str,
+    d: &DistanceLog,
+    f: &SlopeFiltered,
+    cfg: &SlopeFilterConfig,
+    fp: &str,
+) -> TableMeta {
     TableMeta {
         table: table.into(),
         drive_id: d.meta.drive_id.clone(),
@@ -27,12 +33,22 @@ pub fn meta(table: &str, d: &DistanceLog, f: &SlopeFiltered, cfg: &SlopeFilterCo
             ("causal_order".into(), f.causal_order.to_string()),
             ("edge".into(), format!("{:?}", cfg.edge).to_lowercase()),
             ("stop_per_m".into(), cfg.stop_per_m.to_string()),
-            ("design_gain_at_stop_db".into(), format!("{:.3}", f.design_gain_at_stop_db)),
-            ("zero_phase_gain_at_stop_db".into(), format!("{:.3}", f.zero_phase_gain_at_stop_db)),
-            ("causal_gain_at_stop_db".into(), format!("{:.3}", f.causal_gain_at_stop_db)),
+            (
+                "design_gain_at_stop_db".into(),
+                format!("{:.3}", f.design_gain_at_stop_db),
+            ),
+            (
+                "zero_phase_gain_at_stop_db".into(),
+                format!("{:.3}", f.zero_phase_gain_at_stop_db),
+            ),
+            (
+                "causal_gain_at_stop_db".into(),
+                format!("{:.3}", f.causal_gain_at_stop_db),
+            ),
             (
                 "slope_quantization_step".into(),
-                f.quantization.map_or("none".into(), |q| format!("{}", q.step)),
+                f.quantization
+                    .map_or("none".into(), |q| format!("{}", q.step)),
             ),
             ("step_m".into(), d.step_m.to_string()),
         ],
@@ -40,7 +56,11 @@ pub fn meta(table: &str, d: &DistanceLog, f: &SlopeFiltered, cfg: &SlopeFilterCo
 }
 
 /// The two slope tables, ready to write: (distance-domain columns, time-domain columns).
-pub fn tables(log: &DriveLog, d: &DistanceLog, f: &SlopeFiltered) -> (Vec<OutColumn>, Vec<OutColumn>) {
+pub fn tables(
+    log: &DriveLog,
+    d: &DistanceLog,
+    f: &SlopeFiltered,
+) -> (Vec<OutColumn>, Vec<OutColumn>) {
     let dist = vec![
         OutColumn::f64("distance", "m", d.distance_m.clone()),
         OutColumn::timestamp(d.timestamp_ns.clone()),
@@ -54,7 +74,8 @@ pub fn tables(log: &DriveLog, d: &DistanceLog, f: &SlopeFiltered) -> (Vec<OutCol
         OutColumn::f64(
             "road_slope",
             "1",
-            log.signal("road_slope").map_or_else(Vec::new, <[f64]>::to_vec),
+            log.signal("road_slope")
+                .map_or_else(Vec::new, <[f64]>::to_vec),
         ),
         OutColumn::f64("road_slope_zero_phase", "1", f.zero_phase_time.clone()),
         OutColumn::f64("road_slope_causal", "1", f.causal_time.clone()),

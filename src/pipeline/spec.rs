@@ -89,7 +89,10 @@ pub fn list_inputs(patterns: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
             let p = e?.path();
             if p.is_dir() {
                 walk(&p, out)?;
-            } else if matches!(p.extension().and_then(|e| e.to_str()), Some("mcap" | "parquet")) {
+            } else if matches!(
+                p.extension().and_then(|e| e.to_str()),
+                Some("mcap" | "parquet")
+            ) {
                 out.push(p);
             }
         }
@@ -117,8 +120,12 @@ pub fn list_inputs(patterns: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     for p in patterns {
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if name.contains('*') {
-            let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            let entries = std::fs::read_dir(dir).map_err(|e| format!("input {}: {e}", p.display()))?;
+            let dir = p
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            let entries =
+                std::fs::read_dir(dir).map_err(|e| format!("input {}: {e}", p.display()))?;
             let before = out.len();
             for e in entries.flatten() {
                 let path = e.path();
@@ -186,7 +193,9 @@ impl PipelineSpec {
             problems.push("stage slope needs resample before it".into());
         }
         if !stages.windows(2).all(|w| w[0] < w[1]) {
-            problems.push("stages must be in the order ingest, resample, slope, without repeats".into());
+            problems.push(
+                "stages must be in the order ingest, resample, slope, without repeats".into(),
+            );
         }
         let vehicle = match &self.vehicle {
             Some(p) => match VehicleFile::load(p) {

@@ -122,11 +122,24 @@ pub fn of_distance_log(
     nperseg: Option<usize>,
     confidence: f64,
 ) -> Result<Spectrum, SpectrumError> {
-    let s = d.signals.iter().find(|s| s.name == column).ok_or_else(|| SpectrumError::NoColumn {
-        file: d.meta.source_file.clone(),
-        column: column.into(),
-    })?;
-    compute(&d.meta.source_file, column, &s.unit, &s.values, 1.0 / d.step_m, "1/m", nperseg, confidence)
+    let s = d
+        .signals
+        .iter()
+        .find(|s| s.name == column)
+        .ok_or_else(|| SpectrumError::NoColumn {
+            file: d.meta.source_file.clone(),
+            column: column.into(),
+        })?;
+    compute(
+        &d.meta.source_file,
+        column,
+        &s.unit,
+        &s.values,
+        1.0 / d.step_m,
+        "1/m",
+        nperseg,
+        confidence,
+    )
 }
 
 /// Spectrum of a column of a drive log in time (Hz); the time base must be uniform within 1 %.
@@ -140,20 +153,30 @@ pub fn of_drive_log(
     confidence: f64,
 ) -> Result<Spectrum, SpectrumError> {
     let file = log.meta.source_file.clone();
-    let s = log.signals.iter().find(|s| s.name == column).ok_or_else(|| SpectrumError::NoColumn {
-        file: file.clone(),
-        column: column.into(),
-    })?;
+    let s = log
+        .signals
+        .iter()
+        .find(|s| s.name == column)
+        .ok_or_else(|| SpectrumError::NoColumn {
+            file: file.clone(),
+            column: column.into(),
+        })?;
     let dts: Vec<i64> = log.timestamp_ns.windows(2).map(|w| w[1] - w[0]).collect();
     let (min_ns, max_ns) = (
         dts.iter().copied().min().unwrap_or(0),
         dts.iter().copied().max().unwrap_or(0),
     );
     if min_ns <= 0 || (max_ns - min_ns) as f64 > 0.01 * min_ns as f64 {
-        return Err(SpectrumError::NonUniform { file, min_ns, max_ns });
+        return Err(SpectrumError::NonUniform {
+            file,
+            min_ns,
+            max_ns,
+        });
     }
     let fs = 1e9 / (log.duration_s() * 1e9 / dts.len() as f64);
-    compute(&file, column, &s.unit, &s.values, fs, "Hz", nperseg, confidence)
+    compute(
+        &file, column, &s.unit, &s.values, fs, "Hz", nperseg, confidence,
+    )
 }
 
 /// Writes a spectrum table (schema `spectrum`), knees and Welch settings in the metadata.

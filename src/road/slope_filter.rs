@@ -21,8 +21,8 @@
 use crate::signal::distance::DistanceLog;
 use crate::signal::quantization::{estimate_quantization, Quantization};
 use crate::signal::{
-    butter, sosfilt, try_lowest_order_meeting, MAX_SEARCH_ORDER, sosfilt_zi, sosfiltfilt, BandType, EdgeMode,
-    SignalError,
+    butter, sosfilt, sosfilt_zi, sosfiltfilt, try_lowest_order_meeting, BandType, EdgeMode,
+    SignalError, MAX_SEARCH_ORDER,
 };
 use serde::Deserialize;
 use thiserror::Error;

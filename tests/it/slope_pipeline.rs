@@ -12,7 +12,14 @@ use parquet::file::reader::{FileReader, SerializedFileReader};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn slope_of(file: &str, cfg: &SlopeFilterConfig) -> (fleetdyn::table::DriveLog, fleetdyn::road::slope_filter::SlopeFiltered, fleetdyn::signal::distance::DistanceLog) {
+fn slope_of(
+    file: &str,
+    cfg: &SlopeFilterConfig,
+) -> (
+    fleetdyn::table::DriveLog,
+    fleetdyn::road::slope_filter::SlopeFiltered,
+    fleetdyn::signal::distance::DistanceLog,
+) {
     let opts = IngestOptions {
         stages: vec![Stage::Resample, Stage::Slope],
         ..Default::default()
@@ -25,10 +32,17 @@ fn slope_of(file: &str, cfg: &SlopeFilterConfig) -> (fleetdyn::table::DriveLog, 
 
 #[test]
 fn seed_000_filter_figures() {
-    let (_, f, _) = slope_of("fixtures/drives/truck-0001.mcap", &SlopeFilterConfig::default());
+    let (_, f, _) = slope_of(
+        "fixtures/drives/truck-0001.mcap",
+        &SlopeFilterConfig::default(),
+    );
     // scipy.signal.sosfreqz of butter(3, 4e-3, fs=1) at 2e-2 1/m: -41.97 dB (fixtures/reference/
     // slope_response.json); the seed quotes "about -42 dB" against a -30 dB requirement.
-    assert!((f.design_gain_at_stop_db - (-41.97)).abs() < 0.01, "{}", f.design_gain_at_stop_db);
+    assert!(
+        (f.design_gain_at_stop_db - (-41.97)).abs() < 0.01,
+        "{}",
+        f.design_gain_at_stop_db
+    );
     assert!((f.zero_phase_gain_at_stop_db - 2.0 * f.design_gain_at_stop_db).abs() < 1e-12);
     assert_eq!(f.causal_order, 3, "order 2 gives only -28 dB");
     assert!(f.causal_gain_at_stop_db <= -30.0);
@@ -56,7 +70,10 @@ fn best_lag(a: &[f64], b: &[f64], max_lag: i64) -> i64 {
 
 #[test]
 fn zero_phase_has_no_lag_and_causal_lags() {
-    let (_, f, _) = slope_of("fixtures/drives/truck-0004-long.parquet", &SlopeFilterConfig::default());
+    let (_, f, _) = slope_of(
+        "fixtures/drives/truck-0004-long.parquet",
+        &SlopeFilterConfig::default(),
+    );
     let lag0 = best_lag(&f.zero_phase, &f.raw, 300);
     let lag_c = best_lag(&f.causal, &f.raw, 300);
     println!("lag vs raw slope: zero-phase {lag0} m, causal {lag_c} m");
@@ -68,11 +85,19 @@ fn zero_phase_has_no_lag_and_causal_lags() {
 #[test]
 fn filtered_slope_is_closer_to_the_true_road_than_the_sensor() {
     for (file, truth) in [
-        ("fixtures/drives/truck-0001.mcap", "fixtures/drives/truth/truck-0001-truth.parquet"),
-        ("fixtures/drives/truck-0003-export.parquet", "fixtures/drives/truth/truck-0003-truth.parquet"),
+        (
+            "fixtures/drives/truck-0001.mcap",
+            "fixtures/drives/truth/truck-0001-truth.parquet",
+        ),
+        (
+            "fixtures/drives/truck-0003-export.parquet",
+            "fixtures/drives/truth/truck-0003-truth.parquet",
+        ),
     ] {
         let (log, f, _) = slope_of(file, &SlopeFilterConfig::default());
-        let truth = ingest_file(&fixture(truth), &IngestOptions::default()).unwrap().log;
+        let truth = ingest_file(&fixture(truth), &IngestOptions::default())
+            .unwrap()
+            .log;
         let (tt, ts) = (&truth.timestamp_ns, truth.signal("road_slope").unwrap());
         let raw = log.signal("road_slope").unwrap();
         let (mut e_raw, mut e_zp, mut n) = (0.0, 0.0, 0);
@@ -88,7 +113,10 @@ fn filtered_slope_is_closer_to_the_true_road_than_the_sensor() {
         }
         let (rms_raw, rms_zp) = ((e_raw / n as f64).sqrt(), (e_zp / n as f64).sqrt());
         println!("{file}: slope RMS error vs true road: sensor {rms_raw:.5}, zero-phase filtered {rms_zp:.5}");
-        assert!(rms_zp < rms_raw, "{file}: filtered {rms_zp} vs sensor {rms_raw}");
+        assert!(
+            rms_zp < rms_raw,
+            "{file}: filtered {rms_zp} vs sensor {rms_raw}"
+        );
     }
 }
 
@@ -131,14 +159,24 @@ fn nightly_pipeline_runs_every_fixture_deterministically() {
             let p1 = PathBuf::from(o);
             let rel = p1.strip_prefix(out1.path()).unwrap();
             let p2 = out2.path().join(rel);
-            assert_eq!(std::fs::read(&p1).unwrap(), std::fs::read(&p2).unwrap(), "{rel:?} differs between runs");
+            assert_eq!(
+                std::fs::read(&p1).unwrap(),
+                std::fs::read(&p2).unwrap(),
+                "{rel:?} differs between runs"
+            );
             for (name, unit) in field_units(&p1) {
-                assert!(unit.is_some_and(|u| !u.is_empty()), "{rel:?}: {name} has no unit");
+                assert!(
+                    unit.is_some_and(|u| !u.is_empty()),
+                    "{rel:?}: {name} has no unit"
+                );
             }
         }
     }
     // no temporary files left anywhere
-    let leftovers: Vec<_> = walk(out1.path()).into_iter().filter(|p| p.to_string_lossy().contains(".tmp-")).collect();
+    let leftovers: Vec<_> = walk(out1.path())
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains(".tmp-"))
+        .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
@@ -160,9 +198,17 @@ fn a_bad_drive_fails_alone_and_the_run_exits_1() {
     let dir = tempfile::tempdir().unwrap();
     let inputs = dir.path().join("in");
     std::fs::create_dir(&inputs).unwrap();
-    std::fs::copy(fixture("fixtures/drives/truck-0001.mcap"), inputs.join("truck-0001.mcap")).unwrap();
+    std::fs::copy(
+        fixture("fixtures/drives/truck-0001.mcap"),
+        inputs.join("truck-0001.mcap"),
+    )
+    .unwrap();
     let bytes = std::fs::read(fixture("fixtures/drives/truck-0002-lz4.mcap")).unwrap();
-    std::fs::write(inputs.join("truck-0002-cut.mcap"), &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::write(
+        inputs.join("truck-0002-cut.mcap"),
+        &bytes[..bytes.len() / 2],
+    )
+    .unwrap();
     let mut d = Drive::new(600);
     d.speed = vec![Some(0.0); 600];
     d.write(&inputs.join("parked.parquet"));
@@ -177,17 +223,24 @@ fn a_bad_drive_fails_alone_and_the_run_exits_1() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(1), "{stdout}");
-    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run_report.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run_report.json")).unwrap()).unwrap();
     assert_eq!(report["ok"], 1);
     assert_eq!(report["failed"], 2);
     let drives = report["drives"].as_array().unwrap();
     let by = |id: &str| drives.iter().find(|d| d["drive_id"] == id).unwrap().clone();
     assert_eq!(by("truck-0002-cut")["failed_stage"], "ingest");
     assert_eq!(by("parked")["failed_stage"], "resample");
-    assert!(by("parked")["error"].as_str().unwrap().contains("no distance"));
+    assert!(by("parked")["error"]
+        .as_str()
+        .unwrap()
+        .contains("no distance"));
     // failed drives leave no folder of outputs, the good one has all four files
     assert!(!out.join("parked").exists() && !out.join("truck-0002-cut").exists());
-    assert_eq!(std::fs::read_dir(out.join("truck-0001")).unwrap().count(), 4);
+    assert_eq!(
+        std::fs::read_dir(out.join("truck-0001")).unwrap().count(),
+        4
+    );
 }
 
 #[test]
@@ -199,14 +252,31 @@ fn pipeline_errors_are_reported_up_front_with_exit_2() {
         "name = \"x\"\nstages = [\"ingest\", \"slope\", \"teleport\"]\ninputs = [\"/nonexistent/*.mcap\"]\noutput_dir = \"o\"\nvehicle = \"/nonexistent/v.toml\"\n[slope]\ncutoff_per_m = 0.7\n",
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn")).args(["run"]).arg(&p).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .args(["run"])
+        .arg(&p)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
-    for needle in ["teleport", "slope needs resample", "/nonexistent/v.toml", "/nonexistent/*.mcap"] {
+    for needle in [
+        "teleport",
+        "slope needs resample",
+        "/nonexistent/v.toml",
+        "/nonexistent/*.mcap",
+    ] {
         assert!(e.contains(needle), "{needle} missing from:\n{e}");
     }
-    std::fs::write(&p, "name = \"x\"\nstages = [\"ingest\"]\ninputs = []\noutput_dir = \"o\"\nspeed_limit = 3\n").unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn")).args(["run"]).arg(&p).output().unwrap();
+    std::fs::write(
+        &p,
+        "name = \"x\"\nstages = [\"ingest\"]\ninputs = []\noutput_dir = \"o\"\nspeed_limit = 3\n",
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .args(["run"])
+        .arg(&p)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("speed_limit"));
 }
