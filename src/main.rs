@@ -341,7 +341,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             );
             match f.quantization {
                 Some(q) => println!(
-                    "  slope sensor quantisation step {} ({} %)",
+                    "  slope sensor quantisation step {:.6} ({:.4} %)",
                     q.step,
                     q.step * 100.0
                 ),

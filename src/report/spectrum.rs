@@ -4,7 +4,8 @@
 //! frequencies below which 90 % and 99 % of the power lies (seed 000 §4).
 
 use crate::io::{config_hash, write_table, OutColumn, OutputError, TableMeta};
-use crate::signal::distance::DistanceLog;
+use crate::schema::{drive_log, Interpolation};
+use crate::signal::distance::{fill_gaps, DistanceLog};
 use crate::signal::{cumulative_power, knee_frequency, welch, SignalError, WelchConfig, WelchPsd};
 use crate::table::{DriveLog, DriveMeta};
 use std::path::Path;
@@ -112,7 +113,14 @@ fn compute(
     })
 }
 
-/// Spectrum of a column of a distance log (frequency in 1/m). Gaps of hold columns are held.
+fn interpolation_of(column: &str) -> Interpolation {
+    drive_log()
+        .column(column)
+        .map_or(Interpolation::Linear, |c| c.interpolation)
+}
+
+/// Spectrum of a column of a distance log (frequency in 1/m). Short gaps (those ingest accepted)
+/// are filled per the column's interpolation kind; a column without any value is an error.
 ///
 /// # Errors
 /// [`SpectrumError`].
@@ -130,11 +138,12 @@ pub fn of_distance_log(
             file: d.meta.source_file.clone(),
             column: column.into(),
         })?;
+    let values = fill_gaps(&s.values, interpolation_of(column)).unwrap_or_else(|| s.values.clone());
     compute(
         &d.meta.source_file,
         column,
         &s.unit,
-        &s.values,
+        &values,
         1.0 / d.step_m,
         "1/m",
         nperseg,
@@ -143,6 +152,7 @@ pub fn of_distance_log(
 }
 
 /// Spectrum of a column of a drive log in time (Hz); the time base must be uniform within 1 %.
+/// Short gaps are filled as in [`of_distance_log`].
 ///
 /// # Errors
 /// [`SpectrumError`].
@@ -174,8 +184,9 @@ pub fn of_drive_log(
         });
     }
     let fs = 1e9 / (log.duration_s() * 1e9 / dts.len() as f64);
+    let values = fill_gaps(&s.values, interpolation_of(column)).unwrap_or_else(|| s.values.clone());
     compute(
-        &file, column, &s.unit, &s.values, fs, "Hz", nperseg, confidence,
+        &file, column, &s.unit, &values, fs, "Hz", nperseg, confidence,
     )
 }
 

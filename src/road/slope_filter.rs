@@ -18,7 +18,8 @@
 //! (short sensor dropouts that ingest allowed) are held from the previous sample — the slope
 //! sensor is state-like in the schema — and leading ones take the first valid value.
 
-use crate::signal::distance::DistanceLog;
+use crate::schema::Interpolation;
+use crate::signal::distance::{fill_gaps, DistanceLog};
 use crate::signal::quantization::{estimate_quantization, Quantization};
 use crate::signal::{
     butter, sosfilt, sosfilt_zi, sosfiltfilt, try_lowest_order_meeting, BandType, EdgeMode,
@@ -124,22 +125,6 @@ pub struct SlopeFiltered {
     pub quantization: Option<Quantization>,
 }
 
-fn fill_held(values: &[f64]) -> Option<Vec<f64>> {
-    let first = values.iter().copied().find(|v| v.is_finite())?;
-    let mut last = first;
-    Some(
-        values
-            .iter()
-            .map(|&v| {
-                if v.is_finite() {
-                    last = v;
-                }
-                last
-            })
-            .collect(),
-    )
-}
-
 /// Filters the drive's slope per the module doc.
 ///
 /// # Errors
@@ -149,7 +134,7 @@ pub fn filter_slope(d: &DistanceLog, cfg: &SlopeFilterConfig) -> Result<SlopeFil
     let file = d.meta.source_file.clone();
     let raw = d
         .signal("road_slope")
-        .and_then(fill_held)
+        .and_then(|v| fill_gaps(v, Interpolation::Hold))
         .ok_or_else(|| SlopeError::NoSlope { file: file.clone() })?;
     let fs = 1.0 / d.step_m;
     let err = |source| SlopeError::Filter {

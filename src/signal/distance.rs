@@ -164,12 +164,16 @@ pub struct DistanceMap {
     pub reverse_samples: usize,
 }
 
-fn fill_nan(values: &[f64]) -> Vec<f64> {
+/// Fills missing values (NaN) as the column's interpolation kind allows: `linear` bridges gaps
+/// linearly, `hold` repeats the previous valid value; leading gaps take the first valid value and
+/// trailing gaps the last. `None` when no value is valid. Used where a stage allows filling the
+/// short gaps ingest accepted (the ingest NaN-run limit bounds their length).
+pub fn fill_gaps(values: &[f64], interpolation: Interpolation) -> Option<Vec<f64>> {
+    let valid: Vec<usize> = (0..values.len())
+        .filter(|&i| values[i].is_finite())
+        .collect();
+    let (&first, &last) = (valid.first()?, valid.last()?);
     let mut out = values.to_vec();
-    let valid: Vec<usize> = (0..out.len()).filter(|&i| out[i].is_finite()).collect();
-    let (Some(&first), Some(&last)) = (valid.first(), valid.last()) else {
-        return out;
-    };
     for v in &mut out[..first] {
         *v = values[first];
     }
@@ -178,12 +182,17 @@ fn fill_nan(values: &[f64]) -> Vec<f64> {
     }
     for w in valid.windows(2) {
         let (a, b) = (w[0], w[1]);
-        for i in a + 1..b {
-            let f = (i - a) as f64 / (b - a) as f64;
-            out[i] = values[a] + f * (values[b] - values[a]);
+        for (i, o) in out.iter_mut().enumerate().take(b).skip(a + 1) {
+            *o = match interpolation {
+                Interpolation::Linear => {
+                    let f = (i - a) as f64 / (b - a) as f64;
+                    values[a] + f * (values[b] - values[a])
+                }
+                Interpolation::Hold | Interpolation::None => values[a],
+            };
         }
     }
-    out
+    Some(out)
 }
 
 impl DistanceMap {
@@ -247,7 +256,7 @@ impl DistanceMap {
                     file: file.clone(),
                     column: "vehicle_speed".into(),
                 })?;
-            let v = fill_nan(v);
+            let v = fill_gaps(v, Interpolation::Linear).expect("has a finite value");
             let mut eff = vec![0.0; n];
             for i in 0..n {
                 if v[i] < -cfg.reverse_speed_mps {

@@ -43,7 +43,7 @@ pub fn estimate_quantization(values: &[f64]) -> Option<Quantization> {
         .windows(2)
         .map(|w| w[1] - w[0])
         .fold(f64::INFINITY, f64::min);
-    if !(q > tol) {
+    if q.is_nan() || q <= tol {
         return None;
     }
     let v0 = v[0];
