@@ -254,3 +254,68 @@ pub fn chi2_ppf(p: f64, dof: f64) -> f64 {
     }
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dof_limits() {
+        let w = hann_periodic(256);
+        // One segment: 2 dof; non-overlapping segments: 2 per segment.
+        assert!((equivalent_dof(&w, 128, 1) - 2.0).abs() < 1e-12);
+        assert!((equivalent_dof(&w, 256, 10) - 20.0).abs() < 1e-12);
+        // 50 % overlapped Hann: rho(1) = 1/6 -> nu -> 2 N / (1 + 2/36) for large N.
+        let nu = equivalent_dof(&w, 128, 1000);
+        let want = 2000.0 / (1.0 + 2.0 * (1.0 - 1.0 / 1000.0) / 36.0);
+        assert!((nu - want).abs() < 1e-6 * want, "{nu} vs {want}");
+    }
+
+    #[test]
+    fn rejects_bad_configs() {
+        let x = vec![0.0; 100];
+        let c = |nperseg, noverlap| WelchConfig {
+            nperseg,
+            noverlap,
+            ..WelchConfig::default()
+        };
+        assert!(matches!(
+            welch(&[], &WelchConfig::default()),
+            Err(SignalError::InvalidSegment { len: 0, .. })
+        ));
+        assert!(welch(&x, &c(Some(0), None)).is_err());
+        assert!(welch(&x, &c(Some(50), Some(50))).is_err());
+        let bad = WelchConfig {
+            confidence: 1.0,
+            ..WelchConfig::default()
+        };
+        assert!(welch(&x, &bad).is_err());
+        let bad = WelchConfig {
+            fs_hz: 0.0,
+            ..WelchConfig::default()
+        };
+        assert!(welch(&x, &bad).is_err());
+        let mut y = x.clone();
+        y[3] = f64::NEG_INFINITY;
+        assert!(matches!(
+            welch(&y, &WelchConfig::default()),
+            Err(SignalError::NonFinite { index: 3, .. })
+        ));
+        // len < nperseg -> nperseg = len, noverlap = len/2 (scipy).
+        let r = welch(&x, &WelchConfig::default()).unwrap();
+        assert_eq!((r.nperseg, r.noverlap, r.n_segments), (100, 50, 1));
+    }
+
+    #[test]
+    fn interval_brackets_psd() {
+        let x: Vec<f64> = (0..4096)
+            .map(|i| ((i * 7919) % 1000) as f64 / 1000.0)
+            .collect();
+        let r = welch(&x, &WelchConfig::default()).unwrap();
+        assert_eq!(r.n_segments, 31);
+        for k in 0..r.psd.len() {
+            assert!(r.lower[k] <= r.psd[k] && r.psd[k] <= r.upper[k]);
+        }
+        assert!(r.dof > 50.0 && r.dof < 62.0, "{}", r.dof);
+    }
+}
