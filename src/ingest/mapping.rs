@@ -143,6 +143,14 @@ const EMBEDDED: &[(&str, &str)] = &[
         "j1939-long-export",
         include_str!("../../schemas/mappings/j1939-long-export.toml"),
     ),
+    (
+        "css-obd2-long",
+        include_str!("../../schemas/mappings/css-obd2-long.toml"),
+    ),
+    (
+        "css-gnss-wide",
+        include_str!("../../schemas/mappings/css-gnss-wide.toml"),
+    ),
 ];
 
 impl Mapping {

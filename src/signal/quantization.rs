@@ -6,8 +6,8 @@
 //!
 //! Method: sort the distinct finite values, take the smallest gap between neighbours as the
 //! candidate step `q`, and accept it only if (a) at least 99 % of samples lie within 1 % of `q`
-//! of the lattice `v₀ + k·q` and (b) the signal has many samples per distinct value (at most one
-//! distinct value per 4 samples), which a continuous noisy signal does not. Otherwise the signal
+//! of the lattice `v₀ + k·q` and (b) values repeat: at most one distinct value per 2 samples, which a continuous
+//! noisy signal (every sample distinct) does not satisfy. Otherwise the signal
 //! is reported as not quantised.
 
 /// An estimated quantisation lattice `offset + k·step`.
@@ -36,7 +36,7 @@ pub fn estimate_quantization(values: &[f64]) -> Option<Quantization> {
     let tol = scale * 1e-9;
     v.dedup_by(|a, b| (*a - *b).abs() <= tol);
     let distinct = v.len();
-    if distinct < 2 || distinct * 4 > n {
+    if distinct < 2 || distinct * 2 > n {
         return None;
     }
     let q = v
