@@ -19,6 +19,23 @@ use fleetdyn::signal::distance::{
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Prints a line to stdout; a closed pipe (`fleetdyn ... | head`) ends output quietly instead of
+/// panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// Like [`say!`] without the newline.
+macro_rules! say_raw {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "fleetdyn",
@@ -259,10 +276,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
         } => {
             let (cfg, opts) = ingest.resolve(&[])?;
             let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
-            print!("{}", IngestSummary::new(&ing));
+            say_raw!("{}", IngestSummary::new(&ing));
             if let Some(out) = output {
                 ingest_stage::write(&out, &ing.log, &cfg.fingerprint(&opts)).map_err(drive)?;
-                println!("wrote     {}", out.display());
+                say!("wrote     {}", out.display());
             }
             Ok(())
         }
@@ -282,7 +299,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 resample_stage::fingerprint(&rcfg)
             );
             resample_stage::write(&output, &d, &fp).map_err(drive)?;
-            println!(
+            say!(
                 "{}: {:.3} km on a {} m grid ({} points, distance from {:?}, {} samples collapsed) -> {}",
                 d.meta.drive_id,
                 d.map.total_m() / 1000.0,
@@ -328,26 +345,26 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 output.join("slope_time.parquet"),
             );
             slope_stage::write(&a, &b, &ing.log, &d, &f, &scfg, &fp).map_err(drive)?;
-            println!(
+            say!(
                 "{}: {:.3} km, slope filter cut-off {} 1/m",
                 d.meta.drive_id,
                 d.map.total_m() / 1000.0,
                 scfg.cutoff_per_m
             );
-            println!(
+            say!(
                 "  gain at {} 1/m: design (order {}) {:.1} dB, zero-phase {:.1} dB, causal (order {}) {:.1} dB (required <= -{} dB)",
                 scfg.stop_per_m, scfg.order, f.design_gain_at_stop_db, f.zero_phase_gain_at_stop_db,
                 f.causal_order, f.causal_gain_at_stop_db, scfg.required_attenuation_db
             );
             match f.quantization {
-                Some(q) => println!(
+                Some(q) => say!(
                     "  slope sensor quantisation step {:.6} ({:.4} %)",
                     q.step,
                     q.step * 100.0
                 ),
-                None => println!("  slope sensor not quantised"),
+                None => say!("  slope sensor not quantised"),
             }
-            println!("  wrote {} and {}", a.display(), b.display());
+            say!("  wrote {} and {}", a.display(), b.display());
             Ok(())
         }
         Command::Spectrum {
@@ -377,7 +394,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 resample_stage::fingerprint(&rcfg)
             );
             spectrum::write(&output, &ing.log.meta, &sp, &fp).map_err(drive)?;
-            println!(
+            say!(
                 "{}: {} PSD, {} segments of {} samples (equivalent dof {:.1}); 90 % of power below {:.3e} {}, 99 % below {:.3e} {} -> {}",
                 ing.log.meta.drive_id, column, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
                 sp.knee_90, sp.freq_unit, sp.knee_99, sp.freq_unit, output.display()
@@ -395,7 +412,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 .plan(&pipeline.display().to_string(), inputs)
                 .map_err(usage)?;
             let out_root = out.unwrap_or_else(|| plan.spec.output_dir.clone());
-            println!(
+            say!(
                 "pipeline {}: {} drives, stages {:?} -> {}",
                 plan.spec.name,
                 plan.inputs.len(),
@@ -403,20 +420,20 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 out_root.display()
             );
             let report = run_plan(&plan, &out_root, |o| match &o.error {
-                None => println!(
+                None => say!(
                     "  ok      {:<24} {:>8.3} km  {}",
                     o.drive_id,
                     o.distance_m.unwrap_or(0.0) / 1000.0,
                     o.input
                 ),
-                Some(e) => println!(
+                Some(e) => say!(
                     "  FAILED  {:<24} at {}: {e}",
                     o.drive_id,
                     o.failed_stage.unwrap_or("?")
                 ),
             })
             .map_err(usage)?;
-            println!(
+            say!(
                 "{} ok, {} failed; report {}",
                 report.ok,
                 report.failed,

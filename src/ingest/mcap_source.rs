@@ -30,6 +30,9 @@ pub struct McapRead {
     pub messages: u64,
     /// Topics present but not mapped.
     pub ignored: Vec<String>,
+    /// Entries of the file's metadata records (e.g. `drive_id`, `vehicle_id`), later records
+    /// overriding earlier ones.
+    pub metadata: HashMap<String, String>,
 }
 
 fn lookup<'a>(v: &'a Value, path: &[String]) -> Option<&'a Value> {
@@ -126,7 +129,57 @@ pub fn read_mcap(path: &Path, mapping: &Mapping) -> Result<McapRead, IngestError
         channels,
         messages,
         ignored,
+        metadata: metadata_entries(path),
     })
+}
+
+/// Key–value entries of every Metadata record listed in the summary section. Metadata is
+/// optional provenance: a file without a summary, or one whose summary cannot be read, yields
+/// none (its messages were already validated by the streaming pass).
+fn metadata_entries(path: &Path) -> HashMap<String, String> {
+    use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader};
+    use std::io::{Read, Seek, SeekFrom};
+    let mut out = HashMap::new();
+    let Ok(mut file) = File::open(path) else {
+        return out;
+    };
+    let mut reader = SummaryReader::new();
+    while let Some(event) = reader.next_event() {
+        let step = match event {
+            Ok(SummaryReadEvent::ReadRequest(need)) => file
+                .read(reader.insert(need))
+                .map(|n| reader.notify_read(n)),
+            Ok(SummaryReadEvent::SeekRequest(to)) => file.seek(to).map(|p| reader.notify_seeked(p)),
+            Err(_) => return out,
+        };
+        if step.is_err() {
+            return out;
+        }
+    }
+    let Some(summary) = reader.finish() else {
+        return out;
+    };
+    let mut indexes = summary.metadata_indexes;
+    indexes.sort_by_key(|m| m.offset);
+    for idx in indexes {
+        // the index spans the whole record: opcode (1) + length (8) + body
+        let Ok(len) = usize::try_from(idx.length) else {
+            continue;
+        };
+        if !(9..=RECORD_LIMIT_BYTES).contains(&len)
+            || file.seek(SeekFrom::Start(idx.offset)).is_err()
+        {
+            continue;
+        }
+        let mut buf = vec![0u8; len];
+        if file.read_exact(&mut buf).is_err() {
+            continue;
+        }
+        if let Ok(mcap::records::Record::Metadata(m)) = mcap::parse_record(buf[0], &buf[9..]) {
+            out.extend(m.metadata);
+        }
+    }
+    out
 }
 
 fn json_kind(v: &Value) -> &'static str {

@@ -46,7 +46,8 @@ pub struct IngestOptions {
     pub gear_range: Option<(i16, i16)>,
     /// Backwards time handling.
     pub time_repair: TimeRepair,
-    /// Drive id override (default: source metadata, else the file stem).
+    /// Drive id override (default: the source's metadata — Parquet key–value `drive_id`, MCAP
+    /// metadata record entry `drive_id` — else the file stem).
     pub drive_id: Option<String>,
     /// Vehicle id override.
     pub vehicle_id: Option<String>,
@@ -180,7 +181,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
         }
     }
 
-    let mut kv = Default::default();
+    let kv;
     let (t_ns, mut signals) = match mapping.as_ref().map(|m| m.format) {
         None | Some(SourceFormat::ParquetWide) => {
             report.format = "parquet-wide".into();
@@ -221,6 +222,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             let (channels, ignored, rows) = if fmt == SourceFormat::McapJson {
                 report.format = "mcap-json".into();
                 let r = mcap_source::read_mcap(path, m)?;
+                kv = r.metadata;
                 (r.channels, r.ignored, r.messages)
             } else {
                 report.format = "parquet-long".into();

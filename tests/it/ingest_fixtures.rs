@@ -79,3 +79,59 @@ fn multi_rate_mcap_aligns_on_the_fastest_rate() {
         .iter()
         .all(|g| g.fract() == 0.0));
 }
+
+#[test]
+fn drive_and_vehicle_ids_come_from_the_source_metadata() {
+    // MCAP: the metadata record "fleetdyn.drive" written by the Python generator
+    let ing = ingest_file(&fixture("fixtures/drives/truck-0002-lz4.mcap"), &opts()).unwrap();
+    assert_eq!(ing.log.meta.drive_id, "truck-0002");
+    assert_eq!(ing.log.meta.vehicle_id.as_deref(), Some("TRK-0002"));
+    // Parquet key-value metadata
+    let ing = ingest_file(
+        &fixture("fixtures/drives/truck-0003-export.parquet"),
+        &opts(),
+    )
+    .unwrap();
+    assert_eq!(ing.log.meta.vehicle_id.as_deref(), Some("TRK-0003"));
+    // an explicit id wins
+    let o = IngestOptions {
+        drive_id: Some("custom".into()),
+        ..opts()
+    };
+    assert_eq!(
+        ingest_file(&fixture("fixtures/drives/truck-0001.mcap"), &o)
+            .unwrap()
+            .log
+            .meta
+            .drive_id,
+        "custom"
+    );
+}
+
+#[test]
+fn a_written_drive_log_reads_back_identically() {
+    let ing = ingest_file(
+        &fixture("fixtures/drives/truck-0003-export.parquet"),
+        &opts(),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("drive_log.parquet");
+    fleetdyn::pipeline::ingest_stage::write(&p, &ing.log, "test").unwrap();
+    // our own output is canonical input: units from the field metadata, ids from the metadata
+    let back = ingest_file(&p, &IngestOptions::default()).unwrap();
+    assert_eq!(back.report.mapping, "canonical");
+    assert_eq!(back.log.timestamp_ns, ing.log.timestamp_ns);
+    assert_eq!(back.log.meta.drive_id, ing.log.meta.drive_id);
+    assert_eq!(back.log.meta.vehicle_id, ing.log.meta.vehicle_id);
+    assert_eq!(back.log.signals.len(), ing.log.signals.len());
+    for (a, b) in ing.log.signals.iter().zip(&back.log.signals) {
+        assert_eq!((&a.name, &a.unit), (&b.name, &b.unit));
+        let same = a
+            .values
+            .iter()
+            .zip(&b.values)
+            .all(|(x, y)| x == y || (x.is_nan() && y.is_nan()));
+        assert!(same, "{} changed on the round trip", a.name);
+    }
+}
