@@ -5,8 +5,9 @@
 //! value is an error; time going backwards is an error unless [`TimeRepair::Sort`]; values outside
 //! the schema's physical range are rejected.
 
+use super::mapping::ResolvedSignal;
 use super::IngestError;
-use crate::schema::Interpolation;
+use crate::schema::{drive_log, Interpolation};
 use std::path::Path;
 
 /// What to do when a channel's time goes backwards.
@@ -48,6 +49,20 @@ impl Channel {
             values: Vec::new(),
             rows: Vec::new(),
         }
+    }
+
+    /// One empty channel per resolved mapping signal, with the canonical unit and interpolation.
+    pub fn for_signals(resolved: &[ResolvedSignal]) -> Vec<Channel> {
+        let canonical = drive_log();
+        resolved
+            .iter()
+            .map(|r| {
+                let spec = canonical
+                    .column(&r.column)
+                    .expect("resolved against the schema");
+                Channel::new(&r.column, &spec.unit, spec.interpolation)
+            })
+            .collect()
     }
 
     /// Appends one sample.

@@ -10,7 +10,6 @@
 use super::channel::Channel;
 use super::mapping::Mapping;
 use super::IngestError;
-use crate::schema::drive_log;
 use mcap::sans_io::LinearReaderOptions;
 use serde_json::Value;
 use std::collections::HashMap;
@@ -50,14 +49,7 @@ pub fn read_mcap(path: &Path, mapping: &Mapping) -> Result<McapRead, IngestError
         source: e,
     })?;
     let resolved = mapping.resolve()?;
-    let canonical = drive_log();
-    let mut channels: Vec<Channel> = resolved
-        .iter()
-        .map(|r| {
-            let spec = canonical.column(&r.column).expect("resolved");
-            Channel::new(&r.column, &spec.unit, spec.interpolation)
-        })
-        .collect();
+    let mut channels = Channel::for_signals(&resolved);
     // topic -> indices of the signals it carries
     let mut by_topic: HashMap<&str, Vec<usize>> = HashMap::new();
     for (i, r) in resolved.iter().enumerate() {

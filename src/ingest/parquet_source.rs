@@ -12,7 +12,7 @@ use crate::units::{conversion, Conversion};
 use arrow::array::{Array, AsArray};
 use arrow::compute::cast;
 use arrow::datatypes::{DataType, Float64Type, Int64Type, Schema, TimeUnit};
-use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use parquet::arrow::arrow_reader::{ParquetRecordBatchReader, ParquetRecordBatchReaderBuilder};
 use parquet::arrow::ProjectionMask;
 use std::collections::HashMap;
 use std::fs::File;
@@ -57,6 +57,23 @@ fn open(path: &Path) -> Result<ParquetRecordBatchReaderBuilder<File>, IngestErro
         file: path.into(),
         source: e,
     })
+}
+
+/// A batch reader over the root columns `roots` only.
+fn projected(
+    path: &Path,
+    builder: ParquetRecordBatchReaderBuilder<File>,
+    roots: Vec<usize>,
+) -> Result<ParquetRecordBatchReader, IngestError> {
+    let mask = ProjectionMask::roots(builder.parquet_schema(), roots);
+    builder
+        .with_projection(mask)
+        .with_batch_size(BATCH_ROWS)
+        .build()
+        .map_err(|e| IngestError::Parquet {
+            file: path.into(),
+            source: e,
+        })
 }
 
 /// Column names of a Parquet file (for mapping detection).
@@ -261,15 +278,7 @@ pub fn read_wide(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, 
         .filter(|(_, f)| *f.name() == time_col || wanted.iter().any(|w| &w.0 == f.name()))
         .map(|(i, _)| i)
         .collect();
-    let mask = ProjectionMask::roots(builder.parquet_schema(), roots);
-    let reader = builder
-        .with_projection(mask)
-        .with_batch_size(BATCH_ROWS)
-        .build()
-        .map_err(|e| IngestError::Parquet {
-            file: path.into(),
-            source: e,
-        })?;
+    let reader = projected(path, builder, roots)?;
     let mut t_ns = Vec::new();
     let mut columns: Vec<(String, String, Vec<f64>)> = wanted
         .iter()
@@ -341,14 +350,7 @@ pub fn read_long(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestEr
         }
     }
     let resolved = mapping.resolve()?;
-    let canonical = drive_log();
-    let mut channels: Vec<Channel> = resolved
-        .iter()
-        .map(|r| {
-            let spec = canonical.column(&r.column).expect("resolved");
-            Channel::new(&r.column, &spec.unit, spec.interpolation)
-        })
-        .collect();
+    let mut channels = Channel::for_signals(&resolved);
     let by_name: HashMap<&str, usize> = resolved
         .iter()
         .enumerate()
@@ -359,15 +361,7 @@ pub fn read_long(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestEr
         .iter()
         .map(|c| schema.index_of(c).expect("checked"))
         .collect();
-    let mask = ProjectionMask::roots(builder.parquet_schema(), roots);
-    let reader = builder
-        .with_projection(mask)
-        .with_batch_size(BATCH_ROWS)
-        .build()
-        .map_err(|e| IngestError::Parquet {
-            file: path.into(),
-            source: e,
-        })?;
+    let reader = projected(path, builder, roots)?;
     let mut rows = 0u64;
     let mut t_batch = Vec::new();
     let mut v_batch = Vec::new();

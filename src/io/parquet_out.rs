@@ -11,7 +11,7 @@
 
 use super::AtomicFile;
 use crate::schema::{drive_log, output_schema, Dtype, SchemaError};
-use crate::table::DriveLog;
+use crate::table::{DriveLog, Signal};
 use arrow::array::{ArrayRef, Float64Array, Int16Array, TimestampNanosecondArray};
 use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
 use arrow::record_batch::RecordBatch;
@@ -70,6 +70,18 @@ impl OutColumn {
             name: name.into(),
             unit: unit.into(),
             data: OutData::F64(values),
+        }
+    }
+    /// A drive-log signal with its name, unit and schema dtype (`i16` columns as integers).
+    pub fn from_signal(s: &Signal) -> Self {
+        let data = match s.dtype() {
+            Dtype::I16 => OutData::I16(s.values.clone()),
+            _ => OutData::F64(s.values.clone()),
+        };
+        Self {
+            name: s.name.clone(),
+            unit: s.unit.clone(),
+            data,
         }
     }
     /// A `timestamp[ns, UTC]` column named `timestamp`.
@@ -153,17 +165,7 @@ pub fn config_hash(parts: &[&[u8]]) -> String {
 pub fn drive_log_columns(log: &DriveLog) -> Vec<OutColumn> {
     let mut cols = Vec::with_capacity(log.signals.len() + 1);
     cols.push(OutColumn::timestamp(log.timestamp_ns.clone()));
-    for s in &log.signals {
-        let data = match s.dtype() {
-            Dtype::I16 => OutData::I16(s.values.clone()),
-            _ => OutData::F64(s.values.clone()),
-        };
-        cols.push(OutColumn {
-            name: s.name.clone(),
-            unit: s.unit.clone(),
-            data,
-        });
-    }
+    cols.extend(log.signals.iter().map(OutColumn::from_signal));
     cols
 }
 

@@ -1,7 +1,6 @@
 //! The `resample` stage: the drive on a uniform distance grid (`distance_log.parquet`).
 
-use crate::io::{config_hash, write_table, OutColumn, OutData, OutputError, TableMeta};
-use crate::schema::Dtype;
+use crate::io::{config_hash, write_table, OutColumn, OutputError, TableMeta};
 use crate::signal::distance::{DistanceLog, ResampleConfig};
 use std::path::Path;
 
@@ -19,17 +18,7 @@ pub fn write(path: &Path, d: &DistanceLog, config_fingerprint: &str) -> Result<(
         OutColumn::f64("distance", "m", d.distance_m.clone()),
         OutColumn::timestamp(d.timestamp_ns.clone()),
     ];
-    for s in &d.signals {
-        let data = match s.dtype() {
-            Dtype::I16 => OutData::I16(s.values.clone()),
-            _ => OutData::F64(s.values.clone()),
-        };
-        cols.push(OutColumn {
-            name: s.name.clone(),
-            unit: s.unit.clone(),
-            data,
-        });
-    }
+    cols.extend(d.signals.iter().map(OutColumn::from_signal));
     let meta = TableMeta {
         table: "distance_log".into(),
         drive_id: d.meta.drive_id.clone(),
