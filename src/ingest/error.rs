@@ -75,6 +75,16 @@ pub enum IngestError {
         /// What is wrong.
         message: String,
     },
+    /// An ingest setting out of its range.
+    #[error("ingest setting {key} = {value}: {rule}")]
+    Setting {
+        /// Setting name (TOML key / CLI flag).
+        key: String,
+        /// Value given.
+        value: String,
+        /// The rule it breaks.
+        rule: String,
+    },
     /// A unit the mapping names that fleetdyn cannot convert.
     #[error("mapping {mapping}: column {column}: {source}")]
     Unit {

@@ -115,6 +115,9 @@ pub struct Mapping {
     /// Where the mapping came from (set by the loader).
     #[serde(skip)]
     pub origin: String,
+    /// SHA-256 of the mapping text (set by the loader), for output config hashes.
+    #[serde(skip)]
+    pub text_sha256: String,
 }
 
 /// A resolved signal: canonical column, where to find it, how to convert it.
@@ -165,6 +168,7 @@ impl Mapping {
             message: e.to_string(),
         })?;
         m.origin = origin.into();
+        m.text_sha256 = crate::io::config_hash(&[text.as_bytes()]);
         m.resolve()?;
         Ok(m)
     }

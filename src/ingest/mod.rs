@@ -12,6 +12,10 @@
 //! the requested stages, dtypes, units, time order and duplicates, physical ranges (the vehicle's
 //! gearbox narrows the gear range), and runs of missing values longer than the limit. Nothing is
 //! written here; a failed drive leaves no output.
+//!
+//! Identification: `drive_id` and `vehicle_id` come from the source's metadata (Parquet
+//! key–value metadata; MCAP metadata records), else the drive id is the file stem; explicit
+//! options override both.
 
 pub mod align;
 pub mod channel;

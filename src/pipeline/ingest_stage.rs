@@ -39,12 +39,25 @@ impl IngestConfig {
     /// Resolves the configuration into ingest options for `stages` (loads the mapping once).
     ///
     /// # Errors
-    /// The mapping file cannot be read or is invalid.
+    /// A setting out of range, or a mapping file that cannot be read or is invalid.
     pub fn options(
         &self,
         stages: &[Stage],
         vehicle: Option<&VehicleFile>,
     ) -> Result<IngestOptions, IngestError> {
+        let setting = |key: &str, value: f64, rule: &str| IngestError::Setting {
+            key: key.into(),
+            value: value.to_string(),
+            rule: rule.into(),
+        };
+        if let Some(hz) = self.time_base_hz {
+            if !(hz.is_finite() && hz > 0.0) {
+                return Err(setting("time_base_hz", hz, "must be a positive rate"));
+            }
+        }
+        if self.max_nan_run_s.is_nan() || self.max_nan_run_s < 0.0 {
+            return Err(setting("max_nan_run_s", self.max_nan_run_s, "must be >= 0"));
+        }
         let mapping = match &self.mapping {
             Some(p) => Some(Mapping::load(p)?),
             None => None,
@@ -63,11 +76,13 @@ impl IngestConfig {
         })
     }
 
-    /// Canonical text of the settings that change the output, for the config hash.
+    /// Canonical text of the settings that change the output, for the config hash. An explicit
+    /// mapping enters with the hash of its text; automatically chosen mappings are embedded in
+    /// the binary, whose version every output records.
     pub fn fingerprint(&self, opts: &IngestOptions) -> String {
         format!(
             "ingest:v1 mapping={:?} time_base_hz={:?} max_nan_run_s={} time_repair={:?} stages={:?} gears={:?}",
-            opts.mapping.as_ref().map(|m| (&m.name, m.resolve().map(|r| r.len()).ok())),
+            opts.mapping.as_ref().map(|m| (&m.name, &m.text_sha256)),
             self.time_base_hz,
             self.max_nan_run_s,
             self.time_repair,
