@@ -29,7 +29,7 @@ pub struct DriveOutcome {
     pub failed_stage: Option<&'static str>,
     /// Error message.
     pub error: Option<String>,
-    /// Files written.
+    /// Files written, relative to the run's output folder.
     pub outputs: Vec<String>,
     /// Distance travelled, m (when resampled).
     pub distance_m: Option<f64>,
@@ -126,7 +126,10 @@ pub fn run_drive(plan: &Plan, input: &Path, out_root: &Path) -> DriveOutcome {
     })();
     match result {
         Ok(()) => {
-            o.outputs = written.iter().map(|p| p.display().to_string()).collect();
+            o.outputs = written
+                .iter()
+                .map(|p| p.strip_prefix(out_root).unwrap_or(p).display().to_string())
+                .collect();
             o
         }
         Err(e) => {
@@ -158,7 +161,7 @@ pub fn run_plan(
                 .any(|d| d.status == "ok" && d.drive_id == o.drive_id)
         {
             for p in &o.outputs {
-                let _ = std::fs::remove_file(p);
+                let _ = std::fs::remove_file(out_root.join(p));
             }
             let id = o.drive_id.clone();
             o = fail(

@@ -4,5 +4,6 @@ mod common;
 mod ingest_errors;
 mod ingest_fixtures;
 mod real_data;
+mod resample_props;
 mod resample_truth;
 mod slope_pipeline;

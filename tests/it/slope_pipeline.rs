@@ -155,13 +155,10 @@ fn nightly_pipeline_runs_every_fixture_deterministically() {
     assert_eq!(r2.ok, 4);
     for d in &r1.drives {
         assert_eq!(d.outputs.len(), 4, "{d:?}");
-        for o in &d.outputs {
-            let p1 = PathBuf::from(o);
-            let rel = p1.strip_prefix(out1.path()).unwrap();
-            let p2 = out2.path().join(rel);
-            assert_eq!(
-                std::fs::read(&p1).unwrap(),
-                std::fs::read(&p2).unwrap(),
+        for rel in &d.outputs {
+            let (p1, p2) = (out1.path().join(rel), out2.path().join(rel));
+            assert!(
+                std::fs::read(&p1).unwrap() == std::fs::read(&p2).unwrap(),
                 "{rel:?} differs between runs"
             );
             for (name, unit) in field_units(&p1) {
@@ -289,4 +286,35 @@ fn scipy_edge_mode_is_selectable() {
     };
     let (_, f, _) = slope_of("fixtures/drives/truck-0002-lz4.mcap", &cfg);
     assert_eq!(f.zero_phase.len(), f.raw.len());
+}
+
+#[test]
+fn separate_processes_write_identical_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+            .current_dir(fixture(""))
+            .args(["run", "pipelines/nightly.toml", "--out"])
+            .arg(out)
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    run(&a);
+    run(&b);
+    let files = walk(&a);
+    assert_eq!(files.len(), 17, "4 drives x 4 tables + run_report.json");
+    for p in files {
+        let q = b.join(p.strip_prefix(&a).unwrap());
+        assert!(
+            std::fs::read(&p).unwrap() == std::fs::read(&q).unwrap(),
+            "{p:?} differs"
+        );
+    }
 }
