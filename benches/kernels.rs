@@ -50,9 +50,11 @@ fn spectra(c: &mut Criterion) {
                 nperseg: Some(nperseg),
                 ..Default::default()
             };
-            g.bench_with_input(BenchmarkId::new(format!("nperseg{nperseg}"), n), &x, |b, x| {
-                b.iter(|| welch(black_box(x), &cfg).unwrap())
-            });
+            g.bench_with_input(
+                BenchmarkId::new(format!("nperseg{nperseg}"), n),
+                &x,
+                |b, x| b.iter(|| welch(black_box(x), &cfg).unwrap()),
+            );
         }
     }
     g.finish();

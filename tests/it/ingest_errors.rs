@@ -388,3 +388,19 @@ fn cli_failure_leaves_no_output_and_exits_1() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn every_subcommand_has_help() {
+    for sub in ["ingest", "resample", "slope", "spectrum", "run"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+            .args([sub, "--help"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{sub}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("Usage: fleetdyn") && text.contains(sub),
+            "{sub}: {text}"
+        );
+    }
+}
