@@ -45,11 +45,6 @@ impl Conversion {
             Conversion::AngleToGrade { to_rad } => (x * to_rad).tan(),
         }
     }
-
-    /// True when the conversion leaves values unchanged.
-    pub fn is_identity(&self) -> bool {
-        *self == Self::IDENTITY
-    }
 }
 
 /// Why a unit could not be converted.

@@ -146,23 +146,6 @@ impl Channel {
         self.rows.truncate(keep);
         Ok(dropped)
     }
-
-    /// Rejects the first finite value outside `[min, max]` (NaN is "missing", not out of range).
-    ///
-    /// # Errors
-    /// [`IngestError::OutOfRange`] naming the source row, time and value.
-    pub fn check_range(&self, file: &Path, min: f64, max: f64) -> Result<(), IngestError> {
-        check_range(
-            file,
-            &self.column,
-            &self.unit,
-            &self.t_ns,
-            &self.values,
-            Some(&self.rows),
-            min,
-            max,
-        )
-    }
 }
 
 /// Range check over parallel slices; `rows` maps positions to source rows (identity if `None`).
