@@ -9,6 +9,7 @@ use fleetdyn::pipeline::resample_stage;
 use fleetdyn::pipeline::run::run_plan;
 use fleetdyn::pipeline::slope_stage;
 use fleetdyn::pipeline::spec::PipelineSpec;
+use fleetdyn::report::bode::{plot_svg, BodeTable};
 use fleetdyn::report::spectrum;
 use fleetdyn::report::IngestSummary;
 use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
@@ -116,6 +117,16 @@ enum Command {
         ingest: IngestArgs,
         #[command(flatten)]
         resample: ResampleArgs,
+    },
+    /// Linear driveline analysis per gear (seed 000 §3): resonance peaks of F_dr -> v and
+    /// M_e -> v, open and closed loop; prints the table, writes bode.parquet and bode.svg.
+    Bode {
+        /// Vehicle file with a [driveline] section.
+        #[arg(long)]
+        vehicle: PathBuf,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
     Run {
@@ -399,6 +410,22 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 ing.log.meta.drive_id, column, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
                 sp.knee_90, sp.freq_unit, sp.knee_99, sp.freq_unit, output.display()
             );
+            Ok(())
+        }
+        Command::Bode { vehicle, output } => {
+            let v = VehicleFile::load(&vehicle).map_err(usage)?;
+            let p = v.driveline(&vehicle.display().to_string()).map_err(usage)?;
+            let table = BodeTable::new(&v.vehicle_id, p, &v.gearbox.ratios);
+            say_raw!("{table}");
+            match table.open_loop_peak_gone_from() {
+                Some(g) => say!("open-loop F_dr -> v resonance: no peak from gear {g} on"),
+                None => say!("open-loop F_dr -> v resonance: a peak in every gear"),
+            }
+            let fp = format!("bode:v1 {:?} {:?}", p, v.gearbox.ratios);
+            let (pq, svg) = (output.join("bode.parquet"), output.join("bode.svg"));
+            table.write(&pq, &fp).map_err(drive)?;
+            plot_svg(&svg, p, &v.gearbox.ratios, &table).map_err(|e| drive(anyhow::anyhow!(e)))?;
+            say!("wrote {} and {}", pq.display(), svg.display());
             Ok(())
         }
         Command::Run {

@@ -1,3 +1,6 @@
 //! Vehicle models and their parameter files.
 
+pub mod driveline;
+pub mod linear;
+pub mod resonance;
 pub mod vehicle;

@@ -5,6 +5,7 @@
 //! outside the gearbox); the driveline (physics.md §1) and axle (§3) sections are added by the
 //! model issues and are accepted here as opaque tables until then.
 
+use super::driveline::DrivelineParams;
 use serde::Deserialize;
 use std::path::Path;
 use thiserror::Error;
@@ -34,9 +35,12 @@ pub struct VehicleFile {
     pub description: String,
     /// Gearbox.
     pub gearbox: Gearbox,
-    /// Driveline parameters (physics.md §1) — filled by the driveline issue.
-    #[serde(default)]
-    pub driveline: Option<toml::Table>,
+    /// Driveline parameters (physics.md §1), checked against `schemas/vehicle.toml`.
+    #[serde(skip)]
+    pub driveline: Option<DrivelineParams>,
+    /// The raw `[driveline]` table as written (checked and converted by [`VehicleFile::parse`]).
+    #[serde(default, rename = "driveline")]
+    driveline_raw: Option<toml::Table>,
     /// Axle-load parameters (physics.md §3) — filled by the axle-load issue.
     #[serde(default)]
     pub axles: Option<toml::Table>,
@@ -96,7 +100,7 @@ impl VehicleFile {
     /// # Errors
     /// [`VehicleError::Parse`] or [`VehicleError::Range`].
     pub fn parse(text: &str, file: &str) -> Result<Self, VehicleError> {
-        let v: VehicleFile = toml::from_str(text).map_err(|e| VehicleError::Parse {
+        let mut v: VehicleFile = toml::from_str(text).map_err(|e| VehicleError::Parse {
             file: file.into(),
             source: e,
         })?;
@@ -106,7 +110,8 @@ impl VehicleFile {
             value,
             rule: rule.into(),
         };
-        let g = &v.gearbox;
+        let g = v.gearbox.clone();
+        let g = &g;
         if g.forward_gears == 0 || g.forward_gears > 32 {
             return Err(range(
                 "gearbox.forward_gears",
@@ -132,7 +137,31 @@ impl VehicleFile {
                 ));
             }
         }
+        if let Some(t) = v.driveline_raw.take() {
+            let p = DrivelineParams::from_table(&t, usize::from(g.forward_gears)).map_err(
+                |(key, value, rule)| VehicleError::Range {
+                    file: file.into(),
+                    key: format!("driveline.{key}"),
+                    value,
+                    rule,
+                },
+            )?;
+            v.driveline = Some(p);
+        }
         Ok(v)
+    }
+
+    /// Driveline parameters, or an error naming the file when the section is absent.
+    ///
+    /// # Errors
+    /// [`VehicleError::Range`] for a vehicle file without `[driveline]`.
+    pub fn driveline(&self, file: &str) -> Result<&DrivelineParams, VehicleError> {
+        self.driveline.as_ref().ok_or_else(|| VehicleError::Range {
+            file: file.into(),
+            key: "driveline".into(),
+            value: "missing".into(),
+            rule: "the driveline model needs a [driveline] section".into(),
+        })
     }
 
     /// Valid gear range for ingest checks: (−reverse_gears, forward_gears).

@@ -21,6 +21,7 @@ const FILES: &[(&str, &str)] = &[
         "spectrum",
         include_str!("../../schemas/outputs/spectrum.toml"),
     ),
+    ("bode", include_str!("../../schemas/outputs/bode.toml")),
 ];
 
 /// One column of an output table.
@@ -115,7 +116,7 @@ impl OutputSchema {
 }
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
-/// `spectrum`), or `None`.
+/// `spectrum`, `bode`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.

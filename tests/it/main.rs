@@ -1,6 +1,7 @@
 //! fleetdyn integration tests (one binary, one module per area).
 
 mod common;
+mod driveline_linear;
 mod ingest_errors;
 mod ingest_fixtures;
 mod real_data;

@@ -1,0 +1,303 @@
+//! Driveline parameters (physics.md §1, seed 000 §2): the typed `[driveline]` section of a vehicle
+//! file, checked key by key against `schemas/vehicle.toml` (unit, range, shape).
+//!
+//! Symbols (physics.md §1): J_e engine + flywheel, J_c clutch disc, k_c/c_c clutch torsion
+//! spring, J_t(i) gearbox inertia referred to its output shaft in gear i, b_t gearbox loss,
+//! J_p/k_p/c_p propeller shaft, i_f/J_f/b_f final drive, J_d/k_d/c_d drive shafts (lumped, the
+//! main flexibility), J_w wheels, r_w wheel radius, m vehicle mass. All SI.
+
+use serde::Deserialize;
+use std::sync::OnceLock;
+
+const SCHEMA_TOML: &str = include_str!("../../schemas/vehicle.toml");
+
+/// Shape of a vehicle-file value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shape {
+    /// One number.
+    Scalar,
+    /// One number per forward gear.
+    PerGear,
+    /// A curve: as many numbers as the other curve keys.
+    Curve,
+}
+
+/// One key of the vehicle-file schema.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeySpec {
+    /// Key name (unit in the name).
+    pub key: String,
+    /// SI unit.
+    pub unit: String,
+    /// Smallest physical value.
+    pub min: f64,
+    /// Largest physical value.
+    pub max: f64,
+    /// Value shape.
+    pub shape: Shape,
+    /// Symbol and meaning.
+    pub meaning: String,
+}
+
+/// The vehicle-file schema.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleSchema {
+    /// Version.
+    pub schema_version: String,
+    /// Keys of the `[driveline]` table.
+    pub driveline: Vec<KeySpec>,
+}
+
+/// The embedded vehicle-file schema.
+///
+/// # Panics
+/// Never in a released build: the embedded file is parsed by the test suite.
+pub fn vehicle_schema() -> &'static VehicleSchema {
+    static S: OnceLock<VehicleSchema> = OnceLock::new();
+    S.get_or_init(|| toml::from_str(SCHEMA_TOML).expect("embedded schemas/vehicle.toml is valid"))
+}
+
+/// Driveline parameters, SI units (physics.md §1).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)] // each field is documented in schemas/vehicle.toml (meaning, unit, range)
+pub struct DrivelineParams {
+    pub mass_kg: f64,
+    pub wheel_radius_m: f64,
+    pub j_w_kg_m2: f64,
+    pub j_e_kg_m2: f64,
+    pub j_c_kg_m2: f64,
+    pub k_c_nm_per_rad: f64,
+    pub c_c_nm_s_per_rad: f64,
+    pub j_t_kg_m2: Vec<f64>,
+    pub b_t_nm_s_per_rad: f64,
+    pub j_p_kg_m2: f64,
+    pub k_p_nm_per_rad: f64,
+    pub c_p_nm_s_per_rad: f64,
+    pub final_drive_ratio: f64,
+    pub j_f_kg_m2: f64,
+    pub b_f_nm_s_per_rad: f64,
+    pub j_d_kg_m2: f64,
+    pub k_d_nm_per_rad: f64,
+    pub c_d_nm_s_per_rad: f64,
+    pub rho_air_kg_per_m3: f64,
+    pub c_w_a_f_m2: f64,
+    pub c_r1: f64,
+    pub c_r2_s_per_m: f64,
+    pub c_sr_s2_per_m2: f64,
+    pub gravity_m_per_s2: f64,
+    pub clutch_x_max: f64,
+    pub clutch_l_lower: f64,
+    pub clutch_l_upper: f64,
+    pub clutch_max_torque_nm: f64,
+    pub clutch_static_to_kinetic: f64,
+    pub engine_speed_rad_per_s: Vec<f64>,
+    pub engine_max_torque_nm: Vec<f64>,
+    pub engine_min_torque_nm: f64,
+    pub pi_kp_nm_s_per_rad: f64,
+    pub pi_ki_nm_per_rad: f64,
+}
+
+/// A `[driveline]` table that breaks a rule: `(key, value as written, rule)`.
+pub type KeyProblem = (String, String, String);
+
+impl DrivelineParams {
+    /// Checks a raw `[driveline]` table against the schema (every key present, numeric, finite,
+    /// inside its range, per-gear lists one value per forward gear, curves of equal length and
+    /// increasing speed, L_l < L_u) and converts it.
+    ///
+    /// # Errors
+    /// The first problem as `(key, value, rule)`.
+    pub fn from_table(table: &toml::Table, forward_gears: usize) -> Result<Self, KeyProblem> {
+        let schema = vehicle_schema();
+        let problem = |key: &str, value: String, rule: String| (key.to_string(), value, rule);
+        for k in table.keys() {
+            if !schema.driveline.iter().any(|s| &s.key == k) {
+                return Err(problem(k, table[k].to_string(), "unknown key".into()));
+            }
+        }
+        let mut curve_len: Option<usize> = None;
+        for spec in &schema.driveline {
+            let Some(v) = table.get(&spec.key) else {
+                return Err(problem(
+                    &spec.key,
+                    "missing".into(),
+                    format!("required ({}, {})", spec.meaning, spec.unit),
+                ));
+            };
+            let numbers: Vec<f64> = match (spec.shape, v) {
+                (Shape::Scalar, toml::Value::Float(x)) => vec![*x],
+                (Shape::Scalar, toml::Value::Integer(i)) => vec![*i as f64],
+                (Shape::PerGear | Shape::Curve, toml::Value::Array(a)) => {
+                    let mut out = Vec::with_capacity(a.len());
+                    for e in a {
+                        match e {
+                            toml::Value::Float(x) => out.push(*x),
+                            toml::Value::Integer(i) => out.push(*i as f64),
+                            other => {
+                                return Err(problem(
+                                    &spec.key,
+                                    other.to_string(),
+                                    "must be numbers".into(),
+                                ))
+                            }
+                        }
+                    }
+                    out
+                }
+                (shape, other) => {
+                    return Err(problem(
+                        &spec.key,
+                        other.to_string(),
+                        format!("must be {shape:?} numbers"),
+                    ))
+                }
+            };
+            for x in &numbers {
+                if !x.is_finite() || *x < spec.min || *x > spec.max {
+                    return Err(problem(
+                        &spec.key,
+                        x.to_string(),
+                        format!(
+                            "must be finite and within [{}, {}] {}",
+                            spec.min, spec.max, spec.unit
+                        ),
+                    ));
+                }
+            }
+            match spec.shape {
+                Shape::PerGear if numbers.len() != forward_gears => {
+                    return Err(problem(
+                        &spec.key,
+                        format!("{} values", numbers.len()),
+                        format!("needs one value per forward gear ({forward_gears})"),
+                    ))
+                }
+                Shape::Curve => match curve_len {
+                    Some(n) if n != numbers.len() => {
+                        return Err(problem(
+                            &spec.key,
+                            format!("{} values", numbers.len()),
+                            format!("curve keys must have equal length ({n})"),
+                        ))
+                    }
+                    _ if numbers.len() < 2 => {
+                        return Err(problem(
+                            &spec.key,
+                            format!("{} values", numbers.len()),
+                            "a curve needs at least 2 points".into(),
+                        ))
+                    }
+                    _ => curve_len = Some(numbers.len()),
+                },
+                _ => {}
+            }
+        }
+        let p: DrivelineParams = table
+            .clone()
+            .try_into()
+            .map_err(|e: toml::de::Error| problem("driveline", String::new(), e.to_string()))?;
+        if p.clutch_l_lower >= p.clutch_l_upper {
+            return Err(problem(
+                "clutch_l_upper",
+                p.clutch_l_upper.to_string(),
+                "must exceed clutch_l_lower".into(),
+            ));
+        }
+        if p.engine_speed_rad_per_s.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(problem(
+                "engine_speed_rad_per_s",
+                format!("{:?}", p.engine_speed_rad_per_s),
+                "must increase".into(),
+            ));
+        }
+        Ok(p)
+    }
+
+    /// Engine full-load torque at speed `w_rad_s` (linear interpolation, held beyond the ends), N·m.
+    pub fn engine_max_torque(&self, w_rad_s: f64) -> f64 {
+        let (s, t) = (&self.engine_speed_rad_per_s, &self.engine_max_torque_nm);
+        let k = s.partition_point(|&x| x <= w_rad_s);
+        if k == 0 {
+            return t[0];
+        }
+        if k == s.len() {
+            return t[s.len() - 1];
+        }
+        let f = (w_rad_s - s[k - 1]) / (s[k] - s[k - 1]);
+        t[k - 1] + f * (t[k] - t[k - 1])
+    }
+
+    /// J4 = m·r_w² + J_w, the vehicle inertia seen at the wheel, kg·m².
+    pub fn j4(&self) -> f64 {
+        self.mass_kg * self.wheel_radius_m.powi(2) + self.j_w_kg_m2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schema_lists_every_field() {
+        // every struct field has a schema entry and vice versa: the fixture parses through both
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/vehicles/truck-40t.toml"
+        ))
+        .unwrap();
+        let doc: toml::Table = toml::from_str(&text).unwrap();
+        let t = doc["driveline"].as_table().unwrap();
+        let p = DrivelineParams::from_table(t, 12).unwrap();
+        assert_eq!(t.len(), vehicle_schema().driveline.len());
+        assert_eq!(p.j_t_kg_m2.len(), 12);
+        assert_eq!(p.engine_max_torque(120.0), 2600.0);
+        assert_eq!(p.engine_max_torque(0.0), 1100.0);
+    }
+
+    #[test]
+    fn problems_name_the_key() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/vehicles/truck-40t.toml"
+        ))
+        .unwrap();
+        let doc: toml::Table = toml::from_str(&text).unwrap();
+        let base = doc["driveline"].as_table().unwrap().clone();
+        let with = |k: &str, v: toml::Value| {
+            let mut t = base.clone();
+            t.insert(k.into(), v);
+            DrivelineParams::from_table(&t, 12).unwrap_err()
+        };
+        assert_eq!(
+            with("k_d_nm_per_rad", toml::Value::Float(-1.0)).0,
+            "k_d_nm_per_rad"
+        );
+        assert_eq!(with("mass_kg", toml::Value::Float(f64::NAN)).0, "mass_kg");
+        assert_eq!(
+            with(
+                "j_t_kg_m2",
+                toml::Value::Array(vec![toml::Value::Float(1.0)])
+            )
+            .0,
+            "j_t_kg_m2"
+        );
+        assert_eq!(
+            with("warp_factor", toml::Value::Float(1.0)).0,
+            "warp_factor"
+        );
+        assert_eq!(
+            with("clutch_l_upper", toml::Value::Float(0.01)).0,
+            "clutch_l_upper"
+        );
+        let mut t = base.clone();
+        t.remove("c_d_nm_s_per_rad");
+        assert_eq!(
+            DrivelineParams::from_table(&t, 12).unwrap_err().0,
+            "c_d_nm_s_per_rad"
+        );
+    }
+}
