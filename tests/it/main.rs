@@ -2,6 +2,7 @@
 
 mod common;
 mod driveline_linear;
+mod driveline_reference;
 mod ingest_errors;
 mod ingest_fixtures;
 mod real_data;
