@@ -14,6 +14,7 @@ pub mod report;
 pub mod road;
 pub mod schema;
 pub mod signal;
+pub mod sim;
 pub mod table;
 pub mod time_fmt;
 pub mod units;

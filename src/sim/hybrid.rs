@@ -1,0 +1,479 @@
+//! The hybrid driveline model of physics.md §1 (seed 000 §2), simulated with the accurate
+//! adaptive integrator ([`super::dopri`]) and located mode switches.
+//!
+//! # State and conventions
+//! `y = (ω_e, ω_c, φ_c, ω_p, φ_p, ω_d, φ_d, ω_w, x_I)`, SI: engine and clutch-disc speeds, clutch
+//! spring torsion φ_c = θ_c − θ_t, gearbox-output (propeller) speed, propeller torsion
+//! φ_p = θ_p − θ_f, final-drive speed, drive-shaft torsion φ_d = θ_d − θ_w, wheel speed, and the
+//! PI integrator state x_I = ∫(ω_ref − ω_e)dt. In the locked mode ω_c ≡ ω_e.
+//! Torques: `M_c = c_c(ω_c − i_t ω_p) + k_c φ_c`, `M_p = c_p(ω_p − i_f ω_d) + k_p φ_p`,
+//! `M_d = c_d(ω_d − ω_w) + k_d φ_d`. Vehicle: `J4 ω̇_w = M_d − r_w·F`,
+//! `F = sign(v)(F_r + F_a + F_b) + F_g`, `F_r = f(v)(c_r1 + c_r2|v|) m g`,
+//! `f(v) = 1 − exp(−c_sr v²)` (or 1 without smoothing), `F_a = ½ρ c_wA_f v²`,
+//! `F_g = m g sin(atan s)` for the slope s = tan α.
+//!
+//! # Clutch modes (events, not smoothing)
+//! - locked: `J1 ω̇_e = M_e − M_c`; it unlocks when `|M_trans| = (|M_e J_c + M_c J_e|)/(J_e + J_c)`
+//!   rises through the static capacity `M_s = k_µ M_k(x)`; the slip direction σ is the sign of
+//!   M_trans;
+//! - slipping: `J_e ω̇_e = M_e − σM_k`, `J_c ω̇_c = σM_k − M_c`; when σ(ω_e − ω_c) falls through
+//!   0 the two bodies are merged at their momentum-weighted speed and lock if the static capacity
+//!   holds, else slip on in the other direction.
+//!
+//! Inputs are piecewise linear ([`Piecewise`]); the integration restarts at every breakpoint, where
+//! discrete inputs (gear) change. A gear change is an instantaneous change of i_t and J_t with the
+//! state carried over. The engine is an ideal torque source, or the PI controller
+//! `M_e = clamp(K_P(ω_ref − ω_e) + K_I x_I, M_min, M_max(ω_e))` (no anti-windup, as physics.md).
+
+use super::dopri::{hermite, integrate, DopriError, EventFn, Knot, Stats, Tolerances};
+use super::inputs::Piecewise;
+use crate::model::driveline::DrivelineParams;
+use thiserror::Error;
+
+/// Number of states.
+pub const N_STATES: usize = 9;
+
+/// Characteristic size of each state: `atol_i = tol · STATE_SCALE[i]` with `rtol = tol`.
+pub const STATE_SCALE: [f64; N_STATES] = [100.0, 100.0, 0.01, 10.0, 0.01, 10.0, 0.01, 10.0, 10.0];
+
+/// Engine input.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EngineInput {
+    /// Prescribed engine torque, N·m.
+    Torque(Piecewise),
+    /// Engine-speed reference for the PI controller, rad/s.
+    SpeedReference(Piecewise),
+}
+
+/// A simulation scenario: all inputs over `[0, t_end_s]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    /// Duration, s.
+    pub t_end_s: f64,
+    /// Gear (rounded to the nearest integer; 1 = lowest).
+    pub gear: Piecewise,
+    /// Clutch position, 0 = engaged … 1.
+    pub clutch_x: Piecewise,
+    /// Road slope tan α.
+    pub slope: Piecewise,
+    /// Service-brake force at the ground, N (≥ 0).
+    pub brake_n: Piecewise,
+    /// Engine torque or speed reference.
+    pub engine: EngineInput,
+    /// Rolling-resistance smoothing f(v) = 1 − exp(−c_sr v²) on (true) or off.
+    pub smoothing: bool,
+}
+
+/// Clutch mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ClutchMode {
+    /// Engine and clutch disc rotate together.
+    Locked,
+    /// Slipping with direction σ = sign(ω_e − ω_c) ∈ {−1, +1}.
+    Slipping(f64),
+}
+
+/// A located discrete event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    /// Time, s.
+    pub t: f64,
+    /// `unlock`, `lock`, `slip_reversal` or `gear_<a>_to_<b>`.
+    pub kind: String,
+}
+
+/// Output trajectory sampled on a uniform grid.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trajectory {
+    /// Sample times, s.
+    pub t: Vec<f64>,
+    /// States per sample.
+    pub y: Vec<[f64; N_STATES]>,
+    /// Clutch mode per sample.
+    pub mode: Vec<ClutchMode>,
+    /// (M_e, M_c, M_p, M_d, M_trans) per sample, N·m.
+    pub torques: Vec<[f64; 5]>,
+    /// Gear per sample.
+    pub gear: Vec<usize>,
+    /// Mode switches and gear changes.
+    pub events: Vec<Event>,
+    /// Integrator work.
+    pub stats: Stats,
+}
+
+impl Trajectory {
+    /// Vehicle speed per sample, m/s.
+    pub fn speed(&self, r_w: f64) -> Vec<f64> {
+        self.y.iter().map(|y| r_w * y[7]).collect()
+    }
+}
+
+/// Why a simulation failed.
+#[derive(Debug, Error, PartialEq)]
+pub enum SimError {
+    /// The scenario asks for a gear the gearbox lacks.
+    #[error("gear {gear} at t = {t} s is not a forward gear of this gearbox (1..={max})")]
+    Gear {
+        /// Gear.
+        gear: i64,
+        /// Time.
+        t: f64,
+        /// Highest gear.
+        max: usize,
+    },
+    /// Integration failed.
+    #[error(transparent)]
+    Integrator(#[from] DopriError),
+    /// Too many mode switches in one interval (chattering).
+    #[error("more than {limit} clutch mode switches before t = {t} s (chattering)")]
+    Chattering {
+        /// Time.
+        t: f64,
+        /// Limit.
+        limit: usize,
+    },
+}
+
+/// Inputs frozen on one integration interval (piece indices fixed, so values are smooth).
+struct Frozen {
+    gear: usize,
+    x: usize,
+    s: usize,
+    fb: usize,
+    e: usize,
+}
+
+/// The hybrid model bound to one vehicle.
+pub struct HybridDriveline<'a> {
+    p: &'a DrivelineParams,
+    ratios: &'a [f64],
+    sc: &'a Scenario,
+}
+
+impl<'a> HybridDriveline<'a> {
+    /// Binds parameters, gearbox and scenario.
+    pub fn new(p: &'a DrivelineParams, ratios: &'a [f64], sc: &'a Scenario) -> Self {
+        Self { p, ratios, sc }
+    }
+
+    fn freeze(&self, ta: f64, tb: f64) -> Result<Frozen, SimError> {
+        let tm = 0.5 * (ta + tb);
+        let sc = self.sc;
+        let g = sc.gear.eval(tm).round() as i64;
+        if g < 1 || g as usize > self.ratios.len() {
+            return Err(SimError::Gear {
+                gear: g,
+                t: tm,
+                max: self.ratios.len(),
+            });
+        }
+        let e = match &sc.engine {
+            EngineInput::Torque(p) | EngineInput::SpeedReference(p) => p.piece_index(tm),
+        };
+        Ok(Frozen {
+            gear: g as usize,
+            x: sc.clutch_x.piece_index(tm),
+            s: sc.slope.piece_index(tm),
+            fb: sc.brake_n.piece_index(tm),
+            e,
+        })
+    }
+
+    /// Kinetic clutch capacity M_k at clutch position x, N·m (physics.md §1 actuator law).
+    pub fn clutch_capacity(&self, x: f64) -> f64 {
+        let p = self.p;
+        let x_eff = (x / p.clutch_x_max).clamp(p.clutch_l_lower, p.clutch_l_upper);
+        p.clutch_max_torque_nm * (p.clutch_l_upper - x_eff) / (p.clutch_l_upper - p.clutch_l_lower)
+    }
+
+    fn engine_torque(&self, fr: &Frozen, t: f64, w_e: f64, x_i: f64) -> f64 {
+        let p = self.p;
+        match &self.sc.engine {
+            EngineInput::Torque(m) => m.eval_piece(fr.e, t),
+            EngineInput::SpeedReference(r) => {
+                let raw =
+                    p.pi_kp_nm_s_per_rad * (r.eval_piece(fr.e, t) - w_e) + p.pi_ki_nm_per_rad * x_i;
+                raw.max(p.engine_min_torque_nm)
+                    .min(p.engine_max_torque(w_e))
+            }
+        }
+    }
+
+    /// (M_e, M_c, M_p, M_d) at t for state y in `mode`.
+    fn torques(&self, fr: &Frozen, mode: ClutchMode, t: f64, y: &[f64]) -> [f64; 4] {
+        let p = self.p;
+        let it = self.ratios[fr.gear - 1];
+        let w_c = if mode == ClutchMode::Locked {
+            y[0]
+        } else {
+            y[1]
+        };
+        let m_e = self.engine_torque(fr, t, y[0], y[8]);
+        let m_c = p.c_c_nm_s_per_rad * (w_c - it * y[3]) + p.k_c_nm_per_rad * y[2];
+        let m_p =
+            p.c_p_nm_s_per_rad * (y[3] - p.final_drive_ratio * y[5]) + p.k_p_nm_per_rad * y[4];
+        let m_d = p.c_d_nm_s_per_rad * (y[5] - y[7]) + p.k_d_nm_per_rad * y[6];
+        [m_e, m_c, m_p, m_d]
+    }
+
+    fn m_trans_locked(&self, m_e: f64, m_c: f64) -> f64 {
+        let (je, jc) = (self.p.j_e_kg_m2, self.p.j_c_kg_m2);
+        (m_e * jc + m_c * je) / (je + jc)
+    }
+
+    /// Road force F = sign(v)(F_r + F_a + F_b) + F_g, N (positive resists forward motion).
+    fn road_force(&self, fr: &Frozen, t: f64, v: f64) -> f64 {
+        let p = self.p;
+        let s = self.sc.slope.eval_piece(fr.s, t);
+        let fb = self.sc.brake_n.eval_piece(fr.fb, t);
+        let f = if self.sc.smoothing {
+            1.0 - (-p.c_sr_s2_per_m2 * v * v).exp()
+        } else {
+            1.0
+        };
+        let mg = p.mass_kg * p.gravity_m_per_s2;
+        let f_r = f * (p.c_r1 + p.c_r2_s_per_m * v.abs()) * mg;
+        let f_a = 0.5 * p.rho_air_kg_per_m3 * p.c_w_a_f_m2 * v * v;
+        let f_g = mg * s.atan().sin();
+        let sgn = if v > 0.0 {
+            1.0
+        } else if v < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        sgn * (f_r + f_a + fb) + f_g
+    }
+
+    fn rhs(&self, fr: &Frozen, mode: ClutchMode, t: f64, y: &[f64], dy: &mut [f64]) {
+        let p = self.p;
+        let it = self.ratios[fr.gear - 1];
+        let j2 = p.j_t_kg_m2[fr.gear - 1] + p.j_p_kg_m2;
+        let j3 = p.j_f_kg_m2 + p.j_d_kg_m2;
+        let [m_e, m_c, m_p, m_d] = self.torques(fr, mode, t, y);
+        let w_c = if mode == ClutchMode::Locked {
+            y[0]
+        } else {
+            y[1]
+        };
+        let v = p.wheel_radius_m * y[7];
+        let f = self.road_force(fr, t, v);
+        match mode {
+            ClutchMode::Locked => {
+                dy[0] = (m_e - m_c) / (p.j_e_kg_m2 + p.j_c_kg_m2);
+                dy[1] = dy[0];
+            }
+            ClutchMode::Slipping(sigma) => {
+                let m_tr = sigma * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, t));
+                dy[0] = (m_e - m_tr) / p.j_e_kg_m2;
+                dy[1] = (m_tr - m_c) / p.j_c_kg_m2;
+            }
+        }
+        dy[2] = w_c - it * y[3];
+        dy[3] = (it * m_c - p.b_t_nm_s_per_rad * y[3] - m_p) / j2;
+        dy[4] = y[3] - p.final_drive_ratio * y[5];
+        dy[5] = (p.final_drive_ratio * m_p - p.b_f_nm_s_per_rad * y[5] - m_d) / j3;
+        dy[6] = y[5] - y[7];
+        dy[7] = (m_d - p.wheel_radius_m * f) / p.j4();
+        dy[8] = match &self.sc.engine {
+            EngineInput::SpeedReference(r) => r.eval_piece(fr.e, t) - y[0],
+            EngineInput::Torque(_) => 0.0,
+        };
+    }
+
+    fn unlock_margin(&self, fr: &Frozen, t: f64, y: &[f64]) -> f64 {
+        let [m_e, m_c, _, _] = self.torques(fr, ClutchMode::Locked, t, y);
+        self.m_trans_locked(m_e, m_c).abs()
+            - self.p.clutch_static_to_kinetic
+                * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, t))
+    }
+
+    fn breakpoints(&self) -> Vec<f64> {
+        let sc = self.sc;
+        let p = self.p;
+        let mut b: Vec<f64> = Vec::new();
+        let engine = match &sc.engine {
+            EngineInput::Torque(x) | EngineInput::SpeedReference(x) => x,
+        };
+        for pw in [&sc.gear, &sc.clutch_x, &sc.slope, &sc.brake_n, engine] {
+            b.extend(pw.breakpoints());
+        }
+        // kinks of M_k(t) where a clutch ramp crosses the ends of the effective range
+        for &(t0, t1, v0, v1) in sc.clutch_x.pieces() {
+            if v1 != v0 {
+                for lim in [
+                    p.clutch_l_lower * p.clutch_x_max,
+                    p.clutch_l_upper * p.clutch_x_max,
+                ] {
+                    let tc = t0 + (lim - v0) / (v1 - v0) * (t1 - t0);
+                    if t0 < tc && tc < t1 {
+                        b.push(tc);
+                    }
+                }
+            }
+        }
+        b.retain(|&x| x > 0.0 && x < sc.t_end_s);
+        b.sort_by(f64::total_cmp);
+        b.dedup();
+        b.push(sc.t_end_s);
+        b
+    }
+
+    /// Simulates the scenario from `y0` in `mode0` with relative tolerance `tol`
+    /// (`atol_i = tol·STATE_SCALE[i]`), sampling the output at `fs_hz`.
+    ///
+    /// # Errors
+    /// [`SimError`] for gears outside the gearbox, integrator failure or chattering.
+    pub fn simulate(
+        &self,
+        y0: [f64; N_STATES],
+        mode0: ClutchMode,
+        tol: f64,
+        fs_hz: f64,
+    ) -> Result<Trajectory, SimError> {
+        let p = self.p;
+        let tols = Tolerances {
+            rtol: tol,
+            atol: STATE_SCALE.iter().map(|s| s * tol).collect(),
+        };
+        let mut y = y0.to_vec();
+        let mut mode = mode0;
+        if mode == ClutchMode::Locked {
+            y[1] = y[0];
+        }
+        let mut traj = Trajectory::default();
+        let n_out = (self.sc.t_end_s * fs_hz).round() as usize;
+        let mut next_out = 0usize;
+        let mut t = 0.0;
+        let mut h = 1e-4;
+        let mut prev_gear = self.freeze(0.0, self.breakpoints()[0])?.gear;
+        let je = p.j_e_kg_m2;
+        let jc = p.j_c_kg_m2;
+        for tb in self.breakpoints() {
+            let fr = self.freeze(t, tb)?;
+            if fr.gear != prev_gear {
+                traj.events.push(Event {
+                    t,
+                    kind: format!("gear_{prev_gear}_to_{}", fr.gear),
+                });
+                prev_gear = fr.gear;
+            }
+            let mut switches = 0usize;
+            while t < tb {
+                if mode == ClutchMode::Locked && self.unlock_margin(&fr, t, &y) > 0.0 {
+                    let [m_e, m_c, _, _] = self.torques(&fr, mode, t, &y);
+                    mode = ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
+                        1.0
+                    } else {
+                        -1.0
+                    });
+                    y[1] = y[0];
+                    traj.events.push(Event {
+                        t,
+                        kind: "unlock".into(),
+                    });
+                }
+                let m = mode;
+                let mut f = |tt: f64, yy: &[f64], dd: &mut [f64]| self.rhs(&fr, m, tt, yy, dd);
+                let unlock = |tt: f64, yy: &[f64]| self.unlock_margin(&fr, tt, yy);
+                let lock = |_tt: f64, yy: &[f64]| match m {
+                    ClutchMode::Slipping(s) => s * (yy[0] - yy[1]),
+                    ClutchMode::Locked => 1.0,
+                };
+                let event: (EventFn, f64) = match m {
+                    ClutchMode::Locked => (&unlock, 1.0),
+                    ClutchMode::Slipping(_) => (&lock, -1.0),
+                };
+                let mut sample = |ka: &Knot, kb: &Knot| {
+                    let (ta, ya, tbb) = (ka.t, ka.y, kb.t);
+                    while next_out <= n_out {
+                        let to = next_out as f64 / fs_hz;
+                        if to > tbb || (to < ta && next_out > 0) {
+                            break;
+                        }
+                        let mut yo = [0.0; N_STATES];
+                        if to <= ta {
+                            yo.copy_from_slice(ya);
+                        } else {
+                            hermite(ka, kb, to, &mut yo);
+                        }
+                        if m == ClutchMode::Locked {
+                            yo[1] = yo[0];
+                        }
+                        let [m_e, m_c, m_p, m_d] = self.torques(&fr, m, to, &yo);
+                        let m_tr = match m {
+                            ClutchMode::Locked => self.m_trans_locked(m_e, m_c),
+                            ClutchMode::Slipping(s) => {
+                                s * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, to))
+                            }
+                        };
+                        traj.t.push(to);
+                        traj.y.push(yo);
+                        traj.mode.push(m);
+                        traj.torques.push([m_e, m_c, m_p, m_d, m_tr]);
+                        traj.gear.push(fr.gear);
+                        next_out += 1;
+                    }
+                };
+                let out = integrate(&mut f, t, &y, tb, h, &tols, Some(event), &mut sample)?;
+                traj.stats += out.stats;
+                h = out.h_last;
+                y = out.y;
+                t = if out.event && tb - out.t < 1e-12 {
+                    tb
+                } else {
+                    out.t
+                };
+                if out.event {
+                    switches += 1;
+                    if switches > 1000 {
+                        return Err(SimError::Chattering { t, limit: 1000 });
+                    }
+                    match mode {
+                        ClutchMode::Locked => {
+                            let [m_e, m_c, _, _] = self.torques(&fr, mode, t, &y);
+                            mode = ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
+                                1.0
+                            } else {
+                                -1.0
+                            });
+                            y[1] = y[0];
+                            traj.events.push(Event {
+                                t,
+                                kind: "unlock".into(),
+                            });
+                        }
+                        ClutchMode::Slipping(_) => {
+                            let w = (je * y[0] + jc * y[1]) / (je + jc);
+                            let mut ytest = y.clone();
+                            ytest[0] = w;
+                            ytest[1] = w;
+                            if self.unlock_margin(&fr, t, &ytest) <= 0.0 {
+                                mode = ClutchMode::Locked;
+                                y = ytest;
+                                traj.events.push(Event {
+                                    t,
+                                    kind: "lock".into(),
+                                });
+                            } else {
+                                let [m_e, m_c, _, _] =
+                                    self.torques(&fr, ClutchMode::Locked, t, &ytest);
+                                mode =
+                                    ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
+                                        1.0
+                                    } else {
+                                        -1.0
+                                    });
+                                traj.events.push(Event {
+                                    t,
+                                    kind: "slip_reversal".into(),
+                                });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(traj)
+    }
+}

@@ -1,0 +1,5 @@
+//! Simulation: integrators, inputs and the hybrid driveline model (physics.md §1).
+
+pub mod dopri;
+pub mod hybrid;
+pub mod inputs;

@@ -1,0 +1,141 @@
+//! The hybrid driveline simulation (accurate integrator) against independent solve_ivp (Radau,
+//! rtol 1e-10) reference trajectories of fixtures/gen/make_driveline_reference.py.
+
+use crate::common::*;
+use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::sim::hybrid::{ClutchMode, EngineInput, HybridDriveline, Scenario, N_STATES};
+use fleetdyn::sim::inputs::Piecewise;
+use serde_json::Value;
+
+fn pieces(v: &Value) -> Piecewise {
+    Piecewise::new(
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|p| {
+                let g = |k: &str| p[k].as_f64().unwrap();
+                (g("t0"), g("t1"), g("v0"), g("v1"))
+            })
+            .collect(),
+    )
+    .unwrap()
+}
+
+fn scenario(c: &Value) -> Scenario {
+    let d = &c["inputs_def"];
+    let engine = if d["M_e"].is_array() {
+        EngineInput::Torque(pieces(&d["M_e"]))
+    } else {
+        EngineInput::SpeedReference(pieces(&d["M_e"]["pi"]["w_ref"]))
+    };
+    Scenario {
+        t_end_s: c["duration_s"].as_f64().unwrap(),
+        gear: pieces(&d["gear"]),
+        clutch_x: pieces(&d["clutch_x"]),
+        slope: pieces(&d["slope"]),
+        brake_n: pieces(&d["F_b"]),
+        engine,
+        smoothing: c["rr_smoothing"].as_bool().unwrap(),
+    }
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn accurate_integrator_matches_solve_ivp_radau() {
+    let v = VehicleFile::load(&fixture("fixtures/vehicles/truck-40t.toml")).unwrap();
+    let p = v.driveline.as_ref().unwrap();
+    let doc: Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("fixtures/reference/driveline_hybrid.json")).unwrap(),
+    )
+    .unwrap();
+    let mut compared = 0;
+    for c in doc["cases"].as_array().unwrap() {
+        let name = c["name"].as_str().unwrap();
+        // the no-smoothing case uses a vehicle-standstill (stick) mode this simulator does not
+        // model yet; it is compared once that mode exists
+        if !c["events"].as_array().unwrap().iter().all(|e| {
+            ["lock", "unlock", "slip_reversal"].contains(&e["kind"].as_str().unwrap())
+                || e["kind"].as_str().unwrap().starts_with("gear_")
+        }) {
+            println!("{name}: skipped (standstill events)");
+            continue;
+        }
+        let sc = scenario(c);
+        let i = &c["initial_state"];
+        let keys = [
+            "w_e", "w_c", "phi_c", "w_p", "phi_p", "w_d", "phi_d", "w_w", "x_i",
+        ];
+        let mut y0 = [0.0; N_STATES];
+        for (k, key) in keys.iter().enumerate() {
+            y0[k] = i[key].as_f64().unwrap();
+        }
+        let mode0 = match c["initial_clutch_mode"].as_str().unwrap() {
+            "locked" => ClutchMode::Locked,
+            _ => ClutchMode::Slipping(c["initial_sigma"].as_f64().unwrap()),
+        };
+        let sim = HybridDriveline::new(p, &v.gearbox.ratios, &sc);
+        let start = std::time::Instant::now();
+        let tr = sim
+            .simulate(y0, mode0, 1e-10, c["fs_hz"].as_f64().unwrap())
+            .unwrap();
+        let wall = start.elapsed();
+        let t_ref = floats(&c["t"]);
+        assert_eq!(tr.t.len(), t_ref.len(), "{name}");
+        // events: same kinds in the same order, times within 1e-8 s (measured: 2.4e-12 s; the
+        // reference's own rtol 1e-8 vs 1e-10 convergence moves them by < 1e-9 s)
+        let ev_ref = c["events"].as_array().unwrap();
+        assert_eq!(tr.events.len(), ev_ref.len(), "{name}: {:?}", tr.events);
+        for (a, b) in tr.events.iter().zip(ev_ref) {
+            assert_eq!(a.kind, b["kind"].as_str().unwrap(), "{name}");
+            assert!(
+                (a.t - b["t"].as_f64().unwrap()).abs() < 1e-8,
+                "{name}: {} at {} vs {}",
+                a.kind,
+                a.t,
+                b["t"]
+            );
+        }
+        let mut worst = (0.0f64, "");
+        for (k, key) in [
+            (0usize, "w_e"),
+            (1, "w_c"),
+            (3, "w_p"),
+            (5, "w_d"),
+            (7, "w_w"),
+        ] {
+            let r = floats(&c[key]);
+            for (j, rv) in r.iter().enumerate() {
+                let d = (tr.y[j][k] - rv).abs();
+                if d > worst.0 {
+                    worst = (d, key);
+                }
+            }
+        }
+        let v_ref = floats(&c["v"]);
+        let v_ours = tr.speed(p.wheel_radius_m);
+        let dv = v_ours
+            .iter()
+            .zip(&v_ref)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "{name}: max |Δv| {dv:.2e} m/s, max |Δω| {:.2e} rad/s ({}), events {:?}, {} steps ({} rejected), {:?}",
+            worst.0, worst.1, tr.events.iter().map(|e| (e.kind.clone(), e.t)).collect::<Vec<_>>(), tr.stats.accepted, tr.stats.rejected, wall
+        );
+        // Both integrators run at rtol 1e-10 with atol = 1e-10 x (100 rad/s, 10 m/s …).
+        // Measured: |Δv| ≤ 3.2e-9 m/s, |Δω| ≤ 3.7e-7 rad/s (at the clutch lock, where the
+        // reference's own rtol 1e-8/1e-10 convergence check moves it by 2.5e-7 of its scale).
+        // Bounds: 1e-7 m/s and 1e-5 rad/s.
+        assert!(dv < 1e-7, "{name}: {dv}");
+        assert!(worst.0 < 1e-5, "{name}: {worst:?}");
+        compared += 1;
+    }
+    assert!(compared >= 4, "{compared}");
+}
