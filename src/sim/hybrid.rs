@@ -477,3 +477,53 @@ impl<'a> HybridDriveline<'a> {
         Ok(traj)
     }
 }
+
+/// Steady state with the clutch locked at vehicle speed `v_mps > 0` on slope `slope` in `gear`:
+/// every acceleration zero, shaft torsions carrying the road load, PI integrator preloaded so
+/// that its output equals the engine torque. Returns the state and that engine torque, N·m.
+pub fn steady_state_locked(
+    p: &DrivelineParams,
+    ratios: &[f64],
+    gear: usize,
+    v_mps: f64,
+    slope: f64,
+    smoothing: bool,
+) -> ([f64; N_STATES], f64) {
+    let it = ratios[gear - 1];
+    let fi = p.final_drive_ratio;
+    let w_w = v_mps / p.wheel_radius_m;
+    let w_d = w_w;
+    let w_p = fi * w_d;
+    let w_e = it * w_p;
+    let f = if smoothing {
+        1.0 - (-p.c_sr_s2_per_m2 * v_mps * v_mps).exp()
+    } else {
+        1.0
+    };
+    let mg = p.mass_kg * p.gravity_m_per_s2;
+    let force = f * (p.c_r1 + p.c_r2_s_per_m * v_mps) * mg
+        + 0.5 * p.rho_air_kg_per_m3 * p.c_w_a_f_m2 * v_mps * v_mps
+        + mg * slope.atan().sin();
+    let m_d = p.wheel_radius_m * force;
+    let m_p = (p.b_f_nm_s_per_rad * w_d + m_d) / fi;
+    let m_c = (p.b_t_nm_s_per_rad * w_p + m_p) / it;
+    let x_i = if p.pi_ki_nm_per_rad > 0.0 {
+        m_c / p.pi_ki_nm_per_rad
+    } else {
+        0.0
+    };
+    (
+        [
+            w_e,
+            w_e,
+            m_c / p.k_c_nm_per_rad,
+            w_p,
+            m_p / p.k_p_nm_per_rad,
+            w_d,
+            m_d / p.k_d_nm_per_rad,
+            w_w,
+            x_i,
+        ],
+        m_c,
+    )
+}

@@ -9,4 +9,5 @@ mod ingest_fixtures;
 mod real_data;
 mod resample_props;
 mod resample_truth;
+mod seed_slope_step;
 mod slope_pipeline;
