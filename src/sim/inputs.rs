@@ -47,12 +47,13 @@ impl Piecewise {
         }
     }
 
-    /// The piece active at `t` (index).
+    /// The piece active at `t` (index; binary search, so long recorded drives stay cheap).
     pub fn piece_index(&self, t: f64) -> usize {
+        // pieces are contiguous and increasing: the last piece starting at or before t
         self.pieces
-            .iter()
-            .position(|p| p.0 <= t && t < p.1)
-            .unwrap_or(self.pieces.len() - 1)
+            .partition_point(|p| p.0 <= t)
+            .saturating_sub(1)
+            .min(self.pieces.len() - 1)
     }
 
     /// Value of piece `k` at `t` (also outside the piece: linear continuation).

@@ -1,5 +1,7 @@
 //! Simulation: integrators, inputs and the hybrid driveline model (physics.md §1).
 
 pub mod dopri;
+pub mod fast;
 pub mod hybrid;
 pub mod inputs;
+pub mod scenarios;

@@ -1,6 +1,7 @@
 //! fleetdyn integration tests (one binary, one module per area).
 
 mod common;
+mod driveline_fast;
 mod driveline_hybrid;
 mod driveline_linear;
 mod driveline_reference;
