@@ -11,12 +11,14 @@ use fleetdyn::pipeline::slope_stage;
 use fleetdyn::pipeline::spec::PipelineSpec;
 use fleetdyn::report::bode::{plot_svg, BodeTable};
 use fleetdyn::report::spectrum;
+use fleetdyn::report::validation;
 use fleetdyn::report::IngestSummary;
 use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
     resample_to_distance, DistanceSource, ResampleConfig, ReversePolicy,
 };
+use fleetdyn::sim::validate::{validate_shuffle, ValidationConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -128,6 +130,9 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Simulate a recorded drive with a physics model and validate it against the recording.
+    #[command(subcommand)]
+    Simulate(SimulateCommand),
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
     Run {
         /// Pipeline file.
@@ -138,6 +143,34 @@ enum Command {
         /// Output folder instead of the pipeline's output_dir.
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum SimulateCommand {
+    /// Driveline shuffle model (physics.md §1) on the drive's recorded engine torque, gear,
+    /// clutch and slope; writes shuffle_sim.parquet and validation.parquet (RMSE, MAE, fit % of
+    /// vehicle and engine speed, overall and per gear). Drift: every window starts from the
+    /// measured state.
+    Shuffle {
+        /// Recorded drive (MCAP or Parquet).
+        #[arg(long)]
+        drive: PathBuf,
+        /// Vehicle file with a [driveline] section.
+        #[arg(long)]
+        vehicle: PathBuf,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Re-initialisation window, s.
+        #[arg(long, default_value_t = 30.0)]
+        window_s: f64,
+        /// Fast-path step, s.
+        #[arg(long, default_value_t = 0.01)]
+        dt_s: f64,
+        /// Mapping file for the drive (chosen automatically when absent).
+        #[arg(long)]
+        mapping: Option<PathBuf>,
     },
 }
 
@@ -426,6 +459,51 @@ fn run(cli: Cli) -> Result<(), Failure> {
             table.write(&pq, &fp).map_err(drive)?;
             plot_svg(&svg, p, &v.gearbox.ratios, &table).map_err(|e| drive(anyhow::anyhow!(e)))?;
             say!("wrote {} and {}", pq.display(), svg.display());
+            Ok(())
+        }
+        Command::Simulate(SimulateCommand::Shuffle {
+            drive: input,
+            vehicle,
+            output,
+            window_s,
+            dt_s,
+            mapping,
+        }) => {
+            let v = VehicleFile::load(&vehicle).map_err(usage)?;
+            let p = v.driveline(&vehicle.display().to_string()).map_err(usage)?;
+            if !(window_s > 0.0 && dt_s > 0.0 && dt_s < window_s) {
+                return Err(usage(anyhow::anyhow!(
+                    "--window-s and --dt-s must be positive with dt_s < window_s"
+                )));
+            }
+            let cfg = IngestConfig {
+                mapping,
+                ..Default::default()
+            };
+            let opts = cfg.options(&[Stage::Driveline], Some(&v)).map_err(usage)?;
+            let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let vcfg = ValidationConfig {
+                window_s,
+                dt_s,
+                ..Default::default()
+            };
+            let val =
+                validate_shuffle(&ing.log, p, &v.gearbox.ratios, None, &vcfg).map_err(drive)?;
+            let fp = format!(
+                "{}\nshuffle:v1 {:?} {:?} {:?}",
+                cfg.fingerprint(&opts),
+                p,
+                v.gearbox.ratios,
+                vcfg
+            );
+            validation::write(&output, &ing.log, &val, &fp).map_err(drive)?;
+            say!("{}: driveline simulation vs recording (windows of {window_s} s re-initialised from the measured state; slope from {})", ing.log.meta.drive_id, val.slope_column.as_deref().unwrap_or("none: flat road"));
+            say_raw!("{}", validation::summary(&val));
+            say!(
+                "wrote {} and {}",
+                output.join("shuffle_sim.parquet").display(),
+                output.join("validation.parquet").display()
+            );
             Ok(())
         }
         Command::Run {

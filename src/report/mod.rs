@@ -3,5 +3,6 @@
 pub mod bode;
 mod ingest_summary;
 pub mod spectrum;
+pub mod validation;
 
 pub use ingest_summary::IngestSummary;

@@ -22,6 +22,14 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../../schemas/outputs/spectrum.toml"),
     ),
     ("bode", include_str!("../../schemas/outputs/bode.toml")),
+    (
+        "shuffle_sim",
+        include_str!("../../schemas/outputs/shuffle-sim.toml"),
+    ),
+    (
+        "validation",
+        include_str!("../../schemas/outputs/validation.toml"),
+    ),
 ];
 
 /// One column of an output table.
@@ -116,7 +124,7 @@ impl OutputSchema {
 }
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
-/// `spectrum`, `bode`), or `None`.
+/// `spectrum`, `bode`, `shuffle_sim`, `validation`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.

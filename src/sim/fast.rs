@@ -226,9 +226,25 @@ impl<'a> FastDriveline<'a> {
         y0: [f64; N_STATES],
         mode0: ClutchMode,
     ) -> Result<Trajectory, SimError> {
+        self.simulate_span(sc, 0.0, sc.t_end_s, y0, mode0)
+    }
+
+    /// Simulates `[t_start, t_end]` of the scenario from `y0` in `mode0` (the state at
+    /// `t_start`), one output sample per step, the first at `t_start`.
+    ///
+    /// # Errors
+    /// [`SimError::Gear`] for gears outside the gearbox.
+    pub fn simulate_span(
+        &mut self,
+        sc: &Scenario,
+        t_start: f64,
+        t_end: f64,
+        y0: [f64; N_STATES],
+        mode0: ClutchMode,
+    ) -> Result<Trajectory, SimError> {
         let p = self.p;
         let dt = self.dt;
-        let n = (sc.t_end_s / dt).round() as usize;
+        let n = ((t_end - t_start) / dt).round() as usize;
         let mut traj = Trajectory {
             t: Vec::with_capacity(n + 1),
             y: Vec::with_capacity(n + 1),
@@ -254,7 +270,7 @@ impl<'a> FastDriveline<'a> {
             }
             Ok(g as usize)
         };
-        let mut gear = gear_at(0.5 * dt)?;
+        let mut gear = gear_at(t_start + 0.5 * dt)?;
         let (je, jc) = (p.j_e_kg_m2, p.j_c_kg_m2);
         let engine_torque = |t: f64, y: &[f64; N_STATES]| -> (f64, bool, f64) {
             // (M_e in use, PI active in the matrices, ω_ref)
@@ -271,7 +287,7 @@ impl<'a> FastDriveline<'a> {
             }
         };
         for k in 0..=n {
-            let t = k as f64 * dt;
+            let t = t_start + k as f64 * dt;
             let (me, _, _) = engine_torque(t, &y);
             let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
             let mtr = match mode {

@@ -4,4 +4,6 @@ pub mod dopri;
 pub mod fast;
 pub mod hybrid;
 pub mod inputs;
+pub mod recorded;
 pub mod scenarios;
+pub mod validate;

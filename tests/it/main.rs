@@ -5,6 +5,7 @@ mod driveline_fast;
 mod driveline_hybrid;
 mod driveline_linear;
 mod driveline_reference;
+mod driveline_validate;
 mod ingest_errors;
 mod ingest_fixtures;
 mod real_data;

@@ -1,0 +1,158 @@
+//! Recorded drives as simulation inputs: the canonical drive log's engine torque, gear, clutch,
+//! slope and brake columns turned into piecewise-linear [`Scenario`] inputs.
+//!
+//! Rules:
+//! - time is counted from the first row of the log, s;
+//! - continuous columns (engine torque, clutch position, brake force) are linear between samples,
+//!   state-like ones (gear, slope sensor) are held — the interpolation kinds of the schema;
+//! - short gaps (NaN; ingest bounds their length) are filled as the column's kind allows;
+//! - gear 0 (neutral) is simulated as the clutch fully open in the last engaged gear — the model
+//!   has no neutral (seed 000 §2.3);
+//! - absent optional columns: clutch engaged (x = 0), no service brake (F_b = 0);
+//! - the slope comes from the named column (e.g. the filtered slope of the slope stage), else
+//!   `road_slope`; without any slope column the road is flat, and this is reported.
+
+use super::hybrid::{EngineInput, Scenario};
+use super::inputs::Piecewise;
+use crate::schema::Interpolation;
+use crate::signal::distance::fill_gaps;
+use crate::table::DriveLog;
+
+/// What a recording could not provide.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RecordedError {
+    /// Too few rows to simulate.
+    #[error("{file}: {rows} rows; a simulation needs at least 2")]
+    TooShort {
+        /// Source file.
+        file: String,
+        /// Rows.
+        rows: usize,
+    },
+    /// A required column is absent or has no value.
+    #[error("{file}: no usable {column} column for the driveline simulation")]
+    Missing {
+        /// Source file.
+        file: String,
+        /// Column.
+        column: String,
+    },
+    /// A gear the gearbox lacks.
+    #[error("{file}: gear {gear} at row {row} is not in the gearbox (0..={max})")]
+    Gear {
+        /// Source file.
+        file: String,
+        /// Gear.
+        gear: f64,
+        /// Row.
+        row: usize,
+        /// Highest gear.
+        max: usize,
+    },
+}
+
+/// A recorded drive as a scenario, with the time axis it was built on.
+#[derive(Debug, Clone)]
+pub struct RecordedScenario {
+    /// The inputs.
+    pub scenario: Scenario,
+    /// Sample times relative to the first row, s.
+    pub t_s: Vec<f64>,
+    /// Which slope column was used (`None`: flat road).
+    pub slope_column: Option<String>,
+}
+
+fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
+    let p = t
+        .windows(2)
+        .zip(v.windows(2))
+        .map(|(tw, vw)| match interp {
+            Interpolation::Linear => (tw[0], tw[1], vw[0], vw[1]),
+            _ => (tw[0], tw[1], vw[0], vw[0]),
+        })
+        .collect();
+    Piecewise::new(p).expect("strictly increasing times and filled values")
+}
+
+/// Builds the scenario of a recorded drive (see the module rules).
+///
+/// # Errors
+/// [`RecordedError`] for logs shorter than 2 rows, missing engine torque or gear, or gears
+/// outside `0..=forward_gears`.
+pub fn scenario_from_log(
+    log: &DriveLog,
+    forward_gears: usize,
+    slope_column: Option<&str>,
+) -> Result<RecordedScenario, RecordedError> {
+    let file = log.meta.source_file.clone();
+    if log.len() < 2 {
+        return Err(RecordedError::TooShort {
+            file,
+            rows: log.len(),
+        });
+    }
+    let t0 = log.timestamp_ns[0];
+    let t: Vec<f64> = log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - t0) as f64 * 1e-9)
+        .collect();
+    let column =
+        |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
+    let missing = |c: &str| RecordedError::Missing {
+        file: file.clone(),
+        column: c.into(),
+    };
+    let torque =
+        column("engine_torque", Interpolation::Linear).ok_or_else(|| missing("engine_torque"))?;
+    let gear_raw = column("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
+    let mut clutch =
+        column("clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
+    let brake =
+        column("brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
+    let (slope_name, slope) = match slope_column
+        .and_then(|c| column(c, Interpolation::Hold).map(|v| (c.to_string(), v)))
+        .or_else(|| {
+            column("road_slope", Interpolation::Hold).map(|v| ("road_slope".to_string(), v))
+        }) {
+        Some((n, v)) => (Some(n), v),
+        None => (None, vec![0.0; log.len()]),
+    };
+    // neutral: clutch open in the last engaged gear (the first engaged one before any)
+    let first_engaged = gear_raw.iter().copied().find(|g| *g >= 1.0).unwrap_or(1.0);
+    let mut last = first_engaged;
+    let mut gear = Vec::with_capacity(log.len());
+    for (row, &g) in gear_raw.iter().enumerate() {
+        let g = g.round();
+        if g < 0.0 || g > forward_gears as f64 {
+            return Err(RecordedError::Gear {
+                file: file.clone(),
+                gear: g,
+                row,
+                max: forward_gears,
+            });
+        }
+        if g == 0.0 {
+            clutch[row] = 1.0;
+            gear.push(last);
+        } else {
+            last = g;
+            gear.push(g);
+        }
+    }
+    let t_end = *t.last().expect("two rows");
+    let scenario = Scenario {
+        t_end_s: t_end,
+        gear: pieces(&t, &gear, Interpolation::Hold),
+        clutch_x: pieces(&t, &clutch, Interpolation::Linear),
+        slope: pieces(&t, &slope, Interpolation::Hold),
+        brake_n: pieces(&t, &brake, Interpolation::Linear),
+        engine: EngineInput::Torque(pieces(&t, &torque, Interpolation::Linear)),
+        smoothing: true,
+    };
+    Ok(RecordedScenario {
+        scenario,
+        t_s: t,
+        slope_column: slope_name,
+    })
+}
