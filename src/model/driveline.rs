@@ -231,6 +231,42 @@ impl DrivelineParams {
         t[k - 1] + f * (t[k] - t[k - 1])
     }
 
+    /// Kinetic clutch capacity M_k at clutch position `x` (physics.md §1 actuator law:
+    /// `x_eff = clamp(x/x_max, L_l, L_u)`, `M_k = k_clutch (L_u − x_eff)/(L_u − L_l)`), N·m.
+    pub fn clutch_capacity(&self, x: f64) -> f64 {
+        let x_eff = (x / self.clutch_x_max).clamp(self.clutch_l_lower, self.clutch_l_upper);
+        self.clutch_max_torque_nm * (self.clutch_l_upper - x_eff)
+            / (self.clutch_l_upper - self.clutch_l_lower)
+    }
+
+    /// Torque through a locked clutch, `M_trans = (M_e J_c + M_c J_e)/(J_e + J_c)`, N·m.
+    pub fn locked_clutch_torque(&self, m_e: f64, m_c: f64) -> f64 {
+        (m_e * self.j_c_kg_m2 + m_c * self.j_e_kg_m2) / (self.j_e_kg_m2 + self.j_c_kg_m2)
+    }
+
+    /// Road force at the wheels `F = sign(v)(F_r + F_a + F_b) + F_g`, N (positive resists forward
+    /// motion): `F_r = f(v)(c_r1 + c_r2|v|) m g` with `f(v) = 1 − exp(−c_sr v²)` when `smoothing`
+    /// (else 1), `F_a = ½ρ c_wA_f v²`, `F_g = m g sin(atan s)` for slope s = tan α; sign(0) = 0.
+    pub fn road_force(&self, v_mps: f64, slope: f64, brake_n: f64, smoothing: bool) -> f64 {
+        let v = v_mps;
+        let f = if smoothing {
+            1.0 - (-self.c_sr_s2_per_m2 * v * v).exp()
+        } else {
+            1.0
+        };
+        let mg = self.mass_kg * self.gravity_m_per_s2;
+        let f_r = f * (self.c_r1 + self.c_r2_s_per_m * v.abs()) * mg;
+        let f_a = 0.5 * self.rho_air_kg_per_m3 * self.c_w_a_f_m2 * v * v;
+        let sgn = if v > 0.0 {
+            1.0
+        } else if v < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        sgn * (f_r + f_a + brake_n) + mg * slope.atan().sin()
+    }
+
     /// J4 = m·r_w² + J_w, the vehicle inertia seen at the wheel, kg·m².
     pub fn j4(&self) -> f64 {
         self.mass_kg * self.wheel_radius_m.powi(2) + self.j_w_kg_m2

@@ -166,32 +166,12 @@ impl<'a> FastDriveline<'a> {
     }
 
     fn clutch_capacity(&self, x: f64) -> f64 {
-        let p = self.p;
-        let x_eff = (x / p.clutch_x_max).clamp(p.clutch_l_lower, p.clutch_l_upper);
-        p.clutch_max_torque_nm * (p.clutch_l_upper - x_eff) / (p.clutch_l_upper - p.clutch_l_lower)
+        self.p.clutch_capacity(x)
     }
 
     fn road_force(&self, sc: &Scenario, t: f64, v: f64) -> f64 {
-        let p = self.p;
-        let s = sc.slope.eval(t);
-        let fb = sc.brake_n.eval(t);
-        let f = if sc.smoothing {
-            1.0 - (-p.c_sr_s2_per_m2 * v * v).exp()
-        } else {
-            1.0
-        };
-        let mg = p.mass_kg * p.gravity_m_per_s2;
-        let sum = f * (p.c_r1 + p.c_r2_s_per_m * v.abs()) * mg
-            + 0.5 * p.rho_air_kg_per_m3 * p.c_w_a_f_m2 * v * v
-            + fb;
-        let sgn = if v > 0.0 {
-            1.0
-        } else if v < 0.0 {
-            -1.0
-        } else {
-            0.0
-        };
-        sgn * sum + mg * s.atan().sin()
+        self.p
+            .road_force(v, sc.slope.eval(t), sc.brake_n.eval(t), sc.smoothing)
     }
 
     /// (M_e, M_c, M_p, M_d) for state `y`; `me` is the engine torque in use.
@@ -212,8 +192,7 @@ impl<'a> FastDriveline<'a> {
     }
 
     fn m_trans_locked(&self, me: f64, mc: f64) -> f64 {
-        let (je, jc) = (self.p.j_e_kg_m2, self.p.j_c_kg_m2);
-        (me * jc + mc * je) / (je + jc)
+        self.p.locked_clutch_torque(me, mc)
     }
 
     /// Simulates the scenario from `y0` in `mode0` with the fixed step, one output sample per step.

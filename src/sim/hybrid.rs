@@ -181,9 +181,7 @@ impl<'a> HybridDriveline<'a> {
 
     /// Kinetic clutch capacity M_k at clutch position x, N·m (physics.md §1 actuator law).
     pub fn clutch_capacity(&self, x: f64) -> f64 {
-        let p = self.p;
-        let x_eff = (x / p.clutch_x_max).clamp(p.clutch_l_lower, p.clutch_l_upper);
-        p.clutch_max_torque_nm * (p.clutch_l_upper - x_eff) / (p.clutch_l_upper - p.clutch_l_lower)
+        self.p.clutch_capacity(x)
     }
 
     fn engine_torque(&self, fr: &Frozen, t: f64, w_e: f64, x_i: f64) -> f64 {
@@ -217,32 +215,14 @@ impl<'a> HybridDriveline<'a> {
     }
 
     fn m_trans_locked(&self, m_e: f64, m_c: f64) -> f64 {
-        let (je, jc) = (self.p.j_e_kg_m2, self.p.j_c_kg_m2);
-        (m_e * jc + m_c * je) / (je + jc)
+        self.p.locked_clutch_torque(m_e, m_c)
     }
 
     /// Road force F = sign(v)(F_r + F_a + F_b) + F_g, N (positive resists forward motion).
     fn road_force(&self, fr: &Frozen, t: f64, v: f64) -> f64 {
-        let p = self.p;
         let s = self.sc.slope.eval_piece(fr.s, t);
         let fb = self.sc.brake_n.eval_piece(fr.fb, t);
-        let f = if self.sc.smoothing {
-            1.0 - (-p.c_sr_s2_per_m2 * v * v).exp()
-        } else {
-            1.0
-        };
-        let mg = p.mass_kg * p.gravity_m_per_s2;
-        let f_r = f * (p.c_r1 + p.c_r2_s_per_m * v.abs()) * mg;
-        let f_a = 0.5 * p.rho_air_kg_per_m3 * p.c_w_a_f_m2 * v * v;
-        let f_g = mg * s.atan().sin();
-        let sgn = if v > 0.0 {
-            1.0
-        } else if v < 0.0 {
-            -1.0
-        } else {
-            0.0
-        };
-        sgn * (f_r + f_a + fb) + f_g
+        self.p.road_force(v, s, fb, self.sc.smoothing)
     }
 
     fn rhs(&self, fr: &Frozen, mode: ClutchMode, t: f64, y: &[f64], dy: &mut [f64]) {
