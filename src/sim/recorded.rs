@@ -156,3 +156,56 @@ pub fn scenario_from_log(
         slope_column: slope_name,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::{DriveMeta, Signal};
+
+    fn log(n: usize, gear: f64) -> DriveLog {
+        let sig = |name: &str, v: f64| Signal {
+            name: name.into(),
+            unit: "1".into(),
+            values: vec![v; n],
+        };
+        DriveLog {
+            meta: DriveMeta {
+                drive_id: "d".into(),
+                vehicle_id: None,
+                source_file: "f".into(),
+            },
+            timestamp_ns: (0..n as i64).map(|k| k * 10_000_000).collect(),
+            signals: vec![
+                sig("vehicle_speed", 5.0),
+                sig("engine_torque", 100.0),
+                sig("gear", gear),
+            ],
+        }
+    }
+
+    #[test]
+    fn zero_length_and_single_row_drives_are_errors() {
+        assert!(matches!(
+            scenario_from_log(&log(0, 3.0), 12, None),
+            Err(RecordedError::TooShort { rows: 0, .. })
+        ));
+        assert!(matches!(
+            scenario_from_log(&log(1, 3.0), 12, None),
+            Err(RecordedError::TooShort { rows: 1, .. })
+        ));
+    }
+
+    #[test]
+    fn neutral_is_an_open_clutch_in_the_last_gear_and_bad_gears_are_errors() {
+        let mut l = log(4, 3.0);
+        l.signals[2].values = vec![3.0, 0.0, 0.0, 4.0];
+        let r = scenario_from_log(&l, 12, None).unwrap();
+        assert_eq!(r.scenario.gear.eval(0.015), 3.0);
+        assert_eq!(r.scenario.clutch_x.eval(0.015), 1.0);
+        assert_eq!(r.slope_column, None, "no slope column: flat road, reported");
+        assert!(matches!(
+            scenario_from_log(&log(4, 13.0), 12, None),
+            Err(RecordedError::Gear { row: 0, .. })
+        ));
+    }
+}
