@@ -268,6 +268,22 @@ impl<'a> HybridDriveline<'a> {
                 * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, t))
     }
 
+    /// Unlocks the clutch at `t`: slip direction from the sign of the locked-clutch torque, the
+    /// disc starting at the engine speed; records the event and returns the new mode.
+    fn unlock(&self, fr: &Frozen, t: f64, y: &mut [f64], events: &mut Vec<Event>) -> ClutchMode {
+        let [m_e, m_c, _, _] = self.torques(fr, ClutchMode::Locked, t, y);
+        y[1] = y[0];
+        events.push(Event {
+            t,
+            kind: "unlock".into(),
+        });
+        ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
+            1.0
+        } else {
+            -1.0
+        })
+    }
+
     fn breakpoints(&self) -> Vec<f64> {
         let sc = self.sc;
         let p = self.p;
@@ -341,17 +357,7 @@ impl<'a> HybridDriveline<'a> {
             let mut switches = 0usize;
             while t < tb {
                 if mode == ClutchMode::Locked && self.unlock_margin(&fr, t, &y) > 0.0 {
-                    let [m_e, m_c, _, _] = self.torques(&fr, mode, t, &y);
-                    mode = ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
-                        1.0
-                    } else {
-                        -1.0
-                    });
-                    y[1] = y[0];
-                    traj.events.push(Event {
-                        t,
-                        kind: "unlock".into(),
-                    });
+                    mode = self.unlock(&fr, t, &mut y, &mut traj.events);
                 }
                 let m = mode;
                 let mut f = |tt: f64, yy: &[f64], dd: &mut [f64]| self.rhs(&fr, m, tt, yy, dd);
@@ -411,17 +417,7 @@ impl<'a> HybridDriveline<'a> {
                     }
                     match mode {
                         ClutchMode::Locked => {
-                            let [m_e, m_c, _, _] = self.torques(&fr, mode, t, &y);
-                            mode = ClutchMode::Slipping(if self.m_trans_locked(m_e, m_c) > 0.0 {
-                                1.0
-                            } else {
-                                -1.0
-                            });
-                            y[1] = y[0];
-                            traj.events.push(Event {
-                                t,
-                                kind: "unlock".into(),
-                            });
+                            mode = self.unlock(&fr, t, &mut y, &mut traj.events);
                         }
                         ClutchMode::Slipping(_) => {
                             let w = (je * y[0] + jc * y[1]) / (je + jc);

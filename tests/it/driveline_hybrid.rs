@@ -39,6 +39,18 @@ fn scenario(c: &Value) -> Scenario {
     }
 }
 
+/// The reference's initial state in fleetdyn's state order.
+fn initial_state(c: &Value) -> [f64; N_STATES] {
+    let keys = [
+        "w_e", "w_c", "phi_c", "w_p", "phi_p", "w_d", "phi_d", "w_w", "x_i",
+    ];
+    let mut y0 = [0.0; N_STATES];
+    for (k, key) in keys.iter().enumerate() {
+        y0[k] = c["initial_state"][key].as_f64().unwrap();
+    }
+    y0
+}
+
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array()
         .unwrap()
@@ -68,14 +80,7 @@ fn accurate_integrator_matches_solve_ivp_radau() {
             continue;
         }
         let sc = scenario(c);
-        let i = &c["initial_state"];
-        let keys = [
-            "w_e", "w_c", "phi_c", "w_p", "phi_p", "w_d", "phi_d", "w_w", "x_i",
-        ];
-        let mut y0 = [0.0; N_STATES];
-        for (k, key) in keys.iter().enumerate() {
-            y0[k] = i[key].as_f64().unwrap();
-        }
+        let y0 = initial_state(c);
         let mode0 = match c["initial_clutch_mode"].as_str().unwrap() {
             "locked" => ClutchMode::Locked,
             _ => ClutchMode::Slipping(c["initial_sigma"].as_f64().unwrap()),
@@ -161,14 +166,7 @@ fn rolling_resistance_smoothing_cuts_integrator_work() {
         .iter()
         .find(|c| c["name"] == "standstill_rr_smoothing")
         .unwrap();
-    let i = &c["initial_state"];
-    let keys = [
-        "w_e", "w_c", "phi_c", "w_p", "phi_p", "w_d", "phi_d", "w_w", "x_i",
-    ];
-    let mut y0 = [0.0; N_STATES];
-    for (k, key) in keys.iter().enumerate() {
-        y0[k] = i[key].as_f64().unwrap();
-    }
+    let y0 = initial_state(c);
     let run = |smoothing: bool| {
         let mut sc = scenario(c);
         sc.smoothing = smoothing;
