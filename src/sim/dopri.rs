@@ -48,8 +48,8 @@ pub struct Outcome {
     pub t: f64,
     /// State there.
     pub y: Vec<f64>,
-    /// True when the event function crossed zero (at `t`).
-    pub event: bool,
+    /// Index of the event function that crossed zero first (at `t`), if any.
+    pub event: Option<usize>,
     /// Last accepted step size (a good first step for the next interval).
     pub h_last: f64,
     /// Work.
@@ -145,7 +145,8 @@ pub fn hermite(a: &Knot, b: &Knot, t: f64, out: &mut [f64]) {
 ///
 /// `on_step(a, b)` is called with the two knots of every accepted step (the last one
 /// truncated at an event), so the caller can sample the interpolant.
-/// `event`: `(g, direction)` with direction +1 (rising), −1 (falling) or 0 (both).
+/// `events`: `(g, direction)` pairs with direction +1 (rising), −1 (falling) or 0 (both); the
+/// earliest crossing in a step ends the interval.
 ///
 /// # Errors
 /// [`DopriError`] on step-size underflow or a non-finite derivative.
@@ -157,7 +158,7 @@ pub fn integrate(
     t1: f64,
     h0: f64,
     tol: &Tolerances,
-    event: Option<(EventFn, f64)>,
+    events: &[(EventFn, f64)],
     on_step: OnStep,
 ) -> Result<Outcome, DopriError> {
     let n = y0.len();
@@ -181,7 +182,7 @@ pub fn integrate(
     check(t, &k1)?;
     let span = t1 - t0;
     let mut h = h0.min(span).max(span * 1e-12);
-    let mut g_prev = event.map(|(g, _)| g(t, &y));
+    let mut g_prev: Vec<f64> = events.iter().map(|(g, _)| g(t, &y)).collect();
     let mut h_last = h;
     while t < t1 {
         let last = t + h >= t1 - 1e-15 * t1.abs().max(1.0);
@@ -238,11 +239,14 @@ pub fn integrate(
         }
         stats.accepted += 1;
         let t_new = if last { t1 } else { t + h };
-        // event in this step?
-        if let (Some((g, dir)), Some(gp)) = (event, g_prev) {
+        // events in this step: locate every crossing, keep the earliest
+        let mut first: Option<(usize, f64)> = None;
+        let mut g_new = Vec::with_capacity(events.len());
+        for (k, ((g, dir), &gp)) in events.iter().zip(&g_prev).enumerate() {
             let gn = g(t_new, &ynew);
+            g_new.push(gn);
             let crosses =
-                (gp < 0.0 && gn >= 0.0 && dir >= 0.0) || (gp > 0.0 && gn <= 0.0 && dir <= 0.0);
+                (gp < 0.0 && gn >= 0.0 && *dir >= 0.0) || (gp > 0.0 && gn <= 0.0 && *dir <= 0.0);
             if crosses {
                 let ka = Knot { t, y: &y, f: &k1 };
                 let kb = Knot {
@@ -255,29 +259,40 @@ pub fn integrate(
                     g(tt, buf)
                 };
                 let te = locate(&mut at, t, gp, t_new, gn, &mut yint);
-                hermite(&ka, &kb, te, &mut yint);
-                // derivative at the event for the truncated step's interpolant
-                let mut fe = vec![0.0; n];
-                f(te, &yint, &mut fe);
-                stats.rhs_evals += 1;
-                on_step(
-                    &Knot { t, y: &y, f: &k1 },
-                    &Knot {
-                        t: te,
-                        y: &yint,
-                        f: &fe,
-                    },
-                );
-                return Ok(Outcome {
-                    t: te,
-                    y: yint,
-                    event: true,
-                    h_last: h,
-                    stats,
-                });
+                if first.is_none_or(|(_, tf)| te < tf) {
+                    first = Some((k, te));
+                }
             }
-            g_prev = Some(gn);
         }
+        if let Some((k, te)) = first {
+            let ka = Knot { t, y: &y, f: &k1 };
+            let kb = Knot {
+                t: t_new,
+                y: &ynew,
+                f: &k7,
+            };
+            hermite(&ka, &kb, te, &mut yint);
+            // derivative at the event for the truncated step's interpolant
+            let mut fe = vec![0.0; n];
+            f(te, &yint, &mut fe);
+            stats.rhs_evals += 1;
+            on_step(
+                &ka,
+                &Knot {
+                    t: te,
+                    y: &yint,
+                    f: &fe,
+                },
+            );
+            return Ok(Outcome {
+                t: te,
+                y: yint,
+                event: Some(k),
+                h_last: h,
+                stats,
+            });
+        }
+        g_prev = g_new;
         on_step(
             &Knot { t, y: &y, f: &k1 },
             &Knot {
@@ -300,7 +315,7 @@ pub fn integrate(
     Ok(Outcome {
         t,
         y,
-        event: false,
+        event: None,
         h_last,
         stats,
     })
@@ -363,9 +378,9 @@ mod tests {
             atol: vec![1e-12],
         };
         let mut f = |_t: f64, y: &[f64], d: &mut [f64]| d[0] = -2.0 * y[0];
-        let out = integrate(&mut f, 0.0, &[1.0], 3.0, 1e-3, &tol, None, &mut |_, _| {}).unwrap();
+        let out = integrate(&mut f, 0.0, &[1.0], 3.0, 1e-3, &tol, &[], &mut |_, _| {}).unwrap();
         assert!((out.y[0] - (-6.0f64).exp()).abs() < 1e-11, "{}", out.y[0]);
-        assert!(!out.event);
+        assert!(out.event.is_none());
     }
 
     #[test]
@@ -387,15 +402,57 @@ mod tests {
             10.0,
             1e-2,
             &tol,
-            Some((&g, -1.0)),
+            &[(&g, -1.0)],
             &mut |_, _| {},
         )
         .unwrap();
-        assert!(out.event);
+        assert_eq!(out.event, Some(0));
         assert!(
             (out.t - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
             "{}",
             out.t
         );
+    }
+
+    #[test]
+    fn the_earliest_of_several_events_wins() {
+        // y = cos t, y' = -sin t: y falls through 0 at pi/2, y' rises through 0 at pi
+        let tol = Tolerances {
+            rtol: 1e-11,
+            atol: vec![1e-13; 2],
+        };
+        let mut f = |_t: f64, y: &[f64], d: &mut [f64]| {
+            d[0] = y[1];
+            d[1] = -y[0];
+        };
+        let late = |_t: f64, y: &[f64]| y[1];
+        let early = |_t: f64, y: &[f64]| y[0];
+        let out = integrate(
+            &mut f,
+            0.0,
+            &[1.0, 0.0],
+            10.0,
+            1e-2,
+            &tol,
+            &[(&late, 1.0), (&early, -1.0)],
+            &mut |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(out.event, Some(1));
+        assert!((out.t - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        // started after pi/2, the other event is next
+        let out = integrate(
+            &mut f,
+            2.0,
+            &[2f64.cos(), -(2f64.sin())],
+            10.0,
+            1e-2,
+            &tol,
+            &[(&late, 1.0), (&early, -1.0)],
+            &mut |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(out.event, Some(0));
+        assert!((out.t - std::f64::consts::PI).abs() < 1e-9, "{}", out.t);
     }
 }

@@ -62,6 +62,21 @@ pub struct Scenario {
     pub engine: EngineInput,
     /// Rolling-resistance smoothing f(v) = 1 − exp(−c_sr v²) on (true) or off.
     pub smoothing: bool,
+    /// Locate the vehicle's stops and breakaways as events (a standstill mode that holds the
+    /// wheels while brake and static rolling resistance can), instead of taking sign(v) from
+    /// the state. Meant for unsmoothed rolling resistance; the accurate integrator only.
+    pub standstill_events: bool,
+}
+
+/// Wheel (vehicle) discrete state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Wheel {
+    /// No standstill events: sign(v) from the state.
+    Free,
+    /// Rolling in direction ±1 (fixed between events).
+    Rolling(f64),
+    /// Held at standstill.
+    Stuck,
 }
 
 /// Clutch mode.
@@ -218,14 +233,37 @@ impl<'a> HybridDriveline<'a> {
         self.p.locked_clutch_torque(m_e, m_c)
     }
 
-    /// Road force F = sign(v)(F_r + F_a + F_b) + F_g, N (positive resists forward motion).
-    fn road_force(&self, fr: &Frozen, t: f64, v: f64) -> f64 {
+    /// Road force F = sign(v)(F_r + F_a + F_b) + F_g, N (positive resists forward motion); while
+    /// rolling between standstill events the direction of motion replaces sign(v).
+    fn road_force(&self, fr: &Frozen, t: f64, v: f64, wheel: Wheel) -> f64 {
         let s = self.sc.slope.eval_piece(fr.s, t);
         let fb = self.sc.brake_n.eval_piece(fr.fb, t);
-        self.p.road_force(v, s, fb, self.sc.smoothing)
+        match wheel {
+            Wheel::Rolling(sv) => {
+                let grade = self.p.road_force(0.0, s, 0.0, self.sc.smoothing);
+                let resist = self.p.road_force(v.abs(), 0.0, fb, self.sc.smoothing);
+                sv * resist + grade
+            }
+            _ => self.p.road_force(v, s, fb, self.sc.smoothing),
+        }
     }
 
-    fn rhs(&self, fr: &Frozen, mode: ClutchMode, t: f64, y: &[f64], dy: &mut [f64]) {
+    /// At standstill: (drive force the shafts and the grade put on the held vehicle, holding
+    /// capacity of static rolling resistance f(0)·c_r1·m·g plus the brake), N.
+    fn static_balance(&self, fr: &Frozen, t: f64, y: &[f64]) -> (f64, f64) {
+        let p = self.p;
+        let [_, _, _, m_d] = self.torques(fr, ClutchMode::Slipping(1.0), t, y);
+        let s = self.sc.slope.eval_piece(fr.s, t);
+        let mg = p.mass_kg * p.gravity_m_per_s2;
+        let drive = m_d / p.wheel_radius_m - mg * s.atan().sin();
+        let f0 = if self.sc.smoothing { 0.0 } else { 1.0 };
+        (
+            drive,
+            f0 * p.c_r1 * mg + self.sc.brake_n.eval_piece(fr.fb, t),
+        )
+    }
+
+    fn rhs(&self, fr: &Frozen, mode: ClutchMode, wheel: Wheel, t: f64, y: &[f64], dy: &mut [f64]) {
         let p = self.p;
         let it = self.ratios[fr.gear - 1];
         let j2 = p.j_t_kg_m2[fr.gear - 1] + p.j_p_kg_m2;
@@ -237,7 +275,7 @@ impl<'a> HybridDriveline<'a> {
             y[1]
         };
         let v = p.wheel_radius_m * y[7];
-        let f = self.road_force(fr, t, v);
+        let f = self.road_force(fr, t, v, wheel);
         match mode {
             ClutchMode::Locked => {
                 dy[0] = (m_e - m_c) / (p.j_e_kg_m2 + p.j_c_kg_m2);
@@ -254,7 +292,11 @@ impl<'a> HybridDriveline<'a> {
         dy[4] = y[3] - p.final_drive_ratio * y[5];
         dy[5] = (p.final_drive_ratio * m_p - p.b_f_nm_s_per_rad * y[5] - m_d) / j3;
         dy[6] = y[5] - y[7];
-        dy[7] = (m_d - p.wheel_radius_m * f) / p.j4();
+        dy[7] = if wheel == Wheel::Stuck {
+            0.0
+        } else {
+            (m_d - p.wheel_radius_m * f) / p.j4()
+        };
         dy[8] = match &self.sc.engine {
             EngineInput::SpeedReference(r) => r.eval_piece(fr.e, t) - y[0],
             EngineInput::Torque(_) => 0.0,
@@ -337,6 +379,17 @@ impl<'a> HybridDriveline<'a> {
         if mode == ClutchMode::Locked {
             y[1] = y[0];
         }
+        let mut wheel = if self.sc.standstill_events {
+            if y[7] > 0.0 {
+                Wheel::Rolling(1.0)
+            } else if y[7] < 0.0 {
+                Wheel::Rolling(-1.0)
+            } else {
+                Wheel::Stuck
+            }
+        } else {
+            Wheel::Free
+        };
         let mut traj = Trajectory::default();
         let n_out = (self.sc.t_end_s * fs_hz).round() as usize;
         let mut next_out = 0usize;
@@ -359,17 +412,41 @@ impl<'a> HybridDriveline<'a> {
                 if mode == ClutchMode::Locked && self.unlock_margin(&fr, t, &y) > 0.0 {
                     mode = self.unlock(&fr, t, &mut y, &mut traj.events);
                 }
+                if wheel == Wheel::Stuck {
+                    let (drive, cap) = self.static_balance(&fr, t, &y);
+                    if drive.abs() > cap {
+                        wheel = Wheel::Rolling(drive.signum());
+                        traj.events.push(Event {
+                            t,
+                            kind: "breakaway".into(),
+                        });
+                    }
+                }
                 let m = mode;
-                let mut f = |tt: f64, yy: &[f64], dd: &mut [f64]| self.rhs(&fr, m, tt, yy, dd);
+                let wm = wheel;
+                let mut f = |tt: f64, yy: &[f64], dd: &mut [f64]| self.rhs(&fr, m, wm, tt, yy, dd);
                 let unlock = |tt: f64, yy: &[f64]| self.unlock_margin(&fr, tt, yy);
                 let lock = |_tt: f64, yy: &[f64]| match m {
                     ClutchMode::Slipping(s) => s * (yy[0] - yy[1]),
                     ClutchMode::Locked => 1.0,
                 };
-                let event: (EventFn, f64) = match m {
+                let v_zero = |_tt: f64, yy: &[f64]| match wm {
+                    Wheel::Rolling(sv) => sv * yy[7],
+                    _ => 1.0,
+                };
+                let breakaway = |tt: f64, yy: &[f64]| {
+                    let (drive, cap) = self.static_balance(&fr, tt, yy);
+                    drive.abs() - cap
+                };
+                let mut events: Vec<(EventFn, f64)> = vec![match m {
                     ClutchMode::Locked => (&unlock, 1.0),
                     ClutchMode::Slipping(_) => (&lock, -1.0),
-                };
+                }];
+                match wm {
+                    Wheel::Rolling(_) => events.push((&v_zero, -1.0)),
+                    Wheel::Stuck => events.push((&breakaway, 1.0)),
+                    Wheel::Free => {}
+                }
                 let mut sample = |ka: &Knot, kb: &Knot| {
                     let (ta, ya, tbb) = (ka.t, ka.y, kb.t);
                     while next_out <= n_out {
@@ -401,19 +478,50 @@ impl<'a> HybridDriveline<'a> {
                         next_out += 1;
                     }
                 };
-                let out = integrate(&mut f, t, &y, tb, h, &tols, Some(event), &mut sample)?;
+                let out = integrate(&mut f, t, &y, tb, h, &tols, &events, &mut sample)?;
                 traj.stats += out.stats;
                 h = out.h_last;
                 y = out.y;
-                t = if out.event && tb - out.t < 1e-12 {
+                t = if out.event.is_some() && tb - out.t < 1e-12 {
                     tb
                 } else {
                     out.t
                 };
-                if out.event {
+                if let Some(k) = out.event {
                     switches += 1;
                     if switches > 1000 {
                         return Err(SimError::Chattering { t, limit: 1000 });
+                    }
+                    if k == 1 {
+                        // wheel event
+                        match wheel {
+                            Wheel::Rolling(_) => {
+                                y[7] = 0.0;
+                                let (drive, cap) = self.static_balance(&fr, t, &y);
+                                if drive.abs() <= cap {
+                                    wheel = Wheel::Stuck;
+                                    traj.events.push(Event {
+                                        t,
+                                        kind: "stop".into(),
+                                    });
+                                } else {
+                                    wheel = Wheel::Rolling(drive.signum());
+                                    traj.events.push(Event {
+                                        t,
+                                        kind: "v_reversal".into(),
+                                    });
+                                }
+                            }
+                            _ => {
+                                let (drive, _) = self.static_balance(&fr, t, &y);
+                                wheel = Wheel::Rolling(drive.signum());
+                                traj.events.push(Event {
+                                    t,
+                                    kind: "breakaway".into(),
+                                });
+                            }
+                        }
+                        continue;
                     }
                     match mode {
                         ClutchMode::Locked => {

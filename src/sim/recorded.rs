@@ -149,6 +149,7 @@ pub fn scenario_from_log(
         brake_n: pieces(&t, &brake, Interpolation::Linear),
         engine: EngineInput::Torque(pieces(&t, &torque, Interpolation::Linear)),
         smoothing: true,
+        standstill_events: false,
     };
     Ok(RecordedScenario {
         scenario,

@@ -76,6 +76,7 @@ pub fn mixed_gear_drive(
         brake_n: Piecewise::constant(t_end_s, 0.0),
         engine: EngineInput::SpeedReference(Piecewise::new(wref_p).expect("contiguous")),
         smoothing: true,
+        standstill_events: false,
     };
     (sc, y0, ClutchMode::Locked)
 }

@@ -78,6 +78,7 @@ fn fast_path_agrees_with_the_accurate_integrator() {
         brake_n: Piecewise::constant(20.0, 0.0),
         engine: EngineInput::SpeedReference(Piecewise::constant(20.0, w)),
         smoothing: true,
+        standstill_events: false,
     };
     // Locked clutch, step at a sample boundary: the linear part is exact and the held road force
     // is the only approximation. Measured 4.6e-8 m/s; bound 1e-6 m/s.
@@ -103,6 +104,7 @@ fn fast_path_agrees_with_the_accurate_integrator() {
         brake_n: Piecewise::constant(10.0, 0.0),
         engine: EngineInput::SpeedReference(Piecewise::constant(10.0, 900.0 * rpm)),
         smoothing: true,
+        standstill_events: false,
     };
     // The lock is found at the end of the 10 ms step in which the slip speed crosses zero (6 ms
     // late here). Measured 4.4e-4 m/s; bound 1e-3 m/s.

@@ -36,6 +36,7 @@ fn scenario(c: &Value) -> Scenario {
         brake_n: pieces(&d["F_b"]),
         engine,
         smoothing: c["rr_smoothing"].as_bool().unwrap(),
+        standstill_events: c["standstill_events"].as_bool().unwrap_or(false),
     }
 }
 
@@ -70,15 +71,6 @@ fn accurate_integrator_matches_solve_ivp_radau() {
     let mut compared = 0;
     for c in doc["cases"].as_array().unwrap() {
         let name = c["name"].as_str().unwrap();
-        // the no-smoothing case uses a vehicle-standstill (stick) mode this simulator does not
-        // model yet; it is compared once that mode exists
-        if !c["events"].as_array().unwrap().iter().all(|e| {
-            ["lock", "unlock", "slip_reversal"].contains(&e["kind"].as_str().unwrap())
-                || e["kind"].as_str().unwrap().starts_with("gear_")
-        }) {
-            println!("{name}: skipped (standstill events)");
-            continue;
-        }
         let sc = scenario(c);
         let y0 = initial_state(c);
         let mode0 = match c["initial_clutch_mode"].as_str().unwrap() {
@@ -93,14 +85,15 @@ fn accurate_integrator_matches_solve_ivp_radau() {
         let wall = start.elapsed();
         let t_ref = floats(&c["t"]);
         assert_eq!(tr.t.len(), t_ref.len(), "{name}");
-        // events: same kinds in the same order, times within 1e-8 s (measured: 2.4e-12 s; the
-        // reference's own rtol 1e-8 vs 1e-10 convergence moves them by < 1e-9 s)
+        // events: same kinds in the same order, times within 5e-8 s (measured: clutch events
+        // 2.4e-12 s, the standstill breakaway 5.2e-9 s; the reference's own rtol 1e-8 vs 1e-10
+        // convergence moves them by up to 7e-10 s)
         let ev_ref = c["events"].as_array().unwrap();
         assert_eq!(tr.events.len(), ev_ref.len(), "{name}: {:?}", tr.events);
         for (a, b) in tr.events.iter().zip(ev_ref) {
             assert_eq!(a.kind, b["kind"].as_str().unwrap(), "{name}");
             assert!(
-                (a.t - b["t"].as_f64().unwrap()).abs() < 1e-8,
+                (a.t - b["t"].as_f64().unwrap()).abs() < 5e-8,
                 "{name}: {} at {} vs {}",
                 a.kind,
                 a.t,
@@ -135,14 +128,17 @@ fn accurate_integrator_matches_solve_ivp_radau() {
             worst.0, worst.1, tr.events.iter().map(|e| (e.kind.clone(), e.t)).collect::<Vec<_>>(), tr.stats.accepted, tr.stats.rejected, wall
         );
         // Both integrators run at rtol 1e-10 with atol = 1e-10 x (100 rad/s, 10 m/s …).
-        // Measured: |Δv| ≤ 3.2e-9 m/s, |Δω| ≤ 3.7e-7 rad/s (at the clutch lock, where the
-        // reference's own rtol 1e-8/1e-10 convergence check moves it by 2.5e-7 of its scale).
-        // Bounds: 1e-7 m/s and 1e-5 rad/s.
-        assert!(dv < 1e-7, "{name}: {dv}");
-        assert!(worst.0 < 1e-5, "{name}: {worst:?}");
+        // Measured: |Δv| ≤ 3.2e-9 m/s and |Δω| ≤ 3.7e-7 rad/s on the clutch cases; 9.3e-8 m/s and
+        // 8.7e-6 rad/s on the standstill case (its breakaway instant differs by 5e-9 s, and the
+        // driveline then winds up from a slightly different moment). Bounds: 5e-7 m/s, 5e-5 rad/s.
+        assert!(dv < 5e-7, "{name}: {dv}");
+        assert!(worst.0 < 5e-5, "{name}: {worst:?}");
         compared += 1;
     }
-    assert!(compared >= 4, "{compared}");
+    assert_eq!(
+        compared, 5,
+        "every reference case, the standstill (stop/breakaway) one included"
+    );
 }
 
 /// Seed 000 §2.7 reproduced: smoothing the rolling resistance near standstill
@@ -178,6 +174,21 @@ fn rolling_resistance_smoothing_cuts_integrator_work() {
     };
     let (with, wall_with) = run(true);
     let (without, wall_without) = run(false);
+    // the unsmoothed model with its stop and breakaway located as events instead
+    let located = {
+        let mut sc = scenario(c);
+        sc.smoothing = false;
+        sc.standstill_events = true;
+        HybridDriveline::new(p, &v.gearbox.ratios, &sc)
+            .simulate(y0, ClutchMode::Locked, 1e-8, 100.0)
+            .unwrap()
+    };
+    println!(
+        "start-stop, rtol 1e-8, unsmoothed with located stop/breakaway: {} steps / {} rhs, events {:?}",
+        located.stats.accepted,
+        located.stats.rhs_evals,
+        located.events.iter().map(|e| (e.kind.clone(), e.t)).collect::<Vec<_>>()
+    );
     let cut_steps = 1.0 - with.stats.accepted as f64 / without.stats.accepted as f64;
     let cut_rhs = 1.0 - with.stats.rhs_evals as f64 / without.stats.rhs_evals as f64;
     let (va, vb) = (

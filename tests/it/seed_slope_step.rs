@@ -61,6 +61,7 @@ fn slope_step_excites_shuffle_and_the_spatial_filter_removes_it() {
             brake_n: Piecewise::constant(t_end, 0.0),
             engine: EngineInput::SpeedReference(Piecewise::constant(t_end, w_ref)),
             smoothing: true,
+            standstill_events: false,
         };
         let tr = HybridDriveline::new(p, ratios, &sc)
             .simulate(y0, ClutchMode::Locked, 1e-8, fs)
