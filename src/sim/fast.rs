@@ -16,7 +16,9 @@
 //! clutch unlocks when |M_trans| exceeds the static capacity; a slipping clutch locks when the
 //! slip speed changes sign and the capacity holds (momentum-weighted merge, as the accurate path
 //! does). The PI output is clamped to the engine's limits; the clamp is decided at each step's
-//! start. Equations and state are those of [`super::hybrid`]; the accuracy against the accurate
+//! start. With `standstill_events`, a vehicle whose speed changes sign in a step while brake and
+//! static rolling resistance can hold it is stopped (ω_w set to 0, the ground reaction then
+//! cancels the drive-shaft torque each step) until the drive force exceeds that capacity. Equations and state are those of [`super::hybrid`]; the accuracy against the accurate
 //! integrator is pinned in the tests.
 
 use super::dopri::Stats;
@@ -235,6 +237,8 @@ impl<'a> FastDriveline<'a> {
         };
         let mut y = y0;
         let mut mode = mode0;
+        // vehicle held at standstill (only with `standstill_events`)
+        let mut stuck = sc.standstill_events && y0[7] == 0.0;
         if mode == ClutchMode::Locked {
             y[1] = y[0];
         }
@@ -299,7 +303,14 @@ impl<'a> FastDriveline<'a> {
                 ClutchMode::Locked => 0.0,
                 ClutchMode::Slipping(s) => s * self.clutch_capacity(sc.clutch_x.eval(tm)),
             };
-            let force = self.road_force(sc, tm, p.wheel_radius_m * y[7]);
+            let v_start = p.wheel_radius_m * y[7];
+            let force = if stuck {
+                // held: the ground reaction cancels the drive-shaft torque
+                let [_, _, _, md0] = self.torques(gear, mode, &y, me_start);
+                md0 / p.wheel_radius_m
+            } else {
+                self.road_force(sc, tm, v_start)
+            };
             let key = Key {
                 gear,
                 locked: mode == ClutchMode::Locked,
@@ -314,6 +325,33 @@ impl<'a> FastDriveline<'a> {
             traj.stats.accepted += 1;
             // mode switches at the step end
             let t1 = t + dt;
+            if sc.standstill_events {
+                let (me1, _, _) = engine_torque(t1, &y);
+                let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
+                let mg = p.mass_kg * p.gravity_m_per_s2;
+                let drive = md1 / p.wheel_radius_m - mg * sc.slope.eval(t1).atan().sin();
+                let f0 = if sc.smoothing { 0.0 } else { 1.0 };
+                let cap = f0 * p.c_r1 * mg + sc.brake_n.eval(t1);
+                let v_end = p.wheel_radius_m * y[7];
+                if stuck {
+                    if drive.abs() > cap {
+                        stuck = false;
+                        traj.events.push(Event {
+                            t: t1,
+                            kind: "breakaway".into(),
+                        });
+                    } else {
+                        y[7] = 0.0;
+                    }
+                } else if v_start != 0.0 && v_start * v_end <= 0.0 && drive.abs() <= cap {
+                    stuck = true;
+                    y[7] = 0.0;
+                    traj.events.push(Event {
+                        t: t1,
+                        kind: "stop".into(),
+                    });
+                }
+            }
             match mode {
                 ClutchMode::Locked => {
                     y[1] = y[0];
