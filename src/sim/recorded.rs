@@ -209,4 +209,21 @@ mod tests {
             Err(RecordedError::Gear { row: 0, .. })
         ));
     }
+
+    #[test]
+    fn short_nan_gaps_in_inputs_are_filled_by_the_column_kind() {
+        let mut l = log(5, 3.0);
+        l.signals[1].values = vec![100.0, f64::NAN, f64::NAN, 400.0, 500.0]; // engine torque: linear
+        l.signals[2].values = vec![3.0, f64::NAN, 4.0, 4.0, 4.0]; // gear: held
+        let r = scenario_from_log(&l, 12, None).unwrap();
+        let EngineInput::Torque(m) = &r.scenario.engine else {
+            panic!()
+        };
+        assert!((m.eval(0.01) - 200.0).abs() < 1e-9);
+        assert_eq!(r.scenario.gear.eval(0.015), 3.0);
+        for k in 0..40 {
+            let t = k as f64 * 0.001;
+            assert!(m.eval(t).is_finite() && r.scenario.gear.eval(t).is_finite());
+        }
+    }
 }
