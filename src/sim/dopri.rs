@@ -181,6 +181,16 @@ pub fn integrate(
     stats.rhs_evals += 1;
     check(t, &k1)?;
     let span = t1 - t0;
+    if span <= 1e-12 * t0.abs().max(1.0) {
+        // nothing to integrate (an interval between coinciding breakpoints)
+        return Ok(Outcome {
+            t: t1.max(t0),
+            y,
+            event: None,
+            h_last: h0,
+            stats,
+        });
+    }
     let mut h = h0.min(span).max(span * 1e-12);
     let mut g_prev: Vec<f64> = events.iter().map(|(g, _)| g(t, &y)).collect();
     let mut h_last = h;

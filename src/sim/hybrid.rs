@@ -352,7 +352,8 @@ impl<'a> HybridDriveline<'a> {
         }
         b.retain(|&x| x > 0.0 && x < sc.t_end_s);
         b.sort_by(f64::total_cmp);
-        b.dedup();
+        // breakpoints closer than 1 ns (a clutch-range kink next to an input sample) are one
+        b.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
         b.push(sc.t_end_s);
         b
     }

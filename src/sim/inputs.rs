@@ -78,3 +78,21 @@ impl Piecewise {
         &self.pieces
     }
 }
+
+impl Piecewise {
+    /// The signal sampled at `fs_hz` over `[0, t_end]` and rebuilt from the samples: linear
+    /// between samples (`hold = false`) or held (`hold = true`) — what a recording of this input
+    /// at `fs_hz` would give.
+    pub fn resampled(&self, t_end: f64, fs_hz: f64, hold: bool) -> Self {
+        let n = (t_end * fs_hz).round().max(1.0) as usize;
+        let t: Vec<f64> = (0..=n).map(|k| (k as f64 / fs_hz).min(t_end)).collect();
+        let v: Vec<f64> = t.iter().map(|&x| self.eval(x)).collect();
+        let pieces = t
+            .windows(2)
+            .zip(v.windows(2))
+            .filter(|(tw, _)| tw[1] > tw[0])
+            .map(|(tw, vw)| (tw[0], tw[1], vw[0], if hold { vw[0] } else { vw[1] }))
+            .collect();
+        Self { pieces }
+    }
+}

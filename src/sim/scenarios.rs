@@ -80,3 +80,24 @@ pub fn mixed_gear_drive(
     };
     (sc, y0, ClutchMode::Locked)
 }
+
+/// The scenario with every input replaced by its samples at `fs_hz` (gear held, the rest linear
+/// between samples), as a recorded drive at that rate would provide it.
+pub fn sampled_inputs(sc: &Scenario, fs_hz: f64) -> Scenario {
+    let t = sc.t_end_s;
+    Scenario {
+        t_end_s: t,
+        gear: sc.gear.resampled(t, fs_hz, true),
+        clutch_x: sc.clutch_x.resampled(t, fs_hz, false),
+        slope: sc.slope.resampled(t, fs_hz, false),
+        brake_n: sc.brake_n.resampled(t, fs_hz, false),
+        engine: match &sc.engine {
+            EngineInput::Torque(m) => EngineInput::Torque(m.resampled(t, fs_hz, false)),
+            EngineInput::SpeedReference(r) => {
+                EngineInput::SpeedReference(r.resampled(t, fs_hz, false))
+            }
+        },
+        smoothing: sc.smoothing,
+        standstill_events: sc.standstill_events,
+    }
+}

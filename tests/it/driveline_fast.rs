@@ -254,3 +254,41 @@ fn fast_path_stops_and_breaks_away_like_the_accurate_one() {
         .filter(|(t, _)| **t > stop + 0.01 && **t < go)
         .all(|(_, v)| *v == 0.0));
 }
+
+#[test]
+fn fast_and_accurate_on_the_same_drive_with_100_hz_sampled_inputs() {
+    // The benchmark's form of the inputs: every signal sampled at 100 Hz as a recording gives it.
+    let veh = VehicleFile::load(&fixture("fixtures/vehicles/truck-40t.toml")).unwrap();
+    let p = veh.driveline.as_ref().unwrap();
+    let r = &veh.gearbox.ratios;
+    let (scripted, y0, mode0) = fleetdyn::sim::scenarios::mixed_gear_drive(p, r, 720.0);
+    let sc = fleetdyn::sim::scenarios::sampled_inputs(&scripted, 100.0);
+    let acc = HybridDriveline::new(p, r, &sc)
+        .simulate(y0, mode0, 1e-8, 100.0)
+        .unwrap();
+    let fast = FastDriveline::new(p, r, 0.01)
+        .simulate(&sc, y0, mode0)
+        .unwrap();
+    let (va, vf) = (acc.speed(p.wheel_radius_m), fast.speed(p.wheel_radius_m));
+    let dv = va
+        .iter()
+        .zip(&vf)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let rms = (va
+        .iter()
+        .zip(&vf)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / va.len() as f64)
+        .sqrt();
+    println!("mixed-gear 720 s, 100 Hz sampled inputs: fast vs accurate |Δv| max {dv:.2e} rms {rms:.2e} m/s");
+    assert!(va.iter().chain(&vf).all(|v| v.is_finite()));
+    // Measured: max 1.50 m/s, rms 0.20 m/s — worse than with the scripted inputs. The fast path
+    // finds each clutch lock up to one 10 ms step late: the 1-2 upshift's lock is 9.1 ms late
+    // here (6.4 ms with the scripted inputs) and the engine speed after it differs by 0.8 rad/s;
+    // the PI without anti-windup carries such differences through the later saturated shifts.
+    // Regression bounds: max 2 m/s, rms 0.3 m/s; locating the lock inside the step is an open
+    // item of issue 3.
+    assert!(dv < 2.0 && rms < 0.3, "max {dv} rms {rms}");
+}
