@@ -171,7 +171,18 @@ enum SimulateCommand {
         /// Mapping file for the drive (chosen automatically when absent).
         #[arg(long)]
         mapping: Option<PathBuf>,
+        /// Road slope input: the sensor as recorded (raw), or after the seed 000 §5 zero-phase
+        /// spatial filter (filtered, default), which removes the quantisation steps that excite
+        /// spurious shuffle.
+        #[arg(long, value_enum, default_value = "filtered")]
+        slope: SlopeInputArg,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SlopeInputArg {
+    Raw,
+    Filtered,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -468,6 +479,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             window_s,
             dt_s,
             mapping,
+            slope,
         }) => {
             let v = VehicleFile::load(&vehicle).map_err(usage)?;
             let p = v.driveline(&vehicle.display().to_string()).map_err(usage)?;
@@ -481,20 +493,35 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 ..Default::default()
             };
             let opts = cfg.options(&[Stage::Driveline], Some(&v)).map_err(usage)?;
-            let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let mut ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let slope_column = match slope {
+                SlopeInputArg::Raw => None,
+                SlopeInputArg::Filtered => {
+                    let d = resample_to_distance(&ing.log, &ResampleConfig::default())
+                        .map_err(drive)?;
+                    let f = filter_slope(&d, &SlopeFilterConfig::default()).map_err(drive)?;
+                    ing.log.signals.push(fleetdyn::table::Signal {
+                        name: "road_slope_filtered".into(),
+                        unit: "1".into(),
+                        values: f.zero_phase_time,
+                    });
+                    Some("road_slope_filtered")
+                }
+            };
             let vcfg = ValidationConfig {
                 window_s,
                 dt_s,
                 ..Default::default()
             };
-            let val =
-                validate_shuffle(&ing.log, p, &v.gearbox.ratios, None, &vcfg).map_err(drive)?;
+            let val = validate_shuffle(&ing.log, p, &v.gearbox.ratios, slope_column, &vcfg)
+                .map_err(drive)?;
             let fp = format!(
-                "{}\nshuffle:v1 {:?} {:?} {:?}",
+                "{}\nshuffle:v1 {:?} {:?} {:?} slope={:?}",
                 cfg.fingerprint(&opts),
                 p,
                 v.gearbox.ratios,
-                vcfg
+                vcfg,
+                slope_column
             );
             validation::write(&output, &ing.log, &val, &fp).map_err(drive)?;
             say!("{}: driveline simulation vs recording (windows of {window_s} s re-initialised from the measured state; slope from {})", ing.log.meta.drive_id, val.slope_column.as_deref().unwrap_or("none: flat road"));
