@@ -20,6 +20,12 @@
 //!   0 the two bodies are merged at their momentum-weighted speed and lock if the static capacity
 //!   holds, else slip on in the other direction.
 //!
+//! # Vehicle standstill (optional, `Scenario::standstill_events`)
+//! Rolling in direction sv = ±1, the road force uses sv instead of sign(v); when sv·v falls
+//! through 0 the vehicle stops if the drive force `M_d/r_w − m g sin α` is within the holding
+//! capacity `f(0)·c_r1·m·g + F_b` (ω̇_w = 0 while held), else it reverses; it breaks away when
+//! the drive force rises through the capacity. Without it, sign(v) is taken from the state.
+//!
 //! Inputs are piecewise linear ([`Piecewise`]); the integration restarts at every breakpoint, where
 //! discrete inputs (gear) change. A gear change is an instantaneous change of i_t and J_t with the
 //! state carried over. The engine is an ideal torque source, or the PI controller
