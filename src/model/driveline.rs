@@ -37,6 +37,9 @@ pub struct KeySpec {
     pub max: f64,
     /// Value shape.
     pub shape: Shape,
+    /// For a curve: the key whose length it must match.
+    #[serde(default)]
+    pub pair: Option<String>,
     /// Symbol and meaning.
     pub meaning: String,
 }
@@ -49,6 +52,109 @@ pub struct VehicleSchema {
     pub schema_version: String,
     /// Keys of the `[driveline]` table.
     pub driveline: Vec<KeySpec>,
+    /// Keys of the `[axles]` table.
+    pub axles: Vec<KeySpec>,
+}
+
+/// Checks a raw vehicle-file table against its key specs: no unknown key, every key present,
+/// numeric, finite and inside its range; per-gear lists one value per forward gear; curves at
+/// least 2 points and as long as their pair.
+///
+/// # Errors
+/// The first problem as `(key, value, rule)`.
+pub fn check_keys(
+    specs: &[KeySpec],
+    table: &toml::Table,
+    forward_gears: usize,
+) -> Result<(), KeyProblem> {
+    let problem = |key: &str, value: String, rule: String| (key.to_string(), value, rule);
+    for k in table.keys() {
+        if !specs.iter().any(|s| &s.key == k) {
+            return Err(problem(k, table[k].to_string(), "unknown key".into()));
+        }
+    }
+    let mut lengths: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for spec in specs {
+        let Some(v) = table.get(&spec.key) else {
+            return Err(problem(
+                &spec.key,
+                "missing".into(),
+                format!("required ({}, {})", spec.meaning, spec.unit),
+            ));
+        };
+        let numbers: Vec<f64> = match (spec.shape, v) {
+            (Shape::Scalar, toml::Value::Float(x)) => vec![*x],
+            (Shape::Scalar, toml::Value::Integer(i)) => vec![*i as f64],
+            (Shape::PerGear | Shape::Curve, toml::Value::Array(a)) => {
+                let mut out = Vec::with_capacity(a.len());
+                for e in a {
+                    match e {
+                        toml::Value::Float(x) => out.push(*x),
+                        toml::Value::Integer(i) => out.push(*i as f64),
+                        other => {
+                            return Err(problem(
+                                &spec.key,
+                                other.to_string(),
+                                "must be numbers".into(),
+                            ))
+                        }
+                    }
+                }
+                out
+            }
+            (shape, other) => {
+                return Err(problem(
+                    &spec.key,
+                    other.to_string(),
+                    format!("must be {shape:?} numbers"),
+                ))
+            }
+        };
+        for x in &numbers {
+            if !x.is_finite() || *x < spec.min || *x > spec.max {
+                return Err(problem(
+                    &spec.key,
+                    x.to_string(),
+                    format!(
+                        "must be finite and within [{}, {}] {}",
+                        spec.min, spec.max, spec.unit
+                    ),
+                ));
+            }
+        }
+        match spec.shape {
+            Shape::PerGear if numbers.len() != forward_gears => {
+                return Err(problem(
+                    &spec.key,
+                    format!("{} values", numbers.len()),
+                    format!("needs one value per forward gear ({forward_gears})"),
+                ))
+            }
+            Shape::Curve => {
+                if numbers.len() < 2 {
+                    return Err(problem(
+                        &spec.key,
+                        format!("{} values", numbers.len()),
+                        "a curve needs at least 2 points".into(),
+                    ));
+                }
+                if let Some(pair) = spec.pair.as_deref() {
+                    if let Some(&n) = lengths.get(pair) {
+                        if n != numbers.len() {
+                            return Err(problem(
+                                &spec.key,
+                                format!("{} values", numbers.len()),
+                                format!("must have as many values as {pair} ({n})"),
+                            ));
+                        }
+                    }
+                }
+                lengths.insert(spec.key.as_str(), numbers.len());
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// The embedded vehicle-file schema.
@@ -112,90 +218,8 @@ impl DrivelineParams {
     /// # Errors
     /// The first problem as `(key, value, rule)`.
     pub fn from_table(table: &toml::Table, forward_gears: usize) -> Result<Self, KeyProblem> {
-        let schema = vehicle_schema();
         let problem = |key: &str, value: String, rule: String| (key.to_string(), value, rule);
-        for k in table.keys() {
-            if !schema.driveline.iter().any(|s| &s.key == k) {
-                return Err(problem(k, table[k].to_string(), "unknown key".into()));
-            }
-        }
-        let mut curve_len: Option<usize> = None;
-        for spec in &schema.driveline {
-            let Some(v) = table.get(&spec.key) else {
-                return Err(problem(
-                    &spec.key,
-                    "missing".into(),
-                    format!("required ({}, {})", spec.meaning, spec.unit),
-                ));
-            };
-            let numbers: Vec<f64> = match (spec.shape, v) {
-                (Shape::Scalar, toml::Value::Float(x)) => vec![*x],
-                (Shape::Scalar, toml::Value::Integer(i)) => vec![*i as f64],
-                (Shape::PerGear | Shape::Curve, toml::Value::Array(a)) => {
-                    let mut out = Vec::with_capacity(a.len());
-                    for e in a {
-                        match e {
-                            toml::Value::Float(x) => out.push(*x),
-                            toml::Value::Integer(i) => out.push(*i as f64),
-                            other => {
-                                return Err(problem(
-                                    &spec.key,
-                                    other.to_string(),
-                                    "must be numbers".into(),
-                                ))
-                            }
-                        }
-                    }
-                    out
-                }
-                (shape, other) => {
-                    return Err(problem(
-                        &spec.key,
-                        other.to_string(),
-                        format!("must be {shape:?} numbers"),
-                    ))
-                }
-            };
-            for x in &numbers {
-                if !x.is_finite() || *x < spec.min || *x > spec.max {
-                    return Err(problem(
-                        &spec.key,
-                        x.to_string(),
-                        format!(
-                            "must be finite and within [{}, {}] {}",
-                            spec.min, spec.max, spec.unit
-                        ),
-                    ));
-                }
-            }
-            match spec.shape {
-                Shape::PerGear if numbers.len() != forward_gears => {
-                    return Err(problem(
-                        &spec.key,
-                        format!("{} values", numbers.len()),
-                        format!("needs one value per forward gear ({forward_gears})"),
-                    ))
-                }
-                Shape::Curve => match curve_len {
-                    Some(n) if n != numbers.len() => {
-                        return Err(problem(
-                            &spec.key,
-                            format!("{} values", numbers.len()),
-                            format!("curve keys must have equal length ({n})"),
-                        ))
-                    }
-                    _ if numbers.len() < 2 => {
-                        return Err(problem(
-                            &spec.key,
-                            format!("{} values", numbers.len()),
-                            "a curve needs at least 2 points".into(),
-                        ))
-                    }
-                    _ => curve_len = Some(numbers.len()),
-                },
-                _ => {}
-            }
-        }
+        check_keys(&vehicle_schema().driveline, table, forward_gears)?;
         let p: DrivelineParams = table
             .clone()
             .try_into()

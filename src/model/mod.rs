@@ -1,5 +1,6 @@
 //! Vehicle models and their parameter files.
 
+pub mod axle;
 pub mod axle_estimation;
 pub mod driveline;
 pub mod linear;

@@ -1,10 +1,11 @@
 //! Vehicle files (`fixtures/vehicles/*.toml`): the parameters models need, with units in the
 //! key names.
 //!
-//! This first version carries identification and the gearbox (ingest uses it to reject gears
-//! outside the gearbox); the driveline (physics.md §1) and axle (§3) sections are added by the
-//! model issues and are accepted here as opaque tables until then.
+//! A file carries identification, the gearbox (ingest uses it to reject gears outside the
+//! gearbox) and, optionally, the driveline (physics.md §1) and axle-load (§3) sections, each
+//! checked key by key against `schemas/vehicle.toml`.
 
+use super::axle::AxleParams;
 use super::driveline::DrivelineParams;
 use serde::Deserialize;
 use std::path::Path;
@@ -41,9 +42,12 @@ pub struct VehicleFile {
     /// The raw `[driveline]` table as written (checked and converted by [`VehicleFile::parse`]).
     #[serde(default, rename = "driveline")]
     driveline_raw: Option<toml::Table>,
-    /// Axle-load parameters (physics.md §3) — filled by the axle-load issue.
-    #[serde(default)]
-    pub axles: Option<toml::Table>,
+    /// Axle-load parameters (physics.md §3), checked against `schemas/vehicle.toml`.
+    #[serde(skip)]
+    pub axles: Option<AxleParams>,
+    /// The raw `[axles]` table as written (checked and converted by [`VehicleFile::parse`]).
+    #[serde(default, rename = "axles")]
+    axles_raw: Option<toml::Table>,
 }
 
 /// A vehicle file that cannot be used; names the file and the key.
@@ -148,6 +152,16 @@ impl VehicleFile {
             )?;
             v.driveline = Some(p);
         }
+        if let Some(t) = v.axles_raw.take() {
+            let p =
+                AxleParams::from_table(&t).map_err(|(key, value, rule)| VehicleError::Range {
+                    file: file.into(),
+                    key: format!("axles.{key}"),
+                    value,
+                    rule,
+                })?;
+            v.axles = Some(p);
+        }
         Ok(v)
     }
 
@@ -161,6 +175,19 @@ impl VehicleFile {
             key: "driveline".into(),
             value: "missing".into(),
             rule: "the driveline model needs a [driveline] section".into(),
+        })
+    }
+
+    /// Axle-load parameters, or an error naming the file when the section is absent.
+    ///
+    /// # Errors
+    /// [`VehicleError::Range`] for a vehicle file without `[axles]`.
+    pub fn axles(&self, file: &str) -> Result<&AxleParams, VehicleError> {
+        self.axles.as_ref().ok_or_else(|| VehicleError::Range {
+            file: file.into(),
+            key: "axles".into(),
+            value: "missing".into(),
+            rule: "the axle-load model needs an [axles] section".into(),
         })
     }
 

@@ -1,5 +1,7 @@
-//! Simulation: integrators, inputs and the hybrid driveline model (physics.md §1).
+//! Simulation: integrators, inputs, the hybrid driveline model (physics.md §1) and the
+//! half-truck axle-load model (§3).
 
+pub mod axle;
 pub mod dopri;
 pub mod fast;
 pub mod hybrid;
