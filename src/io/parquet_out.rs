@@ -12,7 +12,7 @@
 use super::AtomicFile;
 use crate::schema::{drive_log, output_schema, Dtype, SchemaError};
 use crate::table::{DriveLog, Signal};
-use arrow::array::{ArrayRef, Float64Array, Int16Array, TimestampNanosecondArray};
+use arrow::array::{ArrayRef, Float64Array, Int16Array, StringArray, TimestampNanosecondArray};
 use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
 use arrow::record_batch::RecordBatch;
 use parquet::arrow::ArrowWriter;
@@ -34,6 +34,8 @@ pub enum OutData {
     F64(Vec<f64>),
     /// Integers held as floats (NaN → null), written as `int16`; values are rounded.
     I16(Vec<f64>),
+    /// Labels, written as `utf8`.
+    Str(Vec<String>),
 }
 
 impl OutData {
@@ -41,6 +43,7 @@ impl OutData {
         match self {
             OutData::Timestamp(v) => v.len(),
             OutData::F64(v) | OutData::I16(v) => v.len(),
+            OutData::Str(v) => v.len(),
         }
     }
     fn dtype(&self) -> Dtype {
@@ -48,6 +51,7 @@ impl OutData {
             OutData::Timestamp(_) => Dtype::TimestampNsUtc,
             OutData::F64(_) => Dtype::F64,
             OutData::I16(_) => Dtype::I16,
+            OutData::Str(_) => Dtype::Str,
         }
     }
 }
@@ -236,6 +240,7 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
                 }
                 OutData::F64(_) => DataType::Float64,
                 OutData::I16(_) => DataType::Int16,
+                OutData::Str(_) => DataType::Utf8,
             };
             let nullable = !matches!(c.data, OutData::Timestamp(_));
             Field::new(&c.name, dt, nullable)
@@ -255,6 +260,7 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
                 OutData::I16(v) => Arc::new(Int16Array::from_iter(
                     v.iter().map(|x| (x.is_finite()).then(|| x.round() as i16)),
                 )),
+                OutData::Str(v) => Arc::new(StringArray::from_iter_values(v.iter())),
             }
         })
         .collect();

@@ -23,6 +23,10 @@ pub struct Gearbox {
     /// Ratio of each forward gear, lowest first (i_t, dimensionless), if known.
     #[serde(default)]
     pub ratios: Vec<f64>,
+    /// Final-drive ratio i_f, for vehicles without a `[driveline]` section (which has its own
+    /// `final_drive_ratio`; when both are given they must agree).
+    #[serde(default)]
+    pub final_drive_ratio: Option<f64>,
 }
 
 /// A parsed vehicle file.
@@ -152,6 +156,27 @@ impl VehicleFile {
             )?;
             v.driveline = Some(p);
         }
+        if let Some(i_f) = g.final_drive_ratio {
+            if !(i_f.is_finite() && i_f > 0.0) {
+                return Err(range(
+                    "gearbox.final_drive_ratio",
+                    i_f.to_string(),
+                    "must be positive",
+                ));
+            }
+            if let Some(d) = &v.driveline {
+                if d.final_drive_ratio != i_f {
+                    return Err(range(
+                        "gearbox.final_drive_ratio",
+                        i_f.to_string(),
+                        &format!(
+                            "disagrees with driveline.final_drive_ratio = {}",
+                            d.final_drive_ratio
+                        ),
+                    ));
+                }
+            }
+        }
         if let Some(t) = v.axles_raw.take() {
             let p =
                 AxleParams::from_table(&t).map_err(|(key, value, rule)| VehicleError::Range {
@@ -160,6 +185,19 @@ impl VehicleFile {
                     value,
                     rule,
                 })?;
+            if let Some(d) = &v.driveline {
+                let m = p.mass_kg();
+                if (d.mass_kg - m).abs() > 0.01 * m {
+                    return Err(VehicleError::Range {
+                        file: file.into(),
+                        key: "driveline.mass_kg".into(),
+                        value: d.mass_kg.to_string(),
+                        rule: format!(
+                            "disagrees with the [axles] masses ({m} kg) by more than 1 %"
+                        ),
+                    });
+                }
+            }
             v.axles = Some(p);
         }
         Ok(v)
@@ -189,6 +227,14 @@ impl VehicleFile {
             value: "missing".into(),
             rule: "the axle-load model needs an [axles] section".into(),
         })
+    }
+
+    /// Final-drive ratio: the driveline's, else the gearbox section's.
+    pub fn final_drive_ratio(&self) -> Option<f64> {
+        self.driveline
+            .as_ref()
+            .map(|d| d.final_drive_ratio)
+            .or(self.gearbox.final_drive_ratio)
     }
 
     /// Valid gear range for ingest checks: (−reverse_gears, forward_gears).

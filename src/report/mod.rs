@@ -1,5 +1,6 @@
 //! Reports: human-readable summaries and machine-readable run reports.
 
+pub mod axle_validation;
 pub mod bode;
 mod ingest_summary;
 pub mod spectrum;

@@ -25,6 +25,9 @@ pub enum Dtype {
     /// 16-bit signed integer (nullable).
     #[serde(rename = "i16")]
     I16,
+    /// UTF-8 string (labels in result tables: axle, segment, signal).
+    #[serde(rename = "str")]
+    Str,
 }
 
 /// A schema file that does not parse or contradicts itself. These are build-time assets, so

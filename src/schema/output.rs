@@ -23,6 +23,10 @@ const FILES: &[(&str, &str)] = &[
     ),
     ("bode", include_str!("../../schemas/outputs/bode.toml")),
     (
+        "axle_validation",
+        include_str!("../../schemas/outputs/axle-validation.toml"),
+    ),
+    (
         "shuffle_sim",
         include_str!("../../schemas/outputs/shuffle-sim.toml"),
     ),

@@ -2,6 +2,9 @@
 //! half-truck axle-load model (§3).
 
 pub mod axle;
+pub mod axle_coupling;
+pub mod axle_recorded;
+pub mod axle_validate;
 pub mod dopri;
 pub mod fast;
 pub mod hybrid;

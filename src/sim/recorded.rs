@@ -62,7 +62,8 @@ pub struct RecordedScenario {
     pub slope_column: Option<String>,
 }
 
-fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
+/// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says.
+pub(crate) fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
     let p = t
         .windows(2)
         .zip(v.windows(2))

@@ -108,7 +108,9 @@ pub struct ShuffleValidation {
     pub slope_column: Option<String>,
 }
 
-fn metric(signal: &'static str, gear: Option<usize>, y: &[f64], yh: &[f64]) -> Metric {
+/// RMSE, MAE, fit % (`100 (1 − ‖y − ŷ‖/‖y − mean y‖)`, NaN for a constant y) of `yh` against
+/// `y` — the metrics every validation table of fleetdyn reports.
+pub fn error_metrics(y: &[f64], yh: &[f64]) -> (f64, f64, f64) {
     let n = y.len().max(1) as f64;
     let mean = y.iter().sum::<f64>() / n;
     let (mut se, mut ae, mut ss) = (0.0, 0.0, 0.0);
@@ -117,16 +119,22 @@ fn metric(signal: &'static str, gear: Option<usize>, y: &[f64], yh: &[f64]) -> M
         ae += (a - b).abs();
         ss += (a - mean) * (a - mean);
     }
+    let fit = if ss > 0.0 {
+        100.0 * (1.0 - (se / ss).sqrt())
+    } else {
+        f64::NAN
+    };
+    ((se / n).sqrt(), ae / n, fit)
+}
+
+fn metric(signal: &'static str, gear: Option<usize>, y: &[f64], yh: &[f64]) -> Metric {
+    let (rmse, mae, fit_percent) = error_metrics(y, yh);
     Metric {
         signal,
         gear,
-        rmse: (se / n).sqrt(),
-        mae: ae / n,
-        fit_percent: if ss > 0.0 {
-            100.0 * (1.0 - (se / ss).sqrt())
-        } else {
-            f64::NAN
-        },
+        rmse,
+        mae,
+        fit_percent,
         samples: y.len(),
     }
 }
