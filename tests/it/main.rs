@@ -1,5 +1,6 @@
 //! fleetdyn integration tests (one binary, one module per area).
 
+mod axle_bad_input;
 mod axle_coupling;
 mod axle_model;
 mod common;
