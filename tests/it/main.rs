@@ -1,5 +1,6 @@
 //! fleetdyn integration tests (one binary, one module per area).
 
+mod axle_estimate;
 mod axle_model;
 mod common;
 mod driveline_fast;
