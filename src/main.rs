@@ -3,7 +3,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use fleetdyn::ingest::TimeRepair;
-use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::io::AtomicFile;
+use fleetdyn::model::axle_measurement::{estimate, Measurements};
+use fleetdyn::model::vehicle::{VehicleError, VehicleFile};
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
 use fleetdyn::pipeline::resample_stage;
 use fleetdyn::pipeline::run::run_plan;
@@ -133,6 +135,9 @@ enum Command {
     /// Simulate a recorded drive with a physics model and validate it against the recording.
     #[command(subcommand)]
     Simulate(SimulateCommand),
+    /// Estimate model parameters from measurements and compare them with a vehicle file.
+    #[command(subcommand)]
+    Estimate(EstimateCommand),
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
     Run {
         /// Pipeline file.
@@ -176,6 +181,27 @@ enum SimulateCommand {
         /// spurious shuffle.
         #[arg(long, value_enum, default_value = "filtered")]
         slope: SlopeInputArg,
+    },
+}
+
+#[derive(Subcommand)]
+enum EstimateCommand {
+    /// Axle-model parameters (seed 002 §3.3, physics.md §3) from scale weights, static bellow
+    /// pressures, bellow force-displacement tests and damper datasheets, with the vehicle file's
+    /// axle positions, arm levers and axle masses: total mass and CG, chassis mass and CG, static
+    /// bellow forces, effective bellow areas, bellow stiffness, damper coefficients. Prints each
+    /// estimate beside the vehicle file's value.
+    Axle {
+        /// Measurement file (TOML: [scale], [static_pressure], [[bellow_test]],
+        /// [[damper_datasheet]]; example fixtures/measurements/seed002-static.toml).
+        measurements: PathBuf,
+        /// Vehicle file with an [axles] section.
+        #[arg(long)]
+        vehicle: PathBuf,
+        /// Write the estimates as a TOML snippet of [axles] keys, to replace those in the
+        /// vehicle file (checked against it first; written atomically).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
     },
 }
 
@@ -531,6 +557,44 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 output.join("shuffle_sim.parquet").display(),
                 output.join("validation.parquet").display()
             );
+            Ok(())
+        }
+        Command::Estimate(EstimateCommand::Axle {
+            measurements,
+            vehicle,
+            output,
+        }) => {
+            let vehicle_file = vehicle.display().to_string();
+            let vehicle_text = std::fs::read_to_string(&vehicle).map_err(|source| {
+                usage(VehicleError::Io {
+                    file: vehicle_file.clone(),
+                    source,
+                })
+            })?;
+            let v = VehicleFile::parse(&vehicle_text, &vehicle_file).map_err(usage)?;
+            let p = v.axles(&vehicle_file).map_err(usage)?;
+            let m = Measurements::load(&measurements).map_err(usage)?;
+            let est = estimate(&m, p, &vehicle_file).map_err(usage)?;
+            say!(
+                "{}: axle-model parameters from {} (seed 002 §3.3) beside {}",
+                v.vehicle_id,
+                m.file,
+                vehicle_file
+            );
+            say_raw!("{}", est.comparison(p));
+            if let Some(out) = output {
+                // never write a snippet that would break the vehicle file
+                est.merged_vehicle(&vehicle_text, &vehicle_file)
+                    .map_err(usage)?;
+                let write = || -> std::io::Result<()> {
+                    use std::io::Write as _;
+                    let mut f = AtomicFile::create(&out)?;
+                    f.file().write_all(est.snippet().as_bytes())?;
+                    f.commit()
+                };
+                write().map_err(|e| drive(anyhow::anyhow!("{}: {e}", out.display())))?;
+                say!("wrote {}", out.display());
+            }
             Ok(())
         }
         Command::Run {

@@ -67,8 +67,9 @@ pub struct AxleParams {
     pub road_friction_coefficient: f64,
 }
 
-/// The three axles, in vehicle order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The three axles, in vehicle order; in files by their lower-case name (`"front"`, …).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Axle {
     /// Front (steered) axle.
     Front,

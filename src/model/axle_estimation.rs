@@ -24,6 +24,15 @@ pub enum EstimationError {
         /// The rule it breaks.
         rule: &'static str,
     },
+    /// Scale weights that leave no chassis load on an axle's bellows (seed 002 eq. 3.3.8:
+    /// `m_i = N_i/g − m_ai` must be positive).
+    #[error("scale weight {scale_weight_kg} kg does not exceed the axle mass {axle_mass_kg} kg: no load is left on the bellows (seed 002 eq. 3.3.8)")]
+    NoBellowLoad {
+        /// The axle's scale weight, kg.
+        scale_weight_kg: f64,
+        /// The axle's own (unsprung) mass, kg.
+        axle_mass_kg: f64,
+    },
     /// Too few or degenerate data points for a fit.
     #[error("{what}: {why}")]
     Fit {
@@ -89,9 +98,44 @@ pub fn cg_from_scale_weights(
     })
 }
 
+/// `F = m·g·l_a/l_b` after checking the levers and gravity (`m` checked by the caller).
+fn arm_bellow_force(load_kg: f64, l_a_m: f64, l_b_m: f64, g: f64) -> Result<f64, EstimationError> {
+    let la = positive("l_a m", l_a_m)?;
+    let lb = positive("l_b m", l_b_m)?;
+    let g = positive("gravity m/s^2", g)?;
+    Ok(load_kg * g * la / lb)
+}
+
+/// Static bellow force of an axle from its scale weight, N: the chassis load the axle carries,
+/// `m_i = N_i/g − m_ai` (seed 002 eq. 3.3.8), through the arm's moment balance about its pivot,
+/// `F_s = m_i·g·l_a/l_b` (eq. 3.3.9; axle at l_a, bellow at l_b from the pivot). A bellow acting
+/// directly above its axle (the front axle, eq. 3.3.5: `F_s = m_f·g`) is the case `l_a = l_b`.
+///
+/// # Errors
+/// Non-positive weight, axle mass, levers or gravity; [`EstimationError::NoBellowLoad`] when the
+/// axle alone weighs at least its scale weight.
+pub fn static_bellow_force(
+    scale_weight_kg: f64,
+    axle_mass_kg: f64,
+    l_a_m: f64,
+    l_b_m: f64,
+    gravity_m_per_s2: f64,
+) -> Result<f64, EstimationError> {
+    let w = positive("scale weight kg", scale_weight_kg)?;
+    let ma = positive("axle mass kg", axle_mass_kg)?;
+    if w <= ma {
+        return Err(EstimationError::NoBellowLoad {
+            scale_weight_kg: w,
+            axle_mass_kg: ma,
+        });
+    }
+    arm_bellow_force(w - ma, l_a_m, l_b_m, gravity_m_per_s2)
+}
+
 /// Effective bellow area from the static state of a trailing arm: the arm's moment balance about
 /// its pivot gives the bellow force `F_s = m_i·g·l_a/l_b` (axle load m_i acting at l_a, bellow at
-/// l_b), and `A_eff = F_s/p_s` with the static gauge pressure p_s (physics.md §3), m².
+/// l_b; seed 002 eq. 3.3.9), and `A_eff = F_s/p_s` with the static gauge pressure p_s (eq.
+/// 3.3.10, physics.md §3), m².
 ///
 /// # Errors
 /// Non-positive load, levers or pressure.
@@ -103,11 +147,9 @@ pub fn effective_bellow_area(
     gravity_m_per_s2: f64,
 ) -> Result<f64, EstimationError> {
     let m = positive("axle load kg", axle_load_kg)?;
-    let la = positive("l_a m", l_a_m)?;
-    let lb = positive("l_b m", l_b_m)?;
+    let f = arm_bellow_force(m, l_a_m, l_b_m, gravity_m_per_s2)?;
     let p = positive("static bellow pressure Pa", static_pressure_pa)?;
-    let g = positive("gravity m/s^2", gravity_m_per_s2)?;
-    Ok(m * g * la / lb / p)
+    Ok(f / p)
 }
 
 /// A least-squares line `y = slope·x + intercept` with its coefficient of determination.
@@ -286,6 +328,23 @@ mod tests {
         // F_s = 3000·9.81·0.6/0.8 = 22 072.5 N, A = F_s / 4e5 Pa
         let a = effective_bellow_area(3000.0, 0.6, 0.8, 4e5, 9.81).unwrap();
         assert!((a - 22_072.5 / 4e5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn static_bellow_force_needs_load_left_on_the_bellow() {
+        // 4.3 t on the tag axle of 750 kg, arm 0.6 / 0.95 m: (4300 − 750)·9.81·0.6/0.95 N
+        let f = static_bellow_force(4300.0, 750.0, 0.6, 0.95, 9.81).unwrap();
+        assert!((f - 3550.0 * 9.81 * 0.6 / 0.95).abs() < 1e-9);
+        // a direct-acting bellow (l_a = l_b) carries the chassis load itself
+        let f = static_bellow_force(7600.0, 850.0, 1.0, 1.0, 9.81).unwrap();
+        assert!((f - 6750.0 * 9.81).abs() < 1e-9);
+        assert_eq!(
+            static_bellow_force(700.0, 750.0, 0.6, 0.95, 9.81),
+            Err(EstimationError::NoBellowLoad {
+                scale_weight_kg: 700.0,
+                axle_mass_kg: 750.0
+            })
+        );
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 mod axle_bad_input;
 mod axle_coupling;
+mod axle_estimate;
 mod axle_model;
 mod common;
 mod driveline_fast;
