@@ -255,6 +255,21 @@ impl<'a> HalfTruck<'a> {
         self.h_max
     }
 
+    /// The constant mass matrix M, rows and columns in the order of q (`z`, `θ`, `z_f`, `φ_r`,
+    /// `φ_t`; kg, kg·m, kg·m²): for comparisons with other derivations.
+    pub fn mass_matrix(&self) -> [[f64; 5]; 5] {
+        let m = self
+            .m_inv
+            .try_inverse()
+            .expect("the mass matrix is positive definite");
+        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+    }
+
+    /// The stiffness matrix K (`M q̈ = Q − K q − …`), in the order of q: for comparisons.
+    pub fn stiffness_matrix(&self) -> [[f64; 5]; 5] {
+        std::array::from_fn(|i| std::array::from_fn(|j| self.k[(i, j)]))
+    }
+
     /// Longitudinal forces at time `t` (docs/axle-model.md): with torque inputs, the contact
     /// forces come from them and the service brake, and the remainder acts at the resistance
     /// height; without, the driven axle takes everything the service brake does not.

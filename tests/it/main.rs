@@ -4,6 +4,7 @@ mod axle_bad_input;
 mod axle_coupling;
 mod axle_estimate;
 mod axle_model;
+mod axle_reference;
 mod common;
 mod driveline_fast;
 mod driveline_hybrid;
