@@ -2,6 +2,8 @@
 //! half-truck axle-load model (§3).
 
 pub mod axle;
+pub mod axle_scenarios;
+pub mod axle_summary;
 pub mod dopri;
 pub mod fast;
 pub mod hybrid;

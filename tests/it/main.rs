@@ -1,6 +1,7 @@
 //! fleetdyn integration tests (one binary, one module per area).
 
 mod axle_model;
+mod axle_scenarios;
 mod common;
 mod driveline_fast;
 mod driveline_hybrid;
