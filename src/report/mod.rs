@@ -1,5 +1,8 @@
 //! Reports: human-readable summaries and machine-readable run reports.
 
+pub mod axle_plot;
+pub mod axle_scenario;
+pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
 mod ingest_summary;

@@ -34,6 +34,10 @@ const FILES: &[(&str, &str)] = &[
         "validation",
         include_str!("../../schemas/outputs/validation.toml"),
     ),
+    (
+        "axle_sim",
+        include_str!("../../schemas/outputs/axle-sim.toml"),
+    ),
 ];
 
 /// One column of an output table.
@@ -48,6 +52,10 @@ pub struct OutputColumn {
     pub unit: String,
     /// One line for humans.
     pub meaning: String,
+    /// When true the column may be left out (e.g. `timestamp` of a table written both for
+    /// recorded drives and for scripted scenarios, which have no wall-clock time).
+    #[serde(default)]
+    pub optional: bool,
 }
 
 /// An output table's schema.
@@ -65,8 +73,9 @@ pub struct OutputSchema {
 impl OutputSchema {
     /// Checks an ordered list of `(name, dtype, unit)` against this schema: the fixed columns
     /// first, in order, with their dtype and unit (`from_run` accepts any unit but not an empty
-    /// one); then, only if `passthrough_drive_log`, drive-log columns with their canonical dtype
-    /// and unit, or non-canonical pass-through columns (kept from the source) as f64 with a unit.
+    /// one; an `optional` column may be absent, and is recognised by its name); then, only if
+    /// `passthrough_drive_log`, drive-log columns with their canonical dtype and unit, or
+    /// non-canonical pass-through columns (kept from the source) as f64 with a unit.
     ///
     /// # Errors
     /// [`SchemaError::Mismatch`] naming the first column that differs.
@@ -75,14 +84,22 @@ impl OutputSchema {
             table: self.name.clone(),
             message,
         };
-        if cols.len() < self.columns.len() {
+        let required = self.columns.iter().filter(|c| !c.optional).count();
+        if cols.len() < required {
             return Err(mismatch(format!(
-                "{} columns, schema has {} fixed ones",
+                "{} columns, schema has {required} required fixed ones",
                 cols.len(),
-                self.columns.len()
             )));
         }
-        for (spec, (name, dtype, unit)) in self.columns.iter().zip(cols) {
+        let mut k = 0;
+        for spec in &self.columns {
+            if spec.optional && cols.get(k).is_none_or(|c| c.0 != spec.name) {
+                continue;
+            }
+            let Some((name, dtype, unit)) = cols.get(k) else {
+                return Err(mismatch(format!("missing column {}", spec.name)));
+            };
+            k += 1;
             if spec.name != *name || spec.dtype != *dtype {
                 return Err(mismatch(format!(
                     "column {name} ({dtype:?}) where the schema has {} ({:?})",
@@ -101,7 +118,7 @@ impl OutputSchema {
                 )));
             }
         }
-        let rest = &cols[self.columns.len()..];
+        let rest = &cols[k..];
         if !self.passthrough_drive_log && !rest.is_empty() {
             return Err(mismatch(format!("unexpected column {}", rest[0].0)));
         }
@@ -128,7 +145,7 @@ impl OutputSchema {
 }
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
-/// `spectrum`, `bode`, `shuffle_sim`, `validation`), or `None`.
+/// `spectrum`, `bode`, `shuffle_sim`, `validation`, `axle_sim`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.
@@ -184,5 +201,38 @@ mod tests {
         assert!(s.check(&bad_unit).is_err());
         let t = output_schema("slope_time").unwrap();
         assert!(t.check(&ok).is_err());
+    }
+
+    #[test]
+    fn optional_columns_may_be_left_out_but_not_misplaced() {
+        let s: OutputSchema = toml::from_str(
+            r#"
+            name = "t"
+            passthrough_drive_log = false
+            [[columns]]
+            name = "timestamp"
+            dtype = "timestamp_ns_utc"
+            unit = "ns"
+            meaning = ""
+            optional = true
+            [[columns]]
+            name = "time"
+            dtype = "f64"
+            unit = "s"
+            meaning = ""
+            "#,
+        )
+        .unwrap();
+        let ts = ("timestamp", Dtype::TimestampNsUtc, "ns");
+        let time = ("time", Dtype::F64, "s");
+        s.check(&[ts, time]).unwrap();
+        s.check(&[time]).unwrap();
+        assert!(s.check(&[]).is_err(), "the required column is missing");
+        assert!(s.check(&[ts]).is_err(), "the required column is missing");
+        assert!(
+            s.check(&[time, ts]).is_err(),
+            "the optional column is out of place"
+        );
+        assert!(s.check(&[("timestamp", Dtype::F64, "ns"), time]).is_err());
     }
 }

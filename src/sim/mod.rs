@@ -4,6 +4,8 @@
 pub mod axle;
 pub mod axle_coupling;
 pub mod axle_recorded;
+pub mod axle_scenarios;
+pub mod axle_summary;
 pub mod axle_validate;
 pub mod dopri;
 pub mod fast;

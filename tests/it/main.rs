@@ -5,6 +5,7 @@ mod axle_coupling;
 mod axle_estimate;
 mod axle_model;
 mod axle_reference;
+mod axle_scenarios;
 mod common;
 mod driveline_fast;
 mod driveline_hybrid;
