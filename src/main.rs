@@ -6,11 +6,14 @@ use fleetdyn::ingest::TimeRepair;
 use fleetdyn::io::AtomicFile;
 use fleetdyn::model::axle_measurement::{estimate, Measurements};
 use fleetdyn::model::vehicle::{VehicleError, VehicleFile};
+use fleetdyn::pipeline::axle_stage::{self, AxleStageConfig, LongitudinalSource};
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
 use fleetdyn::pipeline::resample_stage;
 use fleetdyn::pipeline::run::run_plan;
 use fleetdyn::pipeline::slope_stage;
 use fleetdyn::pipeline::spec::PipelineSpec;
+use fleetdyn::report::axle_scenario::run_scenario;
+use fleetdyn::report::axle_validation::axle_summary;
 use fleetdyn::report::bode::{plot_svg, BodeTable};
 use fleetdyn::report::spectrum;
 use fleetdyn::report::validation;
@@ -20,6 +23,8 @@ use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
     resample_to_distance, DistanceSource, ResampleConfig, ReversePolicy,
 };
+use fleetdyn::sim::axle_recorded::{AccelSource, AxleRecordConfig};
+use fleetdyn::sim::axle_validate::AxleValidationConfig;
 use fleetdyn::sim::validate::{validate_shuffle, ValidationConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -182,6 +187,64 @@ enum SimulateCommand {
         #[arg(long, value_enum, default_value = "filtered")]
         slope: SlopeInputArg,
     },
+    /// Axle-load model (physics.md §3, half truck of a 6x2): either a scripted seed 002 scenario
+    /// (--scenario: writes axle_sim.parquet and SVG plots of normal forces and bellow
+    /// pressures), or a recorded drive (--drive: simulates it and validates the bellow
+    /// pressures, and travel where recorded — MAE, RMSE, fit % per axle and segment; writes
+    /// axle_sim.parquet and axle_validation.parquet).
+    Axle {
+        /// Recorded drive (MCAP or Parquet).
+        #[arg(
+            long,
+            required_unless_present = "scenario",
+            conflicts_with = "scenario"
+        )]
+        drive: Option<PathBuf>,
+        /// Scripted scenario of seed 002 §4.3.
+        #[arg(long, value_enum)]
+        scenario: Option<AxleScenarioArg>,
+        /// Vehicle file with an [axles] section.
+        #[arg(long)]
+        vehicle: PathBuf,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Mapping file for the drive (chosen automatically when absent).
+        #[arg(long)]
+        mapping: Option<PathBuf>,
+        /// Road slope input: as recorded (raw) or zero-phase filtered (default).
+        #[arg(long, value_enum, default_value = "filtered")]
+        slope: SlopeInputArg,
+        /// Acceleration input: the IMU column when present (auto), the IMU, or d(speed)/dt.
+        #[arg(long, value_enum, default_value = "auto")]
+        accel: AccelArg,
+        /// Longitudinal inputs: the recording's, or the driveline simulation of it (end to
+        /// end; needs a [driveline] section).
+        #[arg(long, value_enum, default_value = "recorded")]
+        longitudinal: LongitudinalArg,
+        /// Acceleration separating the acceleration / steady / braking segments, m/s².
+        #[arg(long, default_value_t = 0.3)]
+        accel_threshold_mps2: f64,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum AxleScenarioArg {
+    FullAcceleration,
+    AuxBraking,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum AccelArg {
+    Auto,
+    Imu,
+    Speed,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LongitudinalArg {
+    Recorded,
+    Driveline,
 }
 
 #[derive(Subcommand)]
@@ -556,6 +619,103 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 "wrote {} and {}",
                 output.join("shuffle_sim.parquet").display(),
                 output.join("validation.parquet").display()
+            );
+            Ok(())
+        }
+        Command::Simulate(SimulateCommand::Axle {
+            drive: drive_path,
+            scenario,
+            vehicle,
+            output,
+            mapping,
+            slope,
+            accel,
+            longitudinal,
+            accel_threshold_mps2,
+        }) => {
+            let v = VehicleFile::load(&vehicle).map_err(usage)?;
+            let vname = vehicle.display().to_string();
+            let p = v.axles(&vname).map_err(usage)?;
+            if let Some(sc) = scenario {
+                let name = match sc {
+                    AxleScenarioArg::FullAcceleration => "full-acceleration",
+                    AxleScenarioArg::AuxBraking => "aux-braking",
+                };
+                let rep = run_scenario(name, p, &v.vehicle_id, &output).map_err(drive)?;
+                say_raw!("{rep}");
+                return Ok(());
+            }
+            let input = drive_path.expect("clap requires --drive without --scenario");
+            if !(accel_threshold_mps2.is_finite() && accel_threshold_mps2 > 0.0) {
+                return Err(usage(anyhow::anyhow!(
+                    "--accel-threshold-mps2 must be positive"
+                )));
+            }
+            let cfg = IngestConfig {
+                mapping,
+                ..Default::default()
+            };
+            let opts = cfg.options(&[], Some(&v)).map_err(usage)?;
+            let mut ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let slope_column = match slope {
+                SlopeInputArg::Raw => None,
+                SlopeInputArg::Filtered if ing.log.signal("road_slope").is_some() => {
+                    let d = resample_to_distance(&ing.log, &ResampleConfig::default())
+                        .map_err(drive)?;
+                    let f = filter_slope(&d, &SlopeFilterConfig::default()).map_err(drive)?;
+                    ing.log.signals.push(fleetdyn::table::Signal {
+                        name: "road_slope_filtered".into(),
+                        unit: "1".into(),
+                        values: f.zero_phase_time,
+                    });
+                    Some("road_slope_filtered".to_string())
+                }
+                SlopeInputArg::Filtered => None,
+            };
+            let scfg = AxleStageConfig {
+                validation: AxleValidationConfig {
+                    record: AxleRecordConfig {
+                        accel: match accel {
+                            AccelArg::Auto => AccelSource::Auto,
+                            AccelArg::Imu => AccelSource::Imu,
+                            AccelArg::Speed => AccelSource::Speed,
+                        },
+                        ..Default::default()
+                    },
+                    accel_threshold_mps2,
+                },
+                longitudinal: match longitudinal {
+                    LongitudinalArg::Recorded => LongitudinalSource::Recorded,
+                    LongitudinalArg::Driveline => LongitudinalSource::Driveline,
+                },
+                slope_column,
+            };
+            let val = axle_stage::run(&ing.log, &v, &vname, &scfg).map_err(|e| match e {
+                // a vehicle file without the section the mode needs is a configuration error
+                axle_stage::AxleStageError::Vehicle(_) => usage(e),
+                _ => drive(e),
+            })?;
+            let fp = format!("{}\naxle:v1 {:?} {:?}", cfg.fingerprint(&opts), p, scfg);
+            axle_stage::write(&output, &ing.log, &val, p.gravity_m_per_s2, &fp).map_err(drive)?;
+            say!(
+                "{}: axle-load model vs recording (acceleration from {}; slope from {}; {})",
+                ing.log.meta.drive_id,
+                val.recorded.accel_source,
+                val.recorded
+                    .slope_column
+                    .as_deref()
+                    .unwrap_or("none: flat road"),
+                if val.recorded.torque_inputs {
+                    "torque inputs"
+                } else {
+                    "acceleration only"
+                }
+            );
+            say_raw!("{}", axle_summary(&val));
+            say!(
+                "wrote {} and {}",
+                output.join("axle_sim.parquet").display(),
+                output.join("axle_validation.parquet").display()
             );
             Ok(())
         }

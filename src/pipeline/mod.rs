@@ -1,6 +1,7 @@
 //! Pipelines: stages over drives. Each stage kind is one file with its configuration (TOML keys
 //! with units in their names), its run function and its output writer.
 
+pub mod axle_stage;
 pub mod ingest_stage;
 pub mod resample_stage;
 pub mod run;

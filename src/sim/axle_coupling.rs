@@ -25,22 +25,53 @@ pub fn axle_inputs_from_driveline(
     r_w_m: f64,
     half_window_s: f64,
 ) -> Result<AxleInputs, PiecewiseError> {
-    let v = tr.speed(r_w_m);
-    let a = centred_derivative(&tr.t, &v, half_window_s);
+    let m_d: Vec<f64> = tr.torques.iter().map(|q| q[3]).collect();
+    axle_inputs_from_samples(
+        &tr.t,
+        &tr.speed(r_w_m),
+        &m_d,
+        sc.slope.clone(),
+        sc.brake_n.clone(),
+        half_window_s,
+    )
+    .map(|(u, _)| u)
+}
+
+/// Axle-model inputs from sampled driveline outputs: times `t_s`, simulated vehicle speed
+/// `v_mps` and drive-shaft torque `m_d_nm` (torque at the driven wheels), with the slope and
+/// service-brake inputs the driveline was simulated with. Returns the inputs and the
+/// acceleration samples.
+///
+/// # Errors
+/// [`PiecewiseError`] for fewer than 2 samples or non-increasing times.
+pub fn axle_inputs_from_samples(
+    t_s: &[f64],
+    v_mps: &[f64],
+    m_d_nm: &[f64],
+    slope: Piecewise,
+    service_brake_n: Piecewise,
+    half_window_s: f64,
+) -> Result<(AxleInputs, Vec<f64>), PiecewiseError> {
+    if t_s.len() < 2 {
+        return Err(PiecewiseError(format!("{} samples; need 2", t_s.len())));
+    }
+    let a = centred_derivative(t_s, v_mps, half_window_s);
     let lin = |y: &[f64]| {
         Piecewise::new(
-            tr.t.windows(2)
+            t_s.windows(2)
                 .zip(y.windows(2))
                 .map(|(t, y)| (t[0], t[1], y[0], y[1]))
                 .collect(),
         )
     };
-    let m_d: Vec<f64> = tr.torques.iter().map(|q| q[3]).collect();
-    Ok(AxleInputs {
-        accel_mps2: lin(&a)?,
-        slope: sc.slope.clone(),
-        drive_torque_wheel_nm: Some(lin(&m_d)?),
-        aux_brake_torque_wheel_nm: None,
-        service_brake_n: Some(sc.brake_n.clone()),
-    })
+    Ok((
+        AxleInputs {
+            accel_mps2: lin(&a)?,
+            slope,
+            drive_torque_wheel_nm: Some(lin(m_d_nm)?),
+            aux_brake_torque_wheel_nm: None,
+            service_brake_n: Some(service_brake_n),
+        },
+        a,
+    ))
 }

@@ -121,7 +121,8 @@ const SEGMENTS: [Segment; 4] = [
     Segment::Steady,
 ];
 
-/// Simulates `log` with the axle model and compares it with the recorded pressures and travel.
+/// Simulates `log` with the axle model, its inputs taken from the recording, and compares it
+/// with the recorded pressures and travel.
 ///
 /// # Errors
 /// [`AxleValidationError`] when inputs cannot be built or a bellow pressure column is missing.
@@ -133,22 +134,7 @@ pub fn validate_axle(
     slope_column: Option<&str>,
     cfg: &AxleValidationConfig,
 ) -> Result<AxleValidation, AxleValidationError> {
-    let file = log.meta.source_file.clone();
-    let pressure_cols = Axle::ALL.map(|a| format!("bellow_pressure_{}", a.name()));
-    let missing: Vec<String> = pressure_cols
-        .iter()
-        .filter(|c| {
-            log.signal(c)
-                .is_none_or(|v| v.iter().all(|x| !x.is_finite()))
-        })
-        .cloned()
-        .collect();
-    if !missing.is_empty() {
-        return Err(AxleValidationError::MissingPressures {
-            file,
-            columns: missing,
-        });
-    }
+    require_pressures(log)?;
     let rec = axle_inputs_from_log(
         log,
         gear_ratios,
@@ -156,6 +142,41 @@ pub fn validate_axle(
         slope_column,
         &cfg.record,
     )?;
+    Ok(validate_axle_with(log, p, rec, cfg))
+}
+
+/// The bellow-pressure columns validation needs, or the error naming the missing ones.
+///
+/// # Errors
+/// [`AxleValidationError::MissingPressures`].
+pub fn require_pressures(log: &DriveLog) -> Result<(), AxleValidationError> {
+    let missing: Vec<String> = Axle::ALL
+        .iter()
+        .map(|a| format!("bellow_pressure_{}", a.name()))
+        .filter(|c| {
+            log.signal(c)
+                .is_none_or(|v| v.iter().all(|x| !x.is_finite()))
+        })
+        .collect();
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(AxleValidationError::MissingPressures {
+            file: log.meta.source_file.clone(),
+            columns: missing,
+        })
+    }
+}
+
+/// Simulates with the given inputs (on the recording's time axis: `rec.t_s` has one entry per
+/// row of `log`) and compares with whatever of the pressures and travel `log` has.
+pub fn validate_axle_with(
+    log: &DriveLog,
+    p: &AxleParams,
+    rec: RecordedAxleInputs,
+    cfg: &AxleValidationConfig,
+) -> AxleValidation {
+    let pressure_cols = Axle::ALL.map(|a| format!("bellow_pressure_{}", a.name()));
     let model = HalfTruck::new(p);
     let traj = model.simulate(&rec.inputs, &rec.t_s, Start::Steady);
     let thr = cfg.accel_threshold_mps2;
@@ -217,10 +238,10 @@ pub fn validate_axle(
             }
         }
     }
-    Ok(AxleValidation {
+    AxleValidation {
         recorded: rec,
         trajectory: traj,
         segment,
         metrics,
-    })
+    }
 }

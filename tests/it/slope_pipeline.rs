@@ -148,11 +148,11 @@ fn nightly_pipeline_runs_every_fixture_deterministically() {
     let out1 = tempfile::tempdir().unwrap();
     let out2 = tempfile::tempdir().unwrap();
     let plan = nightly_plan(None);
-    assert_eq!(plan.inputs.len(), 4);
+    assert_eq!(plan.inputs.len(), 5);
     let r1 = run_plan(&plan, out1.path(), |_| {}).unwrap();
-    assert_eq!((r1.ok, r1.failed), (4, 0), "{:?}", r1.drives);
+    assert_eq!((r1.ok, r1.failed), (5, 0), "{:?}", r1.drives);
     let r2 = run_plan(&plan, out2.path(), |_| {}).unwrap();
-    assert_eq!(r2.ok, 4);
+    assert_eq!(r2.ok, 5);
     for d in &r1.drives {
         assert_eq!(d.outputs.len(), 4, "{d:?}");
         for rel in &d.outputs {
@@ -309,7 +309,7 @@ fn separate_processes_write_identical_bytes() {
     run(&a);
     run(&b);
     let files = walk(&a);
-    assert_eq!(files.len(), 17, "4 drives x 4 tables + run_report.json");
+    assert_eq!(files.len(), 21, "5 drives x 4 tables + run_report.json");
     for p in files {
         let q = b.join(p.strip_prefix(&a).unwrap());
         assert!(
