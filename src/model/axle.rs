@@ -473,6 +473,20 @@ impl AxleParams {
         }
     }
 
+    /// Static axle loads (kg, as a scale would read them) from bellow gauge pressures at rest on
+    /// a level road: the inverse of [`AxleParams::static_state`] — bellow force `p·A_eff`, then
+    /// the front axle's force balance `N = F + m_af g` and each arm's moment balance
+    /// `N = F l_b/l_a + m_a g` (seed 002 eqs. 3.3.4, 3.3.9).
+    pub fn axle_loads_from_pressures(&self, pressure_pa: [f64; 3]) -> [f64; 3] {
+        let g = self.gravity_m_per_s2;
+        [0, 1, 2].map(|k| {
+            let a = Axle::ALL[k];
+            let f = pressure_pa[k] * self.bellow_area(a);
+            let lever = self.arm(a).map_or(1.0, |(_, la, lb, _, _)| lb / la);
+            (f * lever + self.axle_mass(a) * g) / g
+        })
+    }
+
     /// The largest auxiliary brake force at the driven wheels that keeps the slip ratio under
     /// `slip_ratio_limit` at driven-axle normal force `n_rear` (seed 002 eq. 1.1.1 read as
     /// `F_x/N = k(µ)·i`, the longitudinal force over the normal force linear in slip), capped by

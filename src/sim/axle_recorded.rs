@@ -15,7 +15,11 @@
 //!   propeller shaft, ≥ 0 brakes);
 //! - without `engine_torque` the model takes the whole longitudinal force at the driven axle
 //!   (docs/axle-model.md), and this is reported;
-//! - slope: the named column (e.g. the filtered slope), else `road_slope`, else a flat road.
+//! - slope: the named column (e.g. the filtered slope), else `road_slope`, else a flat road;
+//! - `brake_force` is the force at the ground. At standstill (`vehicle_speed` below
+//!   `standstill_speed_mps`) brakes only hold: a recorded brake force there (a pressure-derived
+//!   signal reports the brakes' capacity) is replaced by the holding force the drive torque and
+//!   the grade ask for, `F_d/r_w·… − m g sin α`, limited to ± the recorded force.
 
 use super::axle::AxleInputs;
 use super::inputs::Piecewise;
@@ -43,6 +47,9 @@ pub struct AxleRecordConfig {
     /// Half window of the centred speed difference, s (0.25 s averages the 1/256 km/h
     /// quantisation of a 10 Hz wheel speed to ~0.002 m/s²).
     pub speed_derivative_half_window_s: f64,
+    /// Below this speed the vehicle stands and brakes only hold, m/s (0.1 m/s: a wheel-speed
+    /// sensor's lowest reading is ~0.3 km/h).
+    pub standstill_speed_mps: f64,
 }
 
 impl Default for AxleRecordConfig {
@@ -50,6 +57,7 @@ impl Default for AxleRecordConfig {
         Self {
             accel: AccelSource::Auto,
             speed_derivative_half_window_s: 0.25,
+            standstill_speed_mps: 0.1,
         }
     }
 }
@@ -100,9 +108,14 @@ pub(crate) fn centred_derivative(t: &[f64], v: &[f64], half: f64) -> Vec<f64> {
 ///
 /// # Errors
 /// [`RecordedError`] for logs shorter than 2 rows, no usable acceleration source, a gear with
-/// no ratio, or a torque signal without gear ratios or final drive.
+/// no ratio, or a torque signal without gear ratios or final drive. `mass_kg` and
+/// `wheel_radius_m` are the axle model's (for the holding force at standstill).
+#[allow(clippy::too_many_arguments)]
 pub fn axle_inputs_from_log(
     log: &DriveLog,
+    mass_kg: f64,
+    wheel_radius_m: f64,
+    gravity_m_per_s2: f64,
     gear_ratios: &[f64],
     final_drive_ratio: Option<f64>,
     slope_column: Option<&str>,
@@ -148,7 +161,7 @@ pub fn axle_inputs_from_log(
         Some((n, v)) => (Some(n), v),
         None => (None, vec![0.0; log.len()]),
     };
-    let brake = column("brake_force", Interpolation::Linear);
+    let mut brake = column("brake_force", Interpolation::Linear);
     let retarder = column("retarder_torque", Interpolation::Linear);
     let torque = column("engine_torque", Interpolation::Linear);
     let torque_inputs = torque.is_some() || retarder.is_some();
@@ -188,6 +201,20 @@ pub fn axle_inputs_from_log(
         let i_f = i_f.expect("set with torque inputs");
         r.iter().map(|x| x * i_f).collect::<Vec<_>>()
     });
+    if let (Some(b), Some(v)) = (
+        brake.as_mut(),
+        column("vehicle_speed", Interpolation::Linear),
+    ) {
+        for k in 0..b.len() {
+            if v[k].abs() < cfg.standstill_speed_mps {
+                let f_drive = (drive.as_ref().map_or(0.0, |d| d[k])
+                    - aux.as_ref().map_or(0.0, |x| x[k]))
+                    / wheel_radius_m;
+                let need = f_drive - mass_kg * gravity_m_per_s2 * slope[k].atan().sin();
+                b[k] = need.clamp(-b[k].abs(), b[k].abs());
+            }
+        }
+    }
     let lin = |v: &[f64]| pieces(&t, v, Interpolation::Linear);
     let inputs = AxleInputs {
         accel_mps2: lin(&accel),
@@ -212,6 +239,43 @@ pub fn axle_inputs_from_log(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::table::{DriveMeta, Signal};
+
+    #[test]
+    fn standing_brakes_hold_with_the_force_the_grade_asks_for() {
+        let n = 20;
+        let sig = |name: &str, unit: &str, v: f64| Signal {
+            name: name.into(),
+            unit: unit.into(),
+            values: vec![v; n],
+        };
+        let log = DriveLog {
+            meta: DriveMeta::default(),
+            timestamp_ns: (0..n as i64).map(|k| k * 100_000_000).collect(),
+            signals: vec![
+                sig("vehicle_speed", "m/s", 0.0),
+                sig("road_slope", "1", 0.02),
+                sig("engine_torque", "N*m", 0.0),
+                sig("gear", "1", 1.0),
+                sig("brake_force", "N", 20_000.0),
+            ],
+        };
+        let r = axle_inputs_from_log(
+            &log,
+            18_700.0,
+            0.5,
+            9.81,
+            &[2.0, 1.0],
+            Some(3.0),
+            None,
+            &AxleRecordConfig::default(),
+        )
+        .unwrap();
+        // parked on a 2 % climb: the brakes hold back m g sin α, not their 20 kN capacity
+        let hold = -18_700.0 * 9.81 * 0.02f64.atan().sin();
+        let b = r.inputs.service_brake_n.as_ref().unwrap().eval(1.0);
+        assert!((b - hold).abs() < 1e-9, "{b} vs {hold}");
+    }
 
     #[test]
     fn centred_derivative_of_a_parabola_is_exact_at_interior_points() {

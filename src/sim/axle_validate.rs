@@ -137,6 +137,9 @@ pub fn validate_axle(
     require_pressures(log)?;
     let rec = axle_inputs_from_log(
         log,
+        p.mass_kg(),
+        p.wheel_radius_m,
+        p.gravity_m_per_s2,
         gear_ratios,
         final_drive_ratio,
         slope_column,

@@ -6,6 +6,7 @@ mod axle_estimate;
 mod axle_model;
 mod axle_reference;
 mod axle_scenarios;
+mod axle_static_table;
 mod axle_validate;
 mod common;
 mod driveline_fast;
