@@ -59,6 +59,27 @@ pub struct Longitudinal {
     pub alpha_rad: f64,
 }
 
+/// Piece indices of the five inputs, moved forward as time increases (so a long recorded drive
+/// costs no binary search per evaluation).
+#[derive(Debug, Clone, Copy, Default)]
+struct Cursor([usize; 5]);
+
+impl Cursor {
+    #[inline]
+    fn eval(&mut self, i: usize, s: &Piecewise, t: f64) -> f64 {
+        let pieces = s.pieces();
+        let mut k = self.0[i].min(pieces.len() - 1);
+        if pieces[k].0 > t {
+            k = s.piece_index(t); // time went back: search again
+        }
+        while k + 1 < pieces.len() && pieces[k + 1].0 <= t {
+            k += 1;
+        }
+        self.0[i] = k;
+        s.eval_piece(k, t)
+    }
+}
+
 /// Where a simulation starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Start {
@@ -274,19 +295,27 @@ impl<'a> HalfTruck<'a> {
     /// forces come from them and the service brake, and the remainder acts at the resistance
     /// height; without, the driven axle takes everything the service brake does not.
     pub fn longitudinal(&self, u: &AxleInputs, t: f64) -> Longitudinal {
+        self.longitudinal_with(u, t, &mut Cursor::default())
+    }
+
+    /// [`HalfTruck::longitudinal`] with a cursor over the input pieces, for increasing times.
+    fn longitudinal_with(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> Longitudinal {
         let p = self.p;
-        let a = u.accel_mps2.eval(t);
-        let alpha = u.slope.eval(t).atan();
+        let a = c.eval(0, &u.accel_mps2, t);
+        let alpha = c.eval(1, &u.slope, t).atan();
         let total = self.st.mass_kg * (a + p.gravity_m_per_s2 * alpha.sin());
-        let fb = u.service_brake_n.as_ref().map_or(0.0, |s| s.eval(t));
+        let fb = u.service_brake_n.as_ref().map_or(0.0, |s| c.eval(2, s, t));
         let mut f = Axle::ALL.map(|ax| -p.brake_share(ax) * fb);
         let torque = u.drive_torque_wheel_nm.is_some() || u.aux_brake_torque_wheel_nm.is_some();
         let resistance = if torque {
-            let td = u.drive_torque_wheel_nm.as_ref().map_or(0.0, |s| s.eval(t));
+            let td = u
+                .drive_torque_wheel_nm
+                .as_ref()
+                .map_or(0.0, |s| c.eval(3, s, t));
             let ta = u
                 .aux_brake_torque_wheel_nm
                 .as_ref()
-                .map_or(0.0, |s| s.eval(t));
+                .map_or(0.0, |s| c.eval(4, s, t));
             f[1] += (td - ta) / p.wheel_radius_m;
             total - f.iter().sum::<f64>()
         } else {
@@ -373,6 +402,7 @@ impl<'a> HalfTruck<'a> {
             ),
         };
         let mut t = t0;
+        let mut cur = Cursor::default();
         let n = t_out.len();
         for v in out
             .normal_n
@@ -387,10 +417,10 @@ impl<'a> HalfTruck<'a> {
             if span > 0.0 {
                 let steps = (span / self.h_max).ceil().max(1.0) as usize;
                 let h = span / steps as f64;
+                let mut qe0 = self.external(&self.longitudinal_with(u, t, &mut cur));
                 for _ in 0..steps {
-                    let qe0 = self.external(&self.longitudinal(u, t));
-                    let qe1 = self.external(&self.longitudinal(u, t + 0.5 * h));
-                    let qe2 = self.external(&self.longitudinal(u, t + h));
+                    let qe1 = self.external(&self.longitudinal_with(u, t + 0.5 * h, &mut cur));
+                    let qe2 = self.external(&self.longitudinal_with(u, t + h, &mut cur));
                     let k1v = self.accel(&q, &qd, &qe0);
                     let k1x = qd;
                     let k2x = qd + 0.5 * h * k1v;
@@ -402,6 +432,7 @@ impl<'a> HalfTruck<'a> {
                     q += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
                     qd += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
                     t += h;
+                    qe0 = qe2;
                 }
                 t = tk;
             }
