@@ -347,6 +347,25 @@ struct Failure {
     error: anyhow::Error,
 }
 
+/// The slope column a simulation uses: `None` for the raw sensor (or a log without one), else
+/// the seed 000 §5 zero-phase filtered slope, added to the log as `road_slope_filtered`.
+fn slope_input(
+    log: &mut fleetdyn::table::DriveLog,
+    slope: SlopeInputArg,
+) -> anyhow::Result<Option<String>> {
+    if matches!(slope, SlopeInputArg::Raw) || log.signal("road_slope").is_none() {
+        return Ok(None);
+    }
+    let d = resample_to_distance(log, &ResampleConfig::default())?;
+    let f = filter_slope(&d, &SlopeFilterConfig::default())?;
+    log.signals.push(fleetdyn::table::Signal {
+        name: "road_slope_filtered".into(),
+        unit: "1".into(),
+        values: f.zero_phase_time,
+    });
+    Ok(Some("road_slope_filtered".to_string()))
+}
+
 fn usage(e: impl Into<anyhow::Error>) -> Failure {
     Failure {
         code: 2,
@@ -583,20 +602,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             };
             let opts = cfg.options(&[Stage::Driveline], Some(&v)).map_err(usage)?;
             let mut ing = ingest_stage::run(&input, &opts).map_err(drive)?;
-            let slope_column = match slope {
-                SlopeInputArg::Raw => None,
-                SlopeInputArg::Filtered => {
-                    let d = resample_to_distance(&ing.log, &ResampleConfig::default())
-                        .map_err(drive)?;
-                    let f = filter_slope(&d, &SlopeFilterConfig::default()).map_err(drive)?;
-                    ing.log.signals.push(fleetdyn::table::Signal {
-                        name: "road_slope_filtered".into(),
-                        unit: "1".into(),
-                        values: f.zero_phase_time,
-                    });
-                    Some("road_slope_filtered")
-                }
-            };
+            let slope_column = slope_input(&mut ing.log, slope).map_err(drive)?;
+            let slope_column = slope_column.as_deref();
             let vcfg = ValidationConfig {
                 window_s,
                 dt_s,
@@ -657,21 +664,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             };
             let opts = cfg.options(&[], Some(&v)).map_err(usage)?;
             let mut ing = ingest_stage::run(&input, &opts).map_err(drive)?;
-            let slope_column = match slope {
-                SlopeInputArg::Raw => None,
-                SlopeInputArg::Filtered if ing.log.signal("road_slope").is_some() => {
-                    let d = resample_to_distance(&ing.log, &ResampleConfig::default())
-                        .map_err(drive)?;
-                    let f = filter_slope(&d, &SlopeFilterConfig::default()).map_err(drive)?;
-                    ing.log.signals.push(fleetdyn::table::Signal {
-                        name: "road_slope_filtered".into(),
-                        unit: "1".into(),
-                        values: f.zero_phase_time,
-                    });
-                    Some("road_slope_filtered".to_string())
-                }
-                SlopeInputArg::Filtered => None,
-            };
+            let slope_column = slope_input(&mut ing.log, slope).map_err(drive)?;
             let scfg = AxleStageConfig {
                 validation: AxleValidationConfig {
                     record: AxleRecordConfig {

@@ -23,7 +23,7 @@
 
 use super::axle::AxleInputs;
 use super::inputs::Piecewise;
-use super::recorded::{pieces, RecordedError};
+use super::recorded::{pieces, relative_times, slope_input, RecordedError};
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
@@ -122,18 +122,7 @@ pub fn axle_inputs_from_log(
     cfg: &AxleRecordConfig,
 ) -> Result<RecordedAxleInputs, RecordedError> {
     let file = log.meta.source_file.clone();
-    if log.len() < 2 {
-        return Err(RecordedError::TooShort {
-            file,
-            rows: log.len(),
-        });
-    }
-    let t0 = log.timestamp_ns[0];
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - t0) as f64 * 1e-9)
-        .collect();
+    let t = relative_times(log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
     let missing = |c: &str| RecordedError::Missing {
@@ -153,14 +142,7 @@ pub fn axle_inputs_from_log(
             )
         }
     };
-    let (slope_name, slope) = match slope_column
-        .and_then(|c| column(c, Interpolation::Hold).map(|v| (c.to_string(), v)))
-        .or_else(|| {
-            column("road_slope", Interpolation::Hold).map(|v| ("road_slope".to_string(), v))
-        }) {
-        Some((n, v)) => (Some(n), v),
-        None => (None, vec![0.0; log.len()]),
-    };
+    let (slope_name, slope) = slope_input(log, slope_column);
     let mut brake = column("brake_force", Interpolation::Linear);
     let retarder = column("retarder_torque", Interpolation::Linear);
     let torque = column("engine_torque", Interpolation::Linear);

@@ -222,38 +222,23 @@ impl AxleScenarioConfig {
                 return bad(field, value, "must be finite");
             }
         }
-        for (field, value) in [
-            ("sample_rate_hz", self.sample_rate_hz),
-            ("max_drive_torque_wheel_nm", self.max_drive_torque_wheel_nm),
-            ("max_drive_power_w", self.max_drive_power_w),
-            (
-                "max_aux_brake_torque_wheel_nm",
-                self.max_aux_brake_torque_wheel_nm,
-            ),
-            ("max_regen_power_w", self.max_regen_power_w),
-            ("regen_fade_speed_mps", self.regen_fade_speed_mps),
-            ("torque_ramp_s", self.torque_ramp_s),
-            ("max_speed_mps", self.max_speed_mps),
-            ("speed_limiter_gain_per_s", self.speed_limiter_gain_per_s),
-            ("braking_speed_mps", self.braking_speed_mps),
-        ] {
-            if value <= 0.0 {
+        // fields that may be zero; every other one must be positive
+        const NON_NEGATIVE: [&str; 6] = [
+            "rolling_resistance_coefficient",
+            "drag_area_m2",
+            "air_density_kg_per_m3",
+            "acceleration_start_s",
+            "braking_start_s",
+            "braking_hold_s",
+        ];
+        const ORDERING_ONLY: [&str; 2] = ["acceleration_end_s", "braking_end_s"];
+        for (field, value) in self.entries() {
+            if NON_NEGATIVE.contains(&field) {
+                if value < 0.0 {
+                    return bad(field, value, "must be >= 0");
+                }
+            } else if !ORDERING_ONLY.contains(&field) && value <= 0.0 {
                 return bad(field, value, "must be > 0");
-            }
-        }
-        for (field, value) in [
-            (
-                "rolling_resistance_coefficient",
-                self.rolling_resistance_coefficient,
-            ),
-            ("drag_area_m2", self.drag_area_m2),
-            ("air_density_kg_per_m3", self.air_density_kg_per_m3),
-            ("acceleration_start_s", self.acceleration_start_s),
-            ("braking_start_s", self.braking_start_s),
-            ("braking_hold_s", self.braking_hold_s),
-        ] {
-            if value < 0.0 {
-                return bad(field, value, "must be >= 0");
             }
         }
         if self.sample_rate_hz > 10e3 {

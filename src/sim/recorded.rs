@@ -62,6 +62,44 @@ pub struct RecordedScenario {
     pub slope_column: Option<String>,
 }
 
+/// Times of a log's rows relative to its first row, s.
+///
+/// # Errors
+/// [`RecordedError::TooShort`] for fewer than 2 rows.
+pub(crate) fn relative_times(log: &DriveLog) -> Result<Vec<f64>, RecordedError> {
+    if log.len() < 2 {
+        return Err(RecordedError::TooShort {
+            file: log.meta.source_file.clone(),
+            rows: log.len(),
+        });
+    }
+    let t0 = log.timestamp_ns[0];
+    Ok(log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - t0) as f64 * 1e-9)
+        .collect())
+}
+
+/// The slope input of a log: the named column, else `road_slope`, else a flat road (`None`),
+/// gaps filled by holding.
+pub(crate) fn slope_input(
+    log: &DriveLog,
+    slope_column: Option<&str>,
+) -> (Option<String>, Vec<f64>) {
+    let column = |name: &str| {
+        log.signal(name)
+            .and_then(|v| fill_gaps(v, Interpolation::Hold))
+    };
+    match slope_column
+        .and_then(|c| column(c).map(|v| (c.to_string(), v)))
+        .or_else(|| column("road_slope").map(|v| ("road_slope".to_string(), v)))
+    {
+        Some((n, v)) => (Some(n), v),
+        None => (None, vec![0.0; log.len()]),
+    }
+}
+
 /// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says.
 pub(crate) fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
     let p = t
@@ -86,18 +124,7 @@ pub fn scenario_from_log(
     slope_column: Option<&str>,
 ) -> Result<RecordedScenario, RecordedError> {
     let file = log.meta.source_file.clone();
-    if log.len() < 2 {
-        return Err(RecordedError::TooShort {
-            file,
-            rows: log.len(),
-        });
-    }
-    let t0 = log.timestamp_ns[0];
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - t0) as f64 * 1e-9)
-        .collect();
+    let t = relative_times(log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
     let missing = |c: &str| RecordedError::Missing {
@@ -111,14 +138,7 @@ pub fn scenario_from_log(
         column("clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
     let brake =
         column("brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
-    let (slope_name, slope) = match slope_column
-        .and_then(|c| column(c, Interpolation::Hold).map(|v| (c.to_string(), v)))
-        .or_else(|| {
-            column("road_slope", Interpolation::Hold).map(|v| ("road_slope".to_string(), v))
-        }) {
-        Some((n, v)) => (Some(n), v),
-        None => (None, vec![0.0; log.len()]),
-    };
+    let (slope_name, slope) = slope_input(log, slope_column);
     // neutral: clutch open in the last engaged gear (the first engaged one before any)
     let first_engaged = gear_raw.iter().copied().find(|g| *g >= 1.0).unwrap_or(1.0);
     let mut last = first_engaged;
