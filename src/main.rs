@@ -15,10 +15,15 @@ use fleetdyn::pipeline::spec::PipelineSpec;
 use fleetdyn::report::axle_scenario::run_scenario;
 use fleetdyn::report::axle_validation::axle_summary;
 use fleetdyn::report::bode::{plot_svg, BodeTable};
+use fleetdyn::report::road_spectra::{write_road_spectrum, write_study};
 use fleetdyn::report::spectrum;
 use fleetdyn::report::validation;
 use fleetdyn::report::IngestSummary;
+use fleetdyn::road::road_table::{read_distance_column, write_road};
+use fleetdyn::road::rules::RoadRules;
 use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
+use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError};
+use fleetdyn::road::synth;
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
     resample_to_distance, DistanceSource, ResampleConfig, ReversePolicy,
@@ -143,6 +148,10 @@ enum Command {
     /// Estimate model parameters from measurements and compare them with a vehicle file.
     #[command(subcommand)]
     Estimate(EstimateCommand),
+    /// Synthetic roads from road-design rules and their spatial spectra (physics.md §2, seed 000
+    /// §4): generate a road, study the slope spectra of many, or analyse one road file.
+    #[command(subcommand)]
+    Road(RoadCommand),
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
     Run {
         /// Pipeline file.
@@ -225,6 +234,79 @@ enum SimulateCommand {
         /// Acceleration separating the acceleration / steady / braking segments, m/s².
         #[arg(long, default_value_t = 0.3)]
         accel_threshold_mps2: f64,
+    },
+}
+
+#[derive(Subcommand)]
+enum RoadCommand {
+    /// Generate one synthetic road (constant grades joined by parabolic vertical curves
+    /// z = x²/(2R), seed 000 eqs. (34)-(36)) and write distance, elevation and slope on a
+    /// uniform grid as Parquet.
+    Synth {
+        /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us) or a TOML file
+        /// of the same keys (schemas/roads/*.toml).
+        #[arg(long)]
+        rules: String,
+        /// Road length, km.
+        #[arg(long, allow_negative_numbers = true)]
+        length_km: f64,
+        /// Seed of the road's random generator (same seed, same road, byte for byte).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Distance grid step, m.
+        #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+        step_m: f64,
+        /// Output Parquet file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Slope spectra of N random roads (seeds seed..seed+N-1) in parallel: PSD percentile bands
+    /// (5/50/95 %) per frequency, the 90 % and 99 % knees of every road, and the slope filter's
+    /// response. Writes road_study_psd.parquet, road_study_knees.parquet and road_study.svg.
+    Study {
+        /// Rule set: a bundled name or a TOML file.
+        #[arg(long)]
+        rules: String,
+        /// Number of roads.
+        #[arg(long, default_value_t = 64)]
+        roads: usize,
+        /// Length of each road, km.
+        #[arg(long, default_value_t = 50.0, allow_negative_numbers = true)]
+        length_km: f64,
+        /// Seed of the first road.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Distance grid step, m.
+        #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+        step_m: f64,
+        /// Welch segment length, m (frequency resolution = 1/segment).
+        #[arg(long, default_value_t = 16384.0, allow_negative_numbers = true)]
+        segment_length_m: f64,
+        /// Worker threads (default: all cores); the output is the same for any number.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Slope spectrum of one road file: any Parquet with a uniform `distance` grid (m) and a
+    /// slope column (a `road synth` output, or slope_distance.parquet of `fleetdyn slope`).
+    /// Writes road_spectrum.parquet and road_spectrum.svg.
+    Spectrum {
+        /// Road Parquet file.
+        input: PathBuf,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Slope column (tan α) to analyse.
+        #[arg(long, default_value = "slope")]
+        column: String,
+        /// Welch segment length, m.
+        #[arg(long, default_value_t = 16384.0, allow_negative_numbers = true)]
+        segment_length_m: f64,
+        /// Confidence level of the PSD band.
+        #[arg(long, default_value_t = 0.95)]
+        confidence: f64,
     },
 }
 
@@ -750,6 +832,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             Ok(())
         }
+        Command::Road(cmd) => run_road(cmd),
         Command::Run {
             pipeline,
             input,
@@ -794,6 +877,132 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     report.failed,
                     report.ok + report.failed
                 )));
+            }
+            Ok(())
+        }
+    }
+}
+
+/// `fleetdyn road …`: configuration errors (rules, lengths, seeds, Welch settings) exit 2;
+/// an unreadable road file or a failed write exits 1.
+fn run_road(cmd: RoadCommand) -> Result<(), Failure> {
+    match cmd {
+        RoadCommand::Synth {
+            rules,
+            length_km,
+            seed,
+            step_m,
+            output,
+        } => {
+            let r = RoadRules::resolve(&rules).map_err(usage)?;
+            let road = synth::generate(&r, length_km * 1000.0, step_m, seed).map_err(usage)?;
+            write_road(&output, &road, &rules).map_err(drive)?;
+            let p = &road.profile;
+            let max_abs = p.slope.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+            let (zmin, zmax) = p
+                .elevation_m
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &z| {
+                    (a.min(z), b.max(z))
+                });
+            say!(
+                "road {} seed {}: {:.3} km on a {} m grid ({} samples), {} grade segments, {} vertical curves ({} segments lengthened to fit their curves), max |slope| {:.4}, elevation {:.1} .. {:.1} m -> {}",
+                r.name, seed, road.length_m / 1000.0, step_m, p.slope.len(),
+                road.alignment.grades.len(), road.alignment.radii_m.len(),
+                road.lengthened_segments, max_abs, zmin, zmax, output.display()
+            );
+            Ok(())
+        }
+        RoadCommand::Study {
+            rules,
+            roads,
+            length_km,
+            seed,
+            step_m,
+            segment_length_m,
+            threads,
+            output,
+        } => {
+            let r = RoadRules::resolve(&rules).map_err(usage)?;
+            let cfg = StudyConfig {
+                rules: r,
+                n_roads: roads,
+                length_m: length_km * 1000.0,
+                step_m,
+                seed,
+                spectrum: SpectrumSettings {
+                    segment_length_m,
+                    ..Default::default()
+                },
+            };
+            let result = match threads {
+                Some(0) => return Err(usage(anyhow::anyhow!("--threads must be at least 1"))),
+                Some(n) => rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| drive(anyhow::anyhow!("thread pool: {e}")))?
+                    .install(|| run_study(&cfg)),
+                None => run_study(&cfg),
+            };
+            let study = result.map_err(|e| match e {
+                StudyError::Signal { .. } => drive(e),
+                _ => usage(e),
+            })?;
+            let files = write_study(&output, &study, &rules).map_err(drive)?;
+            let c = &study.config;
+            say!(
+                "study {}: {} roads x {:.3} km (seeds {}..{}), Welch segments of {} m ({} per road, {:.1} dof), resolution {:.3e} 1/m",
+                c.rules.name, c.n_roads, c.length_m / 1000.0, c.seed, c.seed + c.n_roads as u64 - 1,
+                study.nperseg as f64 * c.step_m, study.n_segments, study.dof,
+                study.freq_per_m.get(1).copied().unwrap_or(f64::NAN)
+            );
+            for (name, k, m) in [
+                ("50 %", &study.knee_50, study.knee_50_of_mean),
+                ("90 %", &study.knee_90, study.knee_90_of_mean),
+                ("99 %", &study.knee_99, study.knee_99_of_mean),
+            ] {
+                say!(
+                    "  {name} knee across roads: median {:.3e} 1/m (5 %: {:.3e}, 95 %: {:.3e}); of the mean PSD: {:.3e} 1/m",
+                    k.p50, k.p05, k.p95, m
+                );
+            }
+            let lengthened: usize = study.roads.iter().map(|k| k.lengthened_segments).sum();
+            let segments: usize = study.roads.iter().map(|k| k.grade_segments).sum();
+            say!("  {segments} grade segments in all, {lengthened} lengthened to fit their curves");
+            for f in files {
+                say!("  wrote {}", f.display());
+            }
+            Ok(())
+        }
+        RoadCommand::Spectrum {
+            input,
+            output,
+            column,
+            segment_length_m,
+            confidence,
+        } => {
+            let settings = SpectrumSettings {
+                segment_length_m,
+                confidence,
+            };
+            if !(confidence > 0.0 && confidence < 1.0) {
+                return Err(usage(anyhow::anyhow!(
+                    "--confidence {confidence} must lie strictly between 0 and 1"
+                )));
+            }
+            let col = read_distance_column(&input, &column).map_err(drive)?;
+            let sp = slope_spectrum(&col.values, col.step_m, &settings).map_err(|e| match e {
+                StudyError::Signal { .. } => drive(e),
+                _ => usage(e),
+            })?;
+            let files = write_road_spectrum(&output, &col, &sp, &settings).map_err(drive)?;
+            say!(
+                "{}: {column} on a {} m grid, {} Welch segments of {} samples ({:.1} dof); half the power below {:.3e} 1/m, 90 % below {:.3e} 1/m, 99 % below {:.3e} 1/m",
+                input.display(), col.step_m, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
+                sp.knee_50, sp.knee_90, sp.knee_99
+            );
+            for f in files {
+                say!("  wrote {}", f.display());
             }
             Ok(())
         }

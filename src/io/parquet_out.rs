@@ -12,7 +12,9 @@
 use super::AtomicFile;
 use crate::schema::{drive_log, output_schema, Dtype, SchemaError};
 use crate::table::{DriveLog, Signal};
-use arrow::array::{ArrayRef, Float64Array, Int16Array, StringArray, TimestampNanosecondArray};
+use arrow::array::{
+    ArrayRef, Float64Array, Int16Array, StringArray, TimestampNanosecondArray, UInt64Array,
+};
 use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
 use arrow::record_batch::RecordBatch;
 use parquet::arrow::ArrowWriter;
@@ -36,6 +38,8 @@ pub enum OutData {
     I16(Vec<f64>),
     /// Labels, written as `utf8`.
     Str(Vec<String>),
+    /// Unsigned integers (seeds, counts), written as `uint64`.
+    U64(Vec<u64>),
 }
 
 impl OutData {
@@ -44,6 +48,7 @@ impl OutData {
             OutData::Timestamp(v) => v.len(),
             OutData::F64(v) | OutData::I16(v) => v.len(),
             OutData::Str(v) => v.len(),
+            OutData::U64(v) => v.len(),
         }
     }
     fn dtype(&self) -> Dtype {
@@ -52,6 +57,7 @@ impl OutData {
             OutData::F64(_) => Dtype::F64,
             OutData::I16(_) => Dtype::I16,
             OutData::Str(_) => Dtype::Str,
+            OutData::U64(_) => Dtype::U64,
         }
     }
 }
@@ -241,6 +247,7 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
                 OutData::F64(_) => DataType::Float64,
                 OutData::I16(_) => DataType::Int16,
                 OutData::Str(_) => DataType::Utf8,
+                OutData::U64(_) => DataType::UInt64,
             };
             let nullable = !matches!(c.data, OutData::Timestamp(_));
             Field::new(&c.name, dt, nullable)
@@ -261,6 +268,7 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
                     v.iter().map(|x| (x.is_finite()).then(|| x.round() as i16)),
                 )),
                 OutData::Str(v) => Arc::new(StringArray::from_iter_values(v.iter())),
+                OutData::U64(v) => Arc::new(UInt64Array::from(v.clone())),
             }
         })
         .collect();

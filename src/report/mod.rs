@@ -6,6 +6,8 @@ pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
 mod ingest_summary;
+pub mod road_plot;
+pub mod road_spectra;
 pub mod spectrum;
 pub mod validation;
 

@@ -28,6 +28,9 @@ pub enum Dtype {
     /// UTF-8 string (labels in result tables: axle, segment, signal).
     #[serde(rename = "str")]
     Str,
+    /// 64-bit unsigned integer (seeds and counts in result tables).
+    #[serde(rename = "u64")]
+    U64,
 }
 
 /// A schema file that does not parse or contradicts itself. These are build-time assets, so

@@ -38,6 +38,22 @@ const FILES: &[(&str, &str)] = &[
         "axle_sim",
         include_str!("../../schemas/outputs/axle-sim.toml"),
     ),
+    (
+        "road_profile",
+        include_str!("../../schemas/outputs/road-profile.toml"),
+    ),
+    (
+        "road_spectrum",
+        include_str!("../../schemas/outputs/road-spectrum.toml"),
+    ),
+    (
+        "road_study_psd",
+        include_str!("../../schemas/outputs/road-study-psd.toml"),
+    ),
+    (
+        "road_study_knees",
+        include_str!("../../schemas/outputs/road-study-knees.toml"),
+    ),
 ];
 
 /// One column of an output table.
@@ -145,7 +161,8 @@ impl OutputSchema {
 }
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
-/// `spectrum`, `bode`, `shuffle_sim`, `validation`, `axle_sim`), or `None`.
+/// `spectrum`, `bode`, `axle_validation`, `shuffle_sim`, `validation`, `axle_sim`,
+/// `road_profile`, `road_spectrum`, `road_study_psd`, `road_study_knees`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.
