@@ -50,13 +50,14 @@ fn write_svg(path: &Path, svg: &str) -> Result<(), RoadReportError> {
     f.commit().map_err(io)
 }
 
+/// One output file: its path and the writer that puts it there.
+type Step<'a> = (
+    PathBuf,
+    Box<dyn FnOnce(&Path) -> Result<(), RoadReportError> + 'a>,
+);
+
 /// Runs the writers in order; on the first error removes the files the earlier ones wrote.
-fn all_or_nothing(
-    steps: Vec<(
-        PathBuf,
-        Box<dyn FnOnce(&Path) -> Result<(), RoadReportError> + '_>,
-    )>,
-) -> Result<Vec<PathBuf>, RoadReportError> {
+fn all_or_nothing(steps: Vec<Step<'_>>) -> Result<Vec<PathBuf>, RoadReportError> {
     let mut done: Vec<PathBuf> = Vec::new();
     for (path, write) in steps {
         if let Err(e) = write(&path) {

@@ -1,0 +1,310 @@
+//! Spatial spectra of road slope and studies over many roads (issue 5 point 2; seed 000 §4–§5):
+//! thread-count independence, knees of analytic cases, the seed's qualitative claim (city roads
+//! reach higher spatial frequencies than highways), the CLI outputs and bad input.
+
+use arrow::array::{AsArray, Float64Array};
+use arrow::datatypes::UInt64Type;
+use fleetdyn::report::road_spectra::write_study;
+use fleetdyn::road::road_table::read_distance_column;
+use fleetdyn::road::rules::RoadRules;
+use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, Study, StudyConfig};
+use fleetdyn::road::synth::generate;
+use fleetdyn::signal::knee_frequency;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn study_config(rules: &str, roads: usize, length_m: f64) -> StudyConfig {
+    StudyConfig {
+        rules: RoadRules::bundled(rules).unwrap(),
+        n_roads: roads,
+        length_m,
+        step_m: 1.0,
+        seed: 1,
+        spectrum: SpectrumSettings {
+            segment_length_m: 4096.0,
+            confidence: 0.95,
+        },
+    }
+}
+
+fn on_threads(n: usize, cfg: &StudyConfig) -> Study {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(|| run_study(cfg))
+        .unwrap()
+}
+
+/// A column of a Parquet file as f64 (u64 columns converted) with its `unit` metadata.
+fn column(path: &Path, name: &str) -> (Vec<f64>, String) {
+    let b = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(path).unwrap()).unwrap();
+    let unit = b
+        .schema()
+        .field_with_name(name)
+        .unwrap()
+        .metadata()
+        .get("unit")
+        .cloned()
+        .unwrap_or_default();
+    let mut out = Vec::new();
+    for batch in b.build().unwrap() {
+        let batch = batch.unwrap();
+        let a = batch.column_by_name(name).unwrap();
+        if let Some(f) = a.as_any().downcast_ref::<Float64Array>() {
+            out.extend(f.values().iter().copied());
+        } else {
+            out.extend(
+                a.as_primitive::<UInt64Type>()
+                    .values()
+                    .iter()
+                    .map(|&v| v as f64),
+            );
+        }
+    }
+    (out, unit)
+}
+
+#[test]
+fn road_study_is_identical_on_one_and_two_threads() {
+    let cfg = study_config("highway-se", 12, 20_000.0);
+    let (one, two) = (on_threads(1, &cfg), on_threads(2, &cfg));
+    assert_eq!(one, two);
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("one"), dir.path().join("two"));
+    let fa = write_study(&a, &one, "highway-se").unwrap();
+    let fb = write_study(&b, &two, "highway-se").unwrap();
+    assert_eq!(fa.len(), 3);
+    for (x, y) in fa.iter().zip(&fb) {
+        assert_eq!(
+            std::fs::read(x).unwrap(),
+            std::fs::read(y).unwrap(),
+            "{} differs between 1 and 2 threads",
+            x.display()
+        );
+    }
+    // Per-road results are in seed order and each equals the road analysed on its own.
+    assert_eq!(
+        one.roads.iter().map(|r| r.seed).collect::<Vec<_>>(),
+        (1..=12).collect::<Vec<u64>>()
+    );
+    let road = generate(&cfg.rules, cfg.length_m, 1.0, 7).unwrap();
+    let sp = slope_spectrum(&road.profile.slope, 1.0, &cfg.spectrum).unwrap();
+    assert_eq!(one.roads[6].knee_90, sp.knee_90);
+}
+
+#[test]
+fn road_study_knee_of_an_analytic_lorentzian() {
+    // S(f) = 1/(1 + (f/fc)²) on [0, fmax]: the cumulative power is atan(f/fc)/atan(fmax/fc), so
+    // the p-knee is fc·tan(p·atan(fmax/fc)). On a grid of fc/1000 the trapezoid integral is
+    // off by ~(Δf/fc)²/12 ≈ 1e-7 relative and the linear interpolation between bins by less:
+    // tolerance 1e-5 relative.
+    let (fc, fmax, df): (f64, f64, f64) = (1e-3, 0.5, 1e-6);
+    let f: Vec<f64> = (0..=(fmax / df).round() as usize)
+        .map(|k| k as f64 * df)
+        .collect();
+    let s: Vec<f64> = f.iter().map(|&x| 1.0 / (1.0 + (x / fc).powi(2))).collect();
+    for p in [0.5, 0.9, 0.99] {
+        let want = fc * (p * (fmax / fc).atan()).tan();
+        let got = knee_frequency(&f, &s, p);
+        assert!(
+            (got - want).abs() <= 1e-5 * want,
+            "p = {p}: {got} vs {want}"
+        );
+    }
+    // The half-power knee of a wide band is the corner itself (fmax/fc = 500: within 0.2 %).
+    let k50 = knee_frequency(&f, &s, 0.5);
+    assert!((k50 - fc).abs() < 2e-3 * fc, "{k50}");
+}
+
+#[test]
+fn road_study_sinusoidal_slope_has_its_knees_at_its_frequency() {
+    // slope = a·sin(2π f0 x) with f0 on bin 64 of 4096-m segments: a periodic-Hann Welch
+    // estimate puts its power in bins 63, 64, 65 (weights 1/4, 1, 1/4); the trapezoid
+    // cumulative power spreads that over the intervals 62…66, so every knee lies within two
+    // bins of f0 (the 99 % knee at 65.9 bins). Σ psd·Δf is the variance a²/2 (Parseval; the
+    // Hann window's own spectrum does not reach 2·f0, so only rounding separates them: 1e-9
+    // relative).
+    let (a, df) = (0.02, 1.0 / 4096.0);
+    let f0 = 64.0 * df;
+    let x: Vec<f64> = (0..40_960)
+        .map(|k| a * (2.0 * std::f64::consts::PI * f0 * k as f64).sin())
+        .collect();
+    let sp = slope_spectrum(
+        &x,
+        1.0,
+        &SpectrumSettings {
+            segment_length_m: 4096.0,
+            confidence: 0.95,
+        },
+    )
+    .unwrap();
+    for k in [sp.knee_50, sp.knee_90, sp.knee_99] {
+        assert!((k - f0).abs() <= 2.0 * df, "knee {k} vs f0 {f0}");
+    }
+    let var: f64 = sp.psd.psd.iter().sum::<f64>() * df;
+    assert!((var - a * a / 2.0).abs() <= 1e-9 * a * a, "{var}");
+    for k in 0..sp.psd.psd.len() {
+        assert!(sp.psd.lower[k] <= sp.psd.psd[k] && sp.psd.psd[k] <= sp.psd.upper[k]);
+    }
+}
+
+#[test]
+fn road_study_city_roads_reach_higher_frequencies_than_highways() {
+    // Seed 000 §4: the city rules (steeper grades, R >= 300 m) give "a road with higher
+    // frequency content" than the highway rules (R >= 1250 m). Fixed seeds, so deterministic.
+    let hw = on_threads(2, &study_config("highway-se", 16, 30_000.0));
+    let city = on_threads(2, &study_config("city-se", 16, 30_000.0));
+    assert!(city.knee_50.p50 > 1.5 * hw.knee_50.p50);
+    assert!(city.knee_90.p50 > 1.5 * hw.knee_90.p50);
+    assert!(city.knee_99.p50 > 1.5 * hw.knee_99.p50);
+    for s in [&hw, &city] {
+        for b in 0..s.freq_per_m.len() {
+            assert!(s.psd_p05[b] <= s.psd_p50[b] && s.psd_p50[b] <= s.psd_p95[b]);
+        }
+        for r in &s.roads {
+            assert!(r.knee_50 < r.knee_90 && r.knee_90 < r.knee_99, "{r:?}");
+        }
+        assert!((s.cumulative_mean.last().unwrap() - 1.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn road_study_cli_writes_tables_with_units_and_a_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let o = cli(&[
+        "road",
+        "study",
+        "--rules",
+        "urban-us",
+        "--roads",
+        "4",
+        "--length-km",
+        "20",
+        "--seed",
+        "5",
+        "--segment-length-m",
+        "4096",
+        "--threads",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("90 % knee across roads"), "{stdout}");
+    let psd = out.join("road_study_psd.parquet");
+    let (f, fu) = column(&psd, "frequency");
+    let (p50, pu) = column(&psd, "psd_p50");
+    let (_, gu) = column(&psd, "filter_zero_phase_gain");
+    assert_eq!(
+        (fu.as_str(), pu.as_str(), gu.as_str()),
+        ("1/m", "(1)^2/(1/m)", "dB")
+    );
+    assert_eq!(f.len(), 2049);
+    assert!((f[1] - 1.0 / 4096.0).abs() < 1e-15 && p50.iter().all(|v| *v >= 0.0));
+    let knees = out.join("road_study_knees.parquet");
+    let (seeds, su) = column(&knees, "seed");
+    let (k90, ku) = column(&knees, "knee_90");
+    assert_eq!(seeds, vec![5.0, 6.0, 7.0, 8.0]);
+    assert_eq!((su.as_str(), ku.as_str()), ("1", "1/m"));
+    assert!(k90.iter().all(|k| *k > 0.0 && *k < 0.5));
+    let svg = std::fs::read_to_string(out.join("road_study.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("99 % knee"),
+        "{}",
+        &svg[..80]
+    );
+
+    // road spectrum of one synthetic road: the table equals the library's analysis.
+    let road = dir.path().join("road.parquet");
+    let o = cli(&[
+        "road",
+        "synth",
+        "--rules",
+        "city-se",
+        "--length-km",
+        "25",
+        "--seed",
+        "9",
+        "-o",
+        road.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let sp_dir = dir.path().join("sp");
+    let o = cli(&[
+        "road",
+        "spectrum",
+        road.to_str().unwrap(),
+        "--segment-length-m",
+        "4096",
+        "-o",
+        sp_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let col = read_distance_column(&road, "slope").unwrap();
+    assert_eq!(col.step_m, 1.0);
+    let settings = SpectrumSettings {
+        segment_length_m: 4096.0,
+        confidence: 0.95,
+    };
+    let sp = slope_spectrum(&col.values, col.step_m, &settings).unwrap();
+    let (psd, _) = column(&sp_dir.join("road_spectrum.parquet"), "psd");
+    assert_eq!(psd, sp.psd.psd);
+    assert!(sp_dir.join("road_spectrum.svg").exists());
+}
+
+#[test]
+fn road_study_bad_input_is_a_clear_error_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o_str = out.to_str().unwrap().to_string();
+    for (args, want) in [
+        (vec!["--roads", "0"], "a study needs 1 to"),
+        (vec!["--segment-length-m", "40000"], "longer than the road"),
+        (vec!["--segment-length-m", "4"], "at least 16 steps"),
+        (
+            vec!["--rules", "nowhere/x.toml"],
+            "rule file nowhere/x.toml",
+        ),
+        (vec!["--length-km", "-1"], "road length -1000 m"),
+        (vec!["--threads", "0"], "--threads must be at least 1"),
+    ] {
+        // defaults for the options this case does not set
+        let mut all = vec!["road", "study", "-o", &o_str];
+        for (flag, value) in [
+            ("--rules", "city-se"),
+            ("--roads", "2"),
+            ("--length-km", "20"),
+        ] {
+            if !args.contains(&flag) {
+                all.extend([flag, value]);
+            }
+        }
+        all.extend(&args);
+        let o = cli(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{args:?} left output behind");
+    }
+    // A Parquet file without a distance grid is refused by road spectrum, naming what is missing.
+    let drive = dir.path().join("drive.parquet");
+    crate::common::Drive::new(50).write(&drive);
+    let o = cli(&["road", "spectrum", drive.to_str().unwrap(), "-o", &o_str]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no column distance"), "{}", stderr(&o));
+    assert!(!out.exists());
+}
