@@ -966,6 +966,12 @@ fn run_road(cmd: RoadCommand) -> Result<(), Failure> {
                     k.p50, k.p05, k.p95, m
                 );
             }
+            say!(
+                "  slope filter (f_co {} 1/m) removes {:.2} % of the mean PSD's power zero-phase, {:.2} % causal",
+                study.filter.config.cutoff_per_m,
+                100.0 * study.removed_by_zero_phase,
+                100.0 * study.removed_by_causal
+            );
             let lengthened: usize = study.roads.iter().map(|k| k.lengthened_segments).sum();
             let segments: usize = study.roads.iter().map(|k| k.grade_segments).sum();
             say!("  {segments} grade segments in all, {lengthened} lengthened to fit their curves");

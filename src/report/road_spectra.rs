@@ -315,6 +315,14 @@ pub fn write_study(
             "filter".into(),
             filter_text(study.filter.causal_order, &study.filter.config),
         ),
+        (
+            "filter_power_removed_zero_phase".into(),
+            format!("{:.6}", study.removed_by_zero_phase),
+        ),
+        (
+            "filter_power_removed_causal".into(),
+            format!("{:.6}", study.removed_by_causal),
+        ),
     ];
     extra.extend(pct("knee_50", &study.knee_50));
     extra.extend(pct("knee_90", &study.knee_90));

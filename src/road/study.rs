@@ -313,6 +313,28 @@ pub struct Study {
     pub dof: f64,
     /// Slope filter response on `freq_per_m`.
     pub filter: FilterResponse,
+    /// Share of the mean PSD's slope power the zero-phase filter removes:
+    /// `1 − ∫P·|H|⁴ df / ∫P df` (trapezoid over the bins).
+    pub removed_by_zero_phase: f64,
+    /// Share the causal filter removes: `1 − ∫P·|H|² df / ∫P df`.
+    pub removed_by_causal: f64,
+}
+
+/// Share of the power of `psd` (over `freq`) that a filter of power gain `10^(gain_db/10)`
+/// removes, by the trapezoid rule; NaN when there is no power.
+pub fn power_removed(freq: &[f64], psd: &[f64], gain_db: &[f64]) -> f64 {
+    let trap = |g: &dyn Fn(usize) -> f64| {
+        (1..freq.len())
+            .map(|i| 0.5 * (g(i) + g(i - 1)) * (freq[i] - freq[i - 1]))
+            .sum::<f64>()
+    };
+    let total = trap(&|i| psd[i]);
+    let kept = trap(&|i| psd[i] * 10f64.powf(gain_db[i] / 10.0));
+    if total > 0.0 {
+        1.0 - kept / total
+    } else {
+        f64::NAN
+    }
 }
 
 /// numpy's default ("linear") percentile `q` (0 … 100) of an ascending sample.
@@ -416,6 +438,8 @@ pub fn run_study(cfg: &StudyConfig) -> Result<Study, StudyError> {
     let mut k90: Vec<f64> = roads.iter().map(|r| r.knee_90).collect();
     let mut k99: Vec<f64> = roads.iter().map(|r| r.knee_99).collect();
     Ok(Study {
+        removed_by_zero_phase: power_removed(&freq_per_m, &mean, &filter.zero_phase_db),
+        removed_by_causal: power_removed(&freq_per_m, &mean, &filter.causal_db),
         config: cfg.clone(),
         cumulative_mean: cumulative_power(&freq_per_m, &mean),
         knee_50_of_mean: knee_frequency(&freq_per_m, &mean, 0.5),
@@ -449,6 +473,17 @@ mod tests {
         assert!((percentile_sorted(&v, 50.0) - 2.5).abs() < 1e-12);
         assert!((percentile_sorted(&v, 95.0) - 3.85).abs() < 1e-12);
         assert!(percentile_sorted(&[], 50.0).is_nan());
+    }
+
+    #[test]
+    fn power_removed_weighs_the_psd_by_the_power_gain() {
+        let f = [0.0, 1.0, 2.0, 3.0];
+        let p = [1.0, 1.0, 1.0, 1.0];
+        assert!(power_removed(&f, &p, &[0.0; 4]).abs() < 1e-15);
+        // -10·log10(2) dB is half power everywhere
+        let half = -10.0 * 2f64.log10();
+        assert!((power_removed(&f, &p, &[half; 4]) - 0.5).abs() < 1e-12);
+        assert!(power_removed(&f, &[0.0; 4], &[0.0; 4]).is_nan());
     }
 
     #[test]
