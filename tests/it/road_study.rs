@@ -308,3 +308,48 @@ fn road_study_bad_input_is_a_clear_error_and_leaves_nothing() {
     assert!(stderr(&o).contains("no column distance"), "{}", stderr(&o));
     assert!(!out.exists());
 }
+
+#[test]
+fn road_study_spectrum_reads_a_recorded_slope_on_its_distance_grid() {
+    // `road spectrum` also takes slope_distance.parquet of `fleetdyn slope`. The fixture drive's
+    // sensor is quantised in 1 % steps (seed 000 §3): each step is a discontinuity whose f⁻²
+    // tail runs to the Nyquist frequency, so the 99 % knee lies far above the filter's
+    // f_lo = 2e-2 1/m while half of the power stays below its cut-off 4e-3 1/m.
+    let dir = tempfile::tempdir().unwrap();
+    let slope_dir = dir.path().join("slope");
+    let drive = crate::common::fixture("fixtures/drives/truck-0001.mcap");
+    let o = cli(&[
+        "slope",
+        drive.to_str().unwrap(),
+        "-o",
+        slope_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = slope_dir.join("slope_distance.parquet");
+    let sp_dir = dir.path().join("sp");
+    let o = cli(&[
+        "road",
+        "spectrum",
+        table.to_str().unwrap(),
+        "--column",
+        "road_slope",
+        "--segment-length-m",
+        "2048",
+        "-o",
+        sp_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(sp_dir.join("road_spectrum.parquet").exists());
+    let col = read_distance_column(&table, "road_slope").unwrap();
+    let sp = slope_spectrum(
+        &col.values,
+        col.step_m,
+        &SpectrumSettings {
+            segment_length_m: 2048.0,
+            confidence: 0.95,
+        },
+    )
+    .unwrap();
+    assert!(sp.knee_50 < 4e-3, "{}", sp.knee_50);
+    assert!(sp.knee_99 > 2e-2, "{}", sp.knee_99);
+}
