@@ -38,6 +38,10 @@ const FILES: &[(&str, &str)] = &[
         "axle_sim",
         include_str!("../../schemas/outputs/axle-sim.toml"),
     ),
+    (
+        "road_profile",
+        include_str!("../../schemas/outputs/road-profile.toml"),
+    ),
 ];
 
 /// One column of an output table.
@@ -145,7 +149,7 @@ impl OutputSchema {
 }
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
-/// `spectrum`, `bode`, `shuffle_sim`, `validation`, `axle_sim`), or `None`.
+/// `spectrum`, `bode`, `shuffle_sim`, `validation`, `axle_sim`, `road_profile`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.

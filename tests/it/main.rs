@@ -19,5 +19,6 @@ mod ingest_fixtures;
 mod real_data;
 mod resample_props;
 mod resample_truth;
+mod road_profile;
 mod seed_slope_step;
 mod slope_pipeline;
