@@ -19,11 +19,16 @@ use fleetdyn::report::road_spectra::{write_road_spectrum, write_study};
 use fleetdyn::report::spectrum;
 use fleetdyn::report::validation;
 use fleetdyn::report::IngestSummary;
+use fleetdyn::road::profile::{
+    detect_input, gnss_profile_of, read_profile_column, write_profile, GnssProfileConfig,
+    ProfileInput,
+};
 use fleetdyn::road::road_table::{read_distance_column, write_road};
 use fleetdyn::road::rules::RoadRules;
 use fleetdyn::road::slope_filter::{filter_slope, SlopeEdge, SlopeFilterConfig};
 use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError};
 use fleetdyn::road::synth;
+use fleetdyn::road::vdri::{cycle_profile, read_vdri};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{
     resample_to_distance, DistanceSource, ResampleConfig, ReversePolicy,
@@ -115,9 +120,13 @@ enum Command {
         /// Output Parquet file (spectrum table).
         #[arg(short, long)]
         output: PathBuf,
-        /// Column to analyse.
-        #[arg(long, default_value = "road_slope")]
-        column: String,
+        /// Column to analyse (default road_slope; slope with --from-profile).
+        #[arg(long)]
+        column: Option<String>,
+        /// IN is a road-profile table written by `fleetdyn road profile`: analyse its column on
+        /// the profile's own distance grid (no ingest, no resampling; --domain must be distance).
+        #[arg(long)]
+        from_profile: bool,
         /// Domain: distance (resampled on the grid of --step-m, frequency in 1/m) or time (Hz).
         #[arg(long, value_enum, default_value = "distance")]
         domain: DomainArg,
@@ -148,8 +157,9 @@ enum Command {
     /// Estimate model parameters from measurements and compare them with a vehicle file.
     #[command(subcommand)]
     Estimate(EstimateCommand),
-    /// Synthetic roads from road-design rules and their spatial spectra (physics.md §2, seed 000
-    /// §4): generate a road, study the slope spectra of many, or analyse one road file.
+    /// Roads (physics.md §2, seed 000 §4): synthetic roads from road-design rules, studies of
+    /// their slope spectra, the spectrum of one road file, and road profiles from real tracks
+    /// (GNSS fixes or VECTO driving cycles).
     #[command(subcommand)]
     Road(RoadCommand),
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
@@ -307,6 +317,39 @@ enum RoadCommand {
         /// Confidence level of the PSD band.
         #[arg(long, default_value_t = 0.95)]
         confidence: f64,
+    },
+    /// Road profile on a uniform distance grid: distance, elevation, smoothed elevation, slope
+    /// (tan α), latitude and longitude. IN is a GNSS track (MCAP or Parquet, read by ingest:
+    /// latitude, longitude, altitude; vehicle_speed gates standstill) or a VECTO distance-based
+    /// driving cycle (.vdri CSV: elevation integrated from <grad> %), recognised by content.
+    /// Bad input (no GNSS columns, fewer than 3 fixes, a malformed .vdri) exits 2, no output.
+    Profile {
+        /// Input: MCAP, Parquet or .vdri.
+        input: PathBuf,
+        /// Output Parquet file (road_profile table).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Distance grid step, m.
+        #[arg(long, default_value_t = 1.0)]
+        step_m: f64,
+        /// Cut-off wavelength of the zero-phase elevation low-pass, m (GNSS tracks only;
+        /// default 300 m, chosen on the measured car drive: see src/road/profile.rs).
+        #[arg(long)]
+        smooth_m: Option<f64>,
+        /// Mapping file for a recording (chosen automatically when absent).
+        #[arg(long)]
+        mapping: Option<PathBuf>,
+        /// Elevation column, m: the canonical altitude, or e.g. a barometric pass-through column.
+        #[arg(long, default_value = "altitude")]
+        elevation_column: String,
+        /// IMU pitch column (deg or rad): its slope tan(pitch − mean) is written beside the GNSS
+        /// slope and their Pearson r printed.
+        #[arg(long)]
+        pitch_column: Option<String>,
+        /// Drop elevation fixes whose reported accuracy (column altitude_accuracy_m, when the
+        /// input has it) is worse than this, m.
+        #[arg(long, default_value_t = 5.0)]
+        max_elevation_accuracy_m: f64,
     },
 }
 
@@ -616,12 +659,44 @@ fn run(cli: Cli) -> Result<(), Failure> {
             input,
             output,
             column,
+            from_profile,
             domain,
             nperseg,
             confidence,
             ingest,
             resample,
         } => {
+            if from_profile {
+                if matches!(domain, DomainArg::Time) {
+                    return Err(usage(anyhow::anyhow!(
+                        "--from-profile: a road profile is on a distance grid; use --domain distance"
+                    )));
+                }
+                let column = column.unwrap_or_else(|| "slope".into());
+                let pc = read_profile_column(&input, &column).map_err(usage)?;
+                let sp = spectrum::of_grid(
+                    &pc.meta.source_file,
+                    &column,
+                    &pc.unit,
+                    &pc.values,
+                    pc.step_m,
+                    nperseg,
+                    confidence,
+                )
+                .map_err(drive)?;
+                let fp = format!(
+                    "spectrum:v1 from_profile step_m={} {column} {nperseg:?} {confidence}",
+                    pc.step_m
+                );
+                spectrum::write(&output, &pc.meta, &sp, &fp).map_err(drive)?;
+                say!(
+                    "{}: {} PSD on the profile's {} m grid, {} segments of {} samples (equivalent dof {:.1}); 90 % of power below {:.3e} {}, 99 % below {:.3e} {} -> {}",
+                    pc.meta.drive_id, column, pc.step_m, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
+                    sp.knee_90, sp.freq_unit, sp.knee_99, sp.freq_unit, output.display()
+                );
+                return Ok(());
+            }
+            let column = column.unwrap_or_else(|| "road_slope".into());
             let (cfg, opts) = ingest.resolve(&[Stage::Resample])?;
             let rcfg = resample.config();
             let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
@@ -887,6 +962,63 @@ fn run(cli: Cli) -> Result<(), Failure> {
 /// an unreadable road file or a failed write exits 1.
 fn run_road(cmd: RoadCommand) -> Result<(), Failure> {
     match cmd {
+        RoadCommand::Profile {
+            input,
+            output,
+            step_m,
+            smooth_m,
+            mapping,
+            elevation_column,
+            pitch_column,
+            max_elevation_accuracy_m,
+        } => {
+            let kind = detect_input(&input).map_err(usage)?;
+            let (profile, fp) = match kind {
+                ProfileInput::VectoCycle => {
+                    if smooth_m.is_some() {
+                        return Err(usage(anyhow::anyhow!(
+                            "{}: --smooth-m applies to GNSS tracks; a VECTO cycle's grade is used as given",
+                            input.display()
+                        )));
+                    }
+                    let c = read_vdri(&input).map_err(usage)?;
+                    let p = cycle_profile(&c, step_m).map_err(usage)?;
+                    (p, format!("road_profile:vdri:v1 step_m={step_m}"))
+                }
+                ProfileInput::Recording => {
+                    let gcfg = GnssProfileConfig {
+                        step_m,
+                        smooth_m: smooth_m.unwrap_or(GnssProfileConfig::default().smooth_m),
+                        elevation_column,
+                        pitch_column,
+                        max_elevation_accuracy_m,
+                        ..Default::default()
+                    };
+                    // GNSS fixes may be missing for long (no satellite lock): the profile
+                    // interpolates over them in distance, so ingest takes any missing-value run
+                    // and requires no column; the profile names what is missing.
+                    let icfg = IngestConfig {
+                        mapping,
+                        max_nan_run_s: f64::INFINITY,
+                        ..Default::default()
+                    };
+                    let opts = icfg.options(&[], None).map_err(usage)?;
+                    let ing = ingest_stage::run(&input, &opts).map_err(usage)?;
+                    let p = gnss_profile_of(&ing, &gcfg).map_err(usage)?;
+                    let fp = format!("{}\n{}", icfg.fingerprint(&opts), gcfg.fingerprint());
+                    (p, fp)
+                }
+            };
+            write_profile(&output, &profile, &fp).map_err(drive)?;
+            say_raw!("{}", profile.summary());
+            say!(
+                "  {} grid points of {} m -> {}",
+                profile.distance_m.len(),
+                profile.step_m,
+                output.display()
+            );
+            Ok(())
+        }
         RoadCommand::Synth {
             rules,
             length_km,

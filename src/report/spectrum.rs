@@ -151,6 +151,33 @@ pub fn of_distance_log(
     )
 }
 
+/// Spectrum of a signal already on a uniform distance grid of `step_m` (frequency in 1/m), e.g.
+/// a column of a road profile ([`crate::road::profile::read_profile_column`]). The signal must
+/// be gap-free.
+///
+/// # Errors
+/// [`SpectrumError::Missing`] for NaN values; [`SpectrumError::Welch`].
+pub fn of_grid(
+    file: &str,
+    column: &str,
+    unit: &str,
+    values: &[f64],
+    step_m: f64,
+    nperseg: Option<usize>,
+    confidence: f64,
+) -> Result<Spectrum, SpectrumError> {
+    compute(
+        file,
+        column,
+        unit,
+        values,
+        1.0 / step_m,
+        "1/m",
+        nperseg,
+        confidence,
+    )
+}
+
 /// Spectrum of a column of a drive log in time (Hz); the time base must be uniform within 1 %.
 /// Short gaps are filled as in [`of_distance_log`].
 ///

@@ -19,6 +19,7 @@ mod ingest_fixtures;
 mod real_data;
 mod resample_props;
 mod resample_truth;
+mod road_profile;
 mod road_study;
 mod road_synth;
 mod seed_slope_step;
