@@ -18,6 +18,17 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
+    /// Writes `bytes` to `target` atomically: the whole file appears, or nothing.
+    ///
+    /// # Errors
+    /// Any I/O error; nothing is then left at `target`.
+    pub fn write_all(target: &Path, bytes: &[u8]) -> io::Result<()> {
+        use std::io::Write as _;
+        let mut f = Self::create(target)?;
+        f.file().write_all(bytes)?;
+        f.commit()
+    }
+
     /// Creates `.<name>.tmp-<pid>-<n>` in the target's folder (creating the folder if needed).
     ///
     /// # Errors

@@ -5,7 +5,6 @@
 use crate::io::AtomicFile;
 use crate::sim::axle::AxleTrajectory;
 use plotters::prelude::*;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -117,9 +116,7 @@ fn plot(
         path: path.to_path_buf(),
         source,
     };
-    let mut f = AtomicFile::create(path).map_err(io)?;
-    f.file().write_all(svg.as_bytes()).map_err(io)?;
-    f.commit().map_err(io)
+    AtomicFile::write_all(path, svg.as_bytes()).map_err(io)
 }
 
 /// Plots the front, rear and tag normal forces as scale readings `N/g` in tonnes over time.

@@ -174,67 +174,70 @@ pub fn plot_svg(
     ratios: &[f64],
     table: &BodeTable,
 ) -> Result<(), String> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
-    }
-    let root = SVGBackend::new(path, (1100, 500)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let panels = root.split_evenly((1, 2));
-    let n = 300usize;
-    let freqs: Vec<f64> = (0..n)
-        .map(|k| 0.05 * (1000f64).powf(k as f64 / (n - 1) as f64))
-        .collect();
-    for (panel, closed) in panels.iter().zip([false, true]) {
-        let curves: Vec<Vec<(f64, f64)>> = table
-            .rows
-            .iter()
-            .map(|r| {
-                let lin = linearize(p, ratios, r.fdr_open.gear, r.fdr_open.v0_mps);
-                let ss = if closed { &lin.closed } else { &lin.open };
-                freqs
-                    .iter()
-                    .map(|&f| (f, 20.0 * ss.freq_response(1, f).norm().log10()))
-                    .collect()
-            })
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1100, 500)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let panels = root.split_evenly((1, 2));
+        let n = 300usize;
+        let freqs: Vec<f64> = (0..n)
+            .map(|k| 0.05 * (1000f64).powf(k as f64 / (n - 1) as f64))
             .collect();
-        let (lo, hi) = curves
-            .iter()
-            .flatten()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, y)| {
-                (lo.min(y), hi.max(y))
-            });
-        let title = if closed {
-            "F_dr -> v, closed loop (PI)"
-        } else {
-            "F_dr -> v, open loop"
-        };
-        let mut chart = ChartBuilder::on(panel)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(55)
-            .build_cartesian_2d((0.05f64..50.0f64).log_scale(), (lo - 5.0)..(hi + 5.0))
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency [Hz]")
-            .y_desc("|v/F_dr| [dB re 1 m/s/N]")
-            .draw()
-            .map_err(|e| e.to_string())?;
-        for (k, c) in curves.into_iter().enumerate() {
-            let colour = Palette99::pick(k).to_rgba();
+        for (panel, closed) in panels.iter().zip([false, true]) {
+            let curves: Vec<Vec<(f64, f64)>> = table
+                .rows
+                .iter()
+                .map(|r| {
+                    let lin = linearize(p, ratios, r.fdr_open.gear, r.fdr_open.v0_mps);
+                    let ss = if closed { &lin.closed } else { &lin.open };
+                    freqs
+                        .iter()
+                        .map(|&f| (f, 20.0 * ss.freq_response(1, f).norm().log10()))
+                        .collect()
+                })
+                .collect();
+            let (lo, hi) = curves
+                .iter()
+                .flatten()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, y)| {
+                    (lo.min(y), hi.max(y))
+                });
+            let title = if closed {
+                "F_dr -> v, closed loop (PI)"
+            } else {
+                "F_dr -> v, open loop"
+            };
+            let mut chart = ChartBuilder::on(panel)
+                .caption(title, ("sans-serif", 18))
+                .margin(10)
+                .x_label_area_size(35)
+                .y_label_area_size(55)
+                .build_cartesian_2d((0.05f64..50.0f64).log_scale(), (lo - 5.0)..(hi + 5.0))
+                .map_err(|e| e.to_string())?;
             chart
-                .draw_series(LineSeries::new(c, colour.stroke_width(2)))
-                .map_err(|e| e.to_string())?
-                .label(format!("gear {}", k + 1))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], colour));
+                .configure_mesh()
+                .x_desc("frequency [Hz]")
+                .y_desc("|v/F_dr| [dB re 1 m/s/N]")
+                .draw()
+                .map_err(|e| e.to_string())?;
+            for (k, c) in curves.into_iter().enumerate() {
+                let colour = Palette99::pick(k).to_rgba();
+                chart
+                    .draw_series(LineSeries::new(c, colour.stroke_width(2)))
+                    .map_err(|e| e.to_string())?
+                    .label(format!("gear {}", k + 1))
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], colour));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| e.to_string())?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
     }
-    root.present().map_err(|e| e.to_string())
+    // written whole or not at all, like every fleetdyn output
+    crate::io::AtomicFile::write_all(path, svg.as_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -8,7 +8,6 @@ use super::road_plot::{render_psd_svg, PsdPlot};
 use crate::io::{config_hash, write_table, AtomicFile, OutColumn, OutData, OutputError, TableMeta};
 use crate::road::road_table::{DistanceColumn, GENERATOR};
 use crate::road::study::{RoadSpectrum, SpectrumSettings, Study};
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -45,9 +44,7 @@ fn write_svg(path: &Path, svg: &str) -> Result<(), RoadReportError> {
         path: path.to_path_buf(),
         source,
     };
-    let mut f = AtomicFile::create(path).map_err(io)?;
-    f.file().write_all(svg.as_bytes()).map_err(io)?;
-    f.commit().map_err(io)
+    AtomicFile::write_all(path, svg.as_bytes()).map_err(io)
 }
 
 /// One output file: its path and the writer that puts it there.
