@@ -469,3 +469,32 @@ fn bad_specs_and_truth_are_clear_errors() {
     assert!(write_can_drive(&mcap, &pq, &bus, &nan, &opts(1)).is_err());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+#[test]
+fn delay_shifts_the_truth_and_the_wire_range_saturates() {
+    let truth = ramp_truth(10.0);
+    let mut bus = CanBus::j1939_truck(REF_NM).without_noise();
+    bus.messages[0].channels[0].delay_s = 0.5; // wheel speed
+    bus.messages[1].channels[1].wire_max = 10.0; // torque saturates at 10 % = 260 N·m < truth
+    let frames = sample(&bus, &truth, T0_NS, 4).unwrap();
+    let mut n = 0;
+    for f in &frames {
+        let t = (f.log_time_ns - T0_NS) as f64 * 1e-9;
+        match f.topic.as_str() {
+            "/can/ccvs1" => {
+                // before 0.5 s the first truth value is held; after, the truth 0.5 s earlier
+                let want = (5.0 + 0.1037 * (t - 0.5).max(0.0)) * 3.6;
+                let got = value(f, "WheelBasedVehicleSpeed");
+                // tolerance: half a step (quantisation) + 1e-9
+                assert!(
+                    (got - want).abs() <= 0.5 / 256.0 + 1e-9,
+                    "{t} s: {got} vs {want}"
+                );
+                n += 1;
+            }
+            "/can/eec1" => assert_eq!(value(f, "ActualEnginePercentTorque"), 10.0),
+            _ => {}
+        }
+    }
+    assert_eq!(n, 101);
+}
