@@ -3,6 +3,8 @@
 //! Inputs (MCAP, Parquet) become one canonical drive-log table ([`ingest`], [`schema`]), which is
 //! resampled to travelled distance ([`signal::distance`]), filtered without phase lag
 //! ([`signal`], [`road`]) and written as Parquet with units and provenance ([`io`]).
+//! Synthetic logs as real loggers deliver them (CAN rates, resolutions, noise, dropouts) come
+//! from [`synth`].
 //! The binary `fleetdyn` is a thin shell over this library.
 #![deny(missing_docs)]
 
@@ -15,6 +17,7 @@ pub mod road;
 pub mod schema;
 pub mod signal;
 pub mod sim;
+pub mod synth;
 pub mod table;
 pub mod time_fmt;
 pub mod units;

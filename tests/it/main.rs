@@ -24,3 +24,4 @@ mod road_study;
 mod road_synth;
 mod seed_slope_step;
 mod slope_pipeline;
+mod synth_can;

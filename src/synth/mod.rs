@@ -1,0 +1,14 @@
+//! Synthetic sensor logs: truth signals delivered the way real loggers record them.
+//!
+//! [`can`] turns SI truth signals into CAN-decoded JSON messages — each message group at its own
+//! rate and phase, each field at its wire resolution and range, with Gaussian noise, optional
+//! delay and dropouts — and writes them as multi-rate MCAP plus the canonical Parquet drive log
+//! that ingest makes of that MCAP. Output bytes are a function of the bus, the truth and the
+//! seed (the project's own PRNG, [`crate::road::rng`]).
+
+pub mod can;
+
+pub use can::{
+    sample, write_can_drive, write_mcap, CanBus, CanChannel, CanFrame, CanMessage, Dropouts,
+    SynthError, SynthOptions, TorqueReference, Truth,
+};
