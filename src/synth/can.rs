@@ -999,7 +999,8 @@ pub fn write_mcap(
 /// the 2 s NaN-run limit fails as it would for a real log) and writes the resulting canonical
 /// drive log as Parquet at `parquet_path` (table `drive_log`). Returns that drive log.
 ///
-/// Both files appear atomically; if the Parquet step fails, the MCAP has already been written.
+/// Both files appear atomically, and together: if ingest or the Parquet step fails, the MCAP is
+/// removed again.
 ///
 /// # Errors
 /// As [`sample`] and [`write_mcap`]; [`SynthError::Ingest`] if the MCAP does not ingest;
@@ -1014,21 +1015,27 @@ pub fn write_can_drive(
     let frames = sample(bus, truth, opts.start_ns, opts.seed)?;
     let mapping = bus.mapping()?;
     write_mcap(mcap_path, bus, &frames, opts)?;
-    let ingest = IngestOptions {
-        mapping: Some(mapping),
-        ..IngestOptions::default()
+    // the pair appears together or not at all: a failed ingest or Parquet write removes the MCAP
+    let rest = || -> Result<DriveLog, SynthError> {
+        let ingest = IngestOptions {
+            mapping: Some(mapping),
+            ..IngestOptions::default()
+        };
+        let log = ingest_file(mcap_path, &ingest)?.log;
+        let meta = TableMeta {
+            table: "drive_log".into(),
+            drive_id: log.meta.drive_id.clone(),
+            vehicle_id: log.meta.vehicle_id.clone(),
+            source_file: log.meta.source_file.clone(),
+            config_hash: config_hash(&[
+                format!("synth-can:v1 seed={} bus={bus:?}", opts.seed).as_bytes()
+            ]),
+            extra: vec![("synth_seed".into(), opts.seed.to_string())],
+        };
+        write_table(parquet_path, &meta, &drive_log_columns(&log))?;
+        Ok(log)
     };
-    let log = ingest_file(mcap_path, &ingest)?.log;
-    let meta = TableMeta {
-        table: "drive_log".into(),
-        drive_id: log.meta.drive_id.clone(),
-        vehicle_id: log.meta.vehicle_id.clone(),
-        source_file: log.meta.source_file.clone(),
-        config_hash: config_hash(&[
-            format!("synth-can:v1 seed={} bus={bus:?}", opts.seed).as_bytes()
-        ]),
-        extra: vec![("synth_seed".into(), opts.seed.to_string())],
-    };
-    write_table(parquet_path, &meta, &drive_log_columns(&log))?;
-    Ok(log)
+    rest().inspect_err(|_| {
+        let _ = std::fs::remove_file(mcap_path);
+    })
 }

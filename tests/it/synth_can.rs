@@ -468,6 +468,22 @@ fn bad_specs_and_truth_are_clear_errors() {
     let (mcap, pq) = (dir.path().join("x.mcap"), dir.path().join("x.parquet"));
     assert!(write_can_drive(&mcap, &pq, &bus, &nan, &opts(1)).is_err());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+
+    // the MCAP is written but does not ingest (wheel speed silent for longer than ingest's 2 s
+    // NaN-run limit): the pair is not left half-written
+    let long = ramp_truth(60.0);
+    let mut silent = CanBus::j1939_truck(REF_NM);
+    silent.messages[0].dropouts = Dropouts {
+        start_probability: 1.0,
+        mean_length_s: 30.0,
+    };
+    let e = write_can_drive(&mcap, &pq, &silent, &long, &opts(1)).unwrap_err();
+    assert!(matches!(e, SynthError::Ingest(_)), "{e}");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no MCAP left"
+    );
 }
 
 #[test]
