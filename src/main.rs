@@ -162,6 +162,10 @@ enum Command {
     /// (GNSS fixes or VECTO driving cycles).
     #[command(subcommand)]
     Road(RoadCommand),
+    /// Synthetic drives (issue 5 point 4): a driver and an AMT co-simulated with the driveline
+    /// and axle models over a synthetic road, written as a CAN log (MCAP + canonical Parquet).
+    #[command(subcommand)]
+    Synth(SynthCommand),
     /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
     Run {
         /// Pipeline file.
@@ -244,6 +248,36 @@ enum SimulateCommand {
         /// Acceleration separating the acceleration / steady / braking segments, m/s².
         #[arg(long, default_value_t = 0.3)]
         accel_threshold_mps2: f64,
+    },
+}
+
+#[derive(Subcommand)]
+enum SynthCommand {
+    /// Drive a vehicle over a synthetic road: launches, stops (every --stop-every-km and at the
+    /// road end), AMT shifts; writes drive.mcap, drive.parquet and vehicle.toml into the output
+    /// folder.
+    Drive {
+        /// Vehicle file with [driveline] and [axles] sections.
+        #[arg(long)]
+        vehicle: PathBuf,
+        /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us) or a TOML file.
+        #[arg(long)]
+        rules: String,
+        /// Road length, km.
+        #[arg(long, allow_negative_numbers = true)]
+        length_km: f64,
+        /// Seed of the road, the driver's variations and the CAN noise.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Speed limit, km/h (default: the rule set's design speed).
+        #[arg(long)]
+        speed_limit_km_per_h: Option<f64>,
+        /// Distance between planned stops, km (0: only the stop at the road end).
+        #[arg(long, default_value_t = 1.0)]
+        stop_every_km: f64,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
     },
 }
 
@@ -908,6 +942,36 @@ fn run(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
         Command::Road(cmd) => run_road(cmd),
+        Command::Synth(SynthCommand::Drive {
+            vehicle,
+            rules,
+            length_km,
+            seed,
+            speed_limit_km_per_h,
+            stop_every_km,
+            output,
+        }) => {
+            use fleetdyn::synth::drive::{synth_drive, DriveConfig, DriveError};
+            let mut cfg = DriveConfig::default();
+            cfg.driver.speed_limit_mps = speed_limit_km_per_h.map(|k| k / 3.6);
+            cfg.driver.stop_every_m = (stop_every_km > 0.0).then_some(stop_every_km * 1000.0);
+            let r =
+                synth_drive(&vehicle, &rules, length_km, seed, &output, &cfg).map_err(
+                    |e| match e {
+                        DriveError::Io { .. } | DriveError::Can(_) => drive(e),
+                        _ => usage(e),
+                    },
+                )?;
+            let d = &r.drive;
+            let vmax = d.speed_mps.iter().fold(0.0f64, |m, &v| m.max(v));
+            say!(
+                "{} km drive, seed {}: {:.1} s, {} launches, {} shifts, max {:.1} km/h, {:.0} m travelled -> {}, {}, {}",
+                length_km, seed, d.t_s.last().copied().unwrap_or(0.0), d.launches.len(),
+                d.shifts.len(), vmax * 3.6, d.distance_m.last().copied().unwrap_or(0.0),
+                r.mcap.display(), r.parquet.display(), r.vehicle.display()
+            );
+            Ok(())
+        }
         Command::Run {
             pipeline,
             input,

@@ -5,8 +5,14 @@
 //! delay and dropouts — and writes them as multi-rate MCAP plus the canonical Parquet drive log
 //! that ingest makes of that MCAP. Output bytes are a function of the bus, the truth and the
 //! seed (the project's own PRNG, [`crate::road::rng`]).
+//!
+//! [`drive`] makes the truth itself: a [`driver`] and an [`amt`] co-simulated with the fast
+//! driveline model over a synthetic road, the axle model run on the result.
 
+pub mod amt;
 pub mod can;
+pub mod drive;
+pub mod driver;
 
 pub use can::{
     sample, write_can_drive, write_mcap, CanBus, CanChannel, CanFrame, CanMessage, Dropouts,

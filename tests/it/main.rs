@@ -25,3 +25,4 @@ mod road_synth;
 mod seed_slope_step;
 mod slope_pipeline;
 mod synth_can;
+mod synth_drive;
