@@ -359,7 +359,17 @@ pub fn simulate_drive(
             out.gear.push(o.gear as f64);
             out.clutch_x.push(o.clutch_x);
             out.slope.push(slope);
-            out.brake_n.push(cmd.brake_n);
+            // the drive log's brake_force is the force at the ground: the brakes' capacity
+            // while rolling, but at standstill only what holds the truck (drive force and grade),
+            // never more than the capacity
+            let ground_brake = if yj[7] == 0.0 {
+                let hold = tr.torques[j][3] / p.wheel_radius_m
+                    - p.mass_kg * p.gravity_m_per_s2 * slope.atan().sin();
+                hold.clamp(-cmd.brake_n, cmd.brake_n)
+            } else {
+                cmd.brake_n
+            };
+            out.brake_n.push(ground_brake);
             out.target_mps.push(cmd.target_mps);
         }
         let last = sub.min(tr.y.len() - 1);
