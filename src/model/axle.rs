@@ -83,6 +83,15 @@ impl Axle {
     /// All axles, front to back.
     pub const ALL: [Axle; 3] = [Axle::Front, Axle::Rear, Axle::Tag];
 
+    /// Position in [`Axle::ALL`] and in per-axle arrays (front 0, rear 1, tag 2).
+    pub fn index(self) -> usize {
+        match self {
+            Axle::Front => 0,
+            Axle::Rear => 1,
+            Axle::Tag => 2,
+        }
+    }
+
     /// Lower-case name used in column and key names.
     pub fn name(self) -> &'static str {
         match self {

@@ -212,14 +212,6 @@ pub struct Measurements {
     pub damper_datasheets: Vec<DamperDatasheet>,
 }
 
-fn index(a: Axle) -> usize {
-    match a {
-        Axle::Front => 0,
-        Axle::Rear => 1,
-        Axle::Tag => 2,
-    }
-}
-
 impl Measurements {
     /// Reads and checks a measurement file.
     ///
@@ -545,7 +537,7 @@ pub fn estimate(
     }
     let mut stiffness = Vec::with_capacity(m.bellow_tests.len());
     for (k, t) in m.bellow_tests.iter().enumerate() {
-        let i = index(t.axle);
+        let i = t.axle.index();
         let (force, from_pressure) = match &t.load {
             BellowLoad::ForceN(f) => (f.clone(), false),
             BellowLoad::PressurePa(p) => {
@@ -971,20 +963,7 @@ impl fmt::Display for Comparison {
                 .unwrap_or(0)
         };
         let w = [width(0), width(1), width(2), width(3)];
-        writeln!(
-            f,
-            "{:<w0$}  {:>w1$}  {:<w2$}  {:>w3$}  {}",
-            head[0],
-            head[1],
-            head[2],
-            head[3],
-            head[4],
-            w0 = w[0],
-            w1 = w[1],
-            w2 = w[2],
-            w3 = w[3]
-        )?;
-        for c in &cells {
+        let mut row = |c: [&str; 5]| {
             writeln!(
                 f,
                 "{:<w0$}  {:>w1$}  {:<w2$}  {:>w3$}  {}",
@@ -997,7 +976,11 @@ impl fmt::Display for Comparison {
                 w1 = w[1],
                 w2 = w[2],
                 w3 = w[3]
-            )?;
+            )
+        };
+        row(head)?;
+        for c in &cells {
+            row([&c[0], &c[1], &c[2], &c[3], &c[4]])?;
         }
         Ok(())
     }

@@ -226,35 +226,24 @@ pub fn write_study(
             (&study.psd_p50, "median PSD".into(), false),
             (&study.psd_mean, "mean PSD".into(), true),
         ],
-        knees: vec![
+        knees: [
+            ("50", &study.knee_50),
+            ("90", &study.knee_90),
+            ("99", &study.knee_99),
+        ]
+        .into_iter()
+        .map(|(pct, k)| {
             (
-                study.knee_50.p50,
+                k.p50,
                 format!(
-                    "50 % knee: median {} (5-95 %: {} - {}) 1/m",
-                    fmt_knee(study.knee_50.p50),
-                    fmt_knee(study.knee_50.p05),
-                    fmt_knee(study.knee_50.p95)
+                    "{pct} % knee: median {} (5-95 %: {} - {}) 1/m",
+                    fmt_knee(k.p50),
+                    fmt_knee(k.p05),
+                    fmt_knee(k.p95)
                 ),
-            ),
-            (
-                study.knee_90.p50,
-                format!(
-                    "90 % knee: median {} (5-95 %: {} - {}) 1/m",
-                    fmt_knee(study.knee_90.p50),
-                    fmt_knee(study.knee_90.p05),
-                    fmt_knee(study.knee_90.p95)
-                ),
-            ),
-            (
-                study.knee_99.p50,
-                format!(
-                    "99 % knee: median {} (5-95 %: {} - {}) 1/m",
-                    fmt_knee(study.knee_99.p50),
-                    fmt_knee(study.knee_99.p05),
-                    fmt_knee(study.knee_99.p95)
-                ),
-            ),
-        ],
+            )
+        })
+        .collect(),
         filter: &study.filter,
     };
     let svg = render_psd_svg(&plot).map_err(|message| RoadReportError::Plot {
