@@ -275,6 +275,15 @@ enum SynthCommand {
         /// Distance between planned stops, km (0: only the stop at the road end).
         #[arg(long, default_value_t = 1.0)]
         stop_every_km: f64,
+        /// Hide an effect of the diagnosis catalogue in the truth: `ID` (magnitude drawn from
+        /// the seed), `ID=VALUE` (the parameter's truth value in its SI unit), `random` (one of
+        /// the catalogue or none, by the seed) or `none`. The vehicle file written stays the
+        /// nominal one; the answer goes to --answer only.
+        #[arg(long)]
+        effect: Option<String>,
+        /// Answer file of --effect (JSON; default OUTPUT/answer.json).
+        #[arg(long)]
+        answer: Option<PathBuf>,
         /// Output folder.
         #[arg(short, long)]
         output: PathBuf,
@@ -949,19 +958,40 @@ fn run(cli: Cli) -> Result<(), Failure> {
             seed,
             speed_limit_km_per_h,
             stop_every_km,
+            effect,
+            answer,
             output,
         }) => {
-            use fleetdyn::synth::drive::{synth_drive, DriveConfig, DriveError};
+            use fleetdyn::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
+            use fleetdyn::synth::effects::{EffectChoice, EffectError};
             let mut cfg = DriveConfig::default();
             cfg.driver.speed_limit_mps = speed_limit_km_per_h.map(|k| k / 3.6);
             cfg.driver.stop_every_m = (stop_every_km > 0.0).then_some(stop_every_km * 1000.0);
-            let r =
-                synth_drive(&vehicle, &rules, length_km, seed, &output, &cfg).map_err(
-                    |e| match e {
-                        DriveError::Io { .. } | DriveError::Can(_) => drive(e),
-                        _ => usage(e),
-                    },
-                )?;
+            let hidden = match &effect {
+                None => None,
+                Some(e) => Some(HiddenEffect {
+                    choice: EffectChoice::parse(e).map_err(usage)?,
+                    answer_path: answer.unwrap_or_else(|| output.join("answer.json")),
+                }),
+            };
+            let r = synth_drive(
+                &vehicle,
+                &rules,
+                length_km,
+                seed,
+                &output,
+                &cfg,
+                hidden.as_ref(),
+            )
+            .map_err(|e| match e {
+                DriveError::Io { .. }
+                | DriveError::Can(_)
+                | DriveError::Effect(EffectError::Io { .. }) => drive(e),
+                _ => usage(e),
+            })?;
+            if let Some(h) = &hidden {
+                say!("answer (hidden effect) -> {}", h.answer_path.display());
+            }
             let d = &r.drive;
             let vmax = d.speed_mps.iter().fold(0.0f64, |m, &v| m.max(v));
             say!(

@@ -16,6 +16,10 @@
 //! Hz, so a fixed step of at most 2 ms and at most 0.5/ρ (ρ the spectral radius of the
 //! linearised system with the dampers' steepest slopes) is accurate and stable; the reference
 //! test compares it with an independent derivation integrated by scipy (tests/it/axle_reference.rs).
+//!
+//! Extensions ([`AxleExtensions`], [`HalfTruck::with_extensions`]) add physics the nominal model
+//! leaves out — the axle-load effects of the diagnosis catalogue (diagnosis.md). All zero is the
+//! nominal model, bit for bit.
 
 use super::inputs::Piecewise;
 use crate::model::axle::{Axle, AxleParams, DamperTable, StaticState};
@@ -57,6 +61,36 @@ pub struct Longitudinal {
     pub accel_mps2: f64,
     /// Grade angle α, rad.
     pub alpha_rad: f64,
+}
+
+/// Physics the nominal half-truck leaves out, each named by its diagnosis-catalogue id
+/// (diagnosis.md). Every field's zero is the nominal model; all are SI.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AxleExtensions {
+    /// `bogie_torque_reaction`: fraction κ (1) of the driven axle's wheel torque
+    /// `T = F_r r_w` (drive − auxiliary brake − the driven axle's service-brake share, + driving)
+    /// whose housing reaction goes into the chassis (torque rods) instead of the trailing arm.
+    /// It acts between arm and chassis as the moment pair `κ T (e_φr + e_θ)` on the generalised
+    /// forces (docs/axle-model.md sign convention: `φ` rear end up, `θ` nose up), so it loads
+    /// the driven-axle bellow in proportion to the torque and mirrors in braking.
+    pub torque_reaction: f64,
+    /// `air_spring_nonlinearity`: progression γ ≥ 0 of every bellow, 1/m: the bellow force is
+    /// `B = B_0 + k_b (e^{2γc} − 1)/(2γ) = B_0 + k_b (c + γ c² + …)` with `c` the bellow
+    /// compression, m. Its second-order term is the polytropic gas law's (`p V^n = const` gives
+    /// `γ = (n + 1) k_b / (2 n B_0)`); unlike a bare quadratic it stays monotone (stiffening in
+    /// compression, softening in extension) at any travel.
+    pub bellow_progression_per_m: f64,
+    /// `grade_load_transfer`: height offset Δh, m, of the point where the chassis' gravity
+    /// component along the road, `−m_c g sin α`, acts (above its CG for Δh > 0): an extra pitch
+    /// moment `m_c g sin α Δh` that moves load rearwards uphill.
+    pub grade_height_offset_m: f64,
+}
+
+impl AxleExtensions {
+    /// True when every extension is absent (the nominal model).
+    pub fn is_nominal(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// Piece indices of the five inputs, moved forward as time increases (so a long recorded drive
@@ -137,6 +171,9 @@ pub struct HalfTruck<'a> {
     damper_d: [V5; 3],
     dampers: [DamperTable; 3],
     h_max: f64,
+    ext: AxleExtensions,
+    /// Index of the rear arm's coordinate.
+    rear_arm: usize,
 }
 
 fn e(i: usize) -> V5 {
@@ -263,7 +300,20 @@ impl<'a> HalfTruck<'a> {
             damper_d,
             dampers,
             h_max,
+            ext: AxleExtensions::default(),
+            rear_arm: 3,
         }
+    }
+
+    /// The same model with the given extensions (see [`AxleExtensions`]).
+    pub fn with_extensions(mut self, ext: AxleExtensions) -> Self {
+        self.ext = ext;
+        self
+    }
+
+    /// The extensions in use.
+    pub fn extensions(&self) -> &AxleExtensions {
+        &self.ext
     }
 
     /// The static state the model is built on.
@@ -340,13 +390,47 @@ impl<'a> HalfTruck<'a> {
         for i in 0..3 {
             q += l.contact_n[i] * self.contact[i];
         }
+        if self.ext.torque_reaction != 0.0 {
+            let t = l.contact_n[1] * self.p.wheel_radius_m;
+            q[self.rear_arm] += self.ext.torque_reaction * t;
+            q[TH] += self.ext.torque_reaction * t;
+        }
+        if self.ext.grade_height_offset_m != 0.0 {
+            q[TH] +=
+                self.p.chassis_mass_kg * g * l.alpha_rad.sin() * self.ext.grade_height_offset_m;
+        }
         q
+    }
+
+    /// Generalised force of the bellows' progression at state q (0 without it).
+    #[inline]
+    fn progression(&self, q: &V5) -> V5 {
+        let mut f = V5::zeros();
+        if self.ext.bellow_progression_per_m != 0.0 {
+            for i in 0..3 {
+                let c = self.bellow_d[i].dot(q);
+                let k = self.p.bellow_stiffness(Axle::ALL[i]);
+                f -= (self.bellow_spring(k, c) - k * c) * self.bellow_d[i];
+            }
+        }
+        f
+    }
+
+    /// Spring force beyond the preload of a bellow of stiffness `k` at compression `c`.
+    #[inline]
+    fn bellow_spring(&self, k: f64, c: f64) -> f64 {
+        let gamma = self.ext.bellow_progression_per_m;
+        if gamma == 0.0 {
+            k * c
+        } else {
+            k * (2.0 * gamma * c).exp_m1() / (2.0 * gamma)
+        }
     }
 
     /// Accelerations q̈ for state (q, q̇) under external forces `qe`.
     #[inline]
     fn accel(&self, q: &V5, qd: &V5, qe: &V5) -> V5 {
-        let mut f = qe - self.k * q;
+        let mut f = qe - self.k * q + self.progression(q);
         for i in 0..3 {
             let rate = self.damper_d[i].dot(qd);
             f -= self.dampers[i].force(rate) * self.damper_d[i];
@@ -357,10 +441,24 @@ impl<'a> HalfTruck<'a> {
     /// The steady state (q̇ = 0, q̈ = 0) under constant longitudinal forces: `K q = Q_ext`.
     pub fn steady_state(&self, l: &Longitudinal) -> V5 {
         let qe = self.external(l);
-        self.k
-            .lu()
-            .solve(&qe)
-            .expect("the stiffness matrix of checked parameters is regular")
+        let lu = self.k.lu();
+        let solve = |rhs: &V5| {
+            lu.solve(rhs)
+                .expect("the stiffness matrix of checked parameters is regular")
+        };
+        let mut q = solve(&qe);
+        if self.ext.bellow_progression_per_m != 0.0 {
+            // K q = Q_ext + P(q): fixed-point iteration (the progression is a small correction)
+            for _ in 0..50 {
+                let next = solve(&(qe + self.progression(&q)));
+                let done = (next - q).norm() <= 1e-12 * (1.0 + q.norm());
+                q = next;
+                if done {
+                    break;
+                }
+            }
+        }
+        q
     }
 
     /// Normal forces front, rear, tag at state q, N.
@@ -373,7 +471,8 @@ impl<'a> HalfTruck<'a> {
     /// Bellow forces front, rear, tag at state q, N (spring part; `p = F/A_eff`).
     pub fn bellow_forces(&self, q: &V5) -> [f64; 3] {
         [0, 1, 2].map(|i| {
-            self.st.bellow_n[i] + self.p.bellow_stiffness(Axle::ALL[i]) * self.bellow_d[i].dot(q)
+            let c = self.bellow_d[i].dot(q);
+            self.st.bellow_n[i] + self.bellow_spring(self.p.bellow_stiffness(Axle::ALL[i]), c)
         })
     }
 

@@ -20,6 +20,18 @@
 //! static rolling resistance can hold it is stopped (ω_w set to 0, the ground reaction then
 //! cancels the drive-shaft torque each step) until the drive force exceeds that capacity. Equations and state are those of [`super::hybrid`]; the accuracy against the accurate
 //! integrator is pinned in the tests.
+//!
+//! # Drive-shaft lash (optional, [`FastDriveline::with_lash`])
+//! With a total play `b > 0` in the drive shaft (the catalogue effect `driveline_backlash`,
+//! diagnosis.md), the shaft torque is a dead-zone spring,
+//! `M_d = k_d (φ_d − s b/2) + c_d (ω_d − ω_w)` in contact (`s = sign φ_d`, `|φ_d| ≥ b/2`) and
+//! `M_d = 0` in the gap (`|φ_d| < b/2`), `φ_d` the total shaft twist including the play. The
+//! contact side is decided from `φ_d` at each step's start (a position-based dead zone); in
+//! contact the step integrates the shifted twist `φ_d − s b/2` with the nominal matrices, in the
+//! gap it uses matrices without the shaft's spring and damper (cached per gear and mode like
+//! the others). Entering contact is detected at step ends, so the shaft overshoots the contact
+//! by at most `|ω_d − ω_w| dt`; callers that need impacts resolved use a smaller step.
+//! `b = 0` (the default) is the nominal model, bit for bit.
 
 use super::dopri::Stats;
 use super::hybrid::{ClutchMode, EngineInput, Event, Scenario, SimError, Trajectory, N_STATES};
@@ -40,6 +52,8 @@ struct Key {
     pi: bool,
     /// The engine follows a speed reference, so x_I integrates (also while clamped).
     integrate: bool,
+    /// Drive shaft in its lash gap: no shaft spring or damper.
+    gap: bool,
 }
 
 /// The exponential integrator bound to one vehicle and step.
@@ -47,6 +61,8 @@ pub struct FastDriveline<'a> {
     p: &'a DrivelineParams,
     ratios: &'a [f64],
     dt: f64,
+    /// Total drive-shaft play b, rad (0: none).
+    lash: f64,
     cache: HashMap<Key, (Phi, Gamma)>,
 }
 
@@ -57,7 +73,32 @@ impl<'a> FastDriveline<'a> {
             p,
             ratios,
             dt: dt_s,
+            lash: 0.0,
             cache: HashMap::new(),
+        }
+    }
+
+    /// The same integrator with a total drive-shaft play of `lash_rad` (rad, ≥ 0; see the
+    /// module documentation). Negative or non-finite values are taken as 0.
+    pub fn with_lash(mut self, lash_rad: f64) -> Self {
+        self.lash = if lash_rad.is_finite() && lash_rad > 0.0 {
+            lash_rad
+        } else {
+            0.0
+        };
+        self.cache.clear();
+        self
+    }
+
+    /// Contact side of the drive shaft at twist `phi_d`: `+1`/`−1` in contact, `0` in the gap
+    /// (always `+1` without lash, where the offset is 0).
+    fn lash_side(&self, phi_d: f64) -> f64 {
+        if self.lash == 0.0 || phi_d >= 0.5 * self.lash {
+            1.0
+        } else if phi_d <= -0.5 * self.lash {
+            -1.0
+        } else {
+            0.0
         }
     }
 
@@ -73,7 +114,11 @@ impl<'a> FastDriveline<'a> {
         let j4 = p.j4();
         let (kc, cc) = (p.k_c_nm_per_rad, p.c_c_nm_s_per_rad);
         let (kp, cp) = (p.k_p_nm_per_rad, p.c_p_nm_s_per_rad);
-        let (kd, cd) = (p.k_d_nm_per_rad, p.c_d_nm_s_per_rad);
+        let (kd, cd) = if k.gap {
+            (0.0, 0.0)
+        } else {
+            (p.k_d_nm_per_rad, p.c_d_nm_s_per_rad)
+        };
         let (kpi, kii) = (p.pi_kp_nm_s_per_rad, p.pi_ki_nm_per_rad);
         let mut a = DMatrix::zeros(N_STATES, N_STATES);
         let mut b = DMatrix::zeros(N_STATES, N_IN);
@@ -185,11 +230,17 @@ impl<'a> FastDriveline<'a> {
         } else {
             y[1]
         };
+        let side = self.lash_side(y[6]);
+        let m_d = if side == 0.0 {
+            0.0
+        } else {
+            p.c_d_nm_s_per_rad * (y[5] - y[7]) + p.k_d_nm_per_rad * (y[6] - side * 0.5 * self.lash)
+        };
         [
             me,
             p.c_c_nm_s_per_rad * (w_c - it * y[3]) + p.k_c_nm_per_rad * y[2],
             p.c_p_nm_s_per_rad * (y[3] - p.final_drive_ratio * y[5]) + p.k_p_nm_per_rad * y[4],
-            p.c_d_nm_s_per_rad * (y[5] - y[7]) + p.k_d_nm_per_rad * y[6],
+            m_d,
         ]
     }
 
@@ -311,16 +362,22 @@ impl<'a> FastDriveline<'a> {
             } else {
                 self.road_force(sc, tm, v_start)
             };
+            let side = self.lash_side(y[6]);
             let key = Key {
                 gear,
                 locked: mode == ClutchMode::Locked,
                 pi: pi_active,
                 integrate: matches!(sc.engine, EngineInput::SpeedReference(_)),
+                gap: side == 0.0,
             };
+            // in contact the nominal matrices act on the twist beyond the play
+            let offset = side * 0.5 * self.lash;
             let (phi, gamma) = self.discrete(key);
             let u = SVector::<f64, N_IN>::new(me_mid, m_trans_in, force, w_ref);
-            let z = SVector::<f64, N_STATES>::from_column_slice(&y);
-            let z1 = phi * z + gamma * u;
+            let mut z = SVector::<f64, N_STATES>::from_column_slice(&y);
+            z[6] -= offset;
+            let mut z1 = phi * z + gamma * u;
+            z1[6] += offset;
             y.copy_from_slice(z1.as_slice());
             traj.stats.accepted += 1;
             // mode switches at the step end

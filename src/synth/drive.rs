@@ -24,11 +24,12 @@
 use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
 use super::can::{write_can_drive, CanBus, SynthError as CanError, SynthOptions, Truth};
 use super::driver::{Driver, DriverConfig};
+use super::effects::{resolve, Answer, EffectChoice, EffectError, Injection, TruthModel};
 use crate::model::driveline::DrivelineParams;
 use crate::model::vehicle::{VehicleError, VehicleFile};
 use crate::road::rules::{RoadRules, RulesError};
 use crate::road::synth::{generate, SynthError as RoadError};
-use crate::sim::axle::{AxleTrajectory, HalfTruck, Start};
+use crate::sim::axle::{AxleExtensions, AxleTrajectory, HalfTruck, Start};
 use crate::sim::axle_coupling::axle_inputs_from_samples;
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{ClutchMode, EngineInput, Scenario, SimError, N_STATES};
@@ -57,6 +58,9 @@ pub enum DriveError {
     /// The CAN log could not be written.
     #[error(transparent)]
     Can(#[from] CanError),
+    /// The hidden effect could not be injected or its answer written.
+    #[error(transparent)]
+    Effect(#[from] EffectError),
     /// A configuration value out of its domain.
     #[error("{parameter} = {value} must be {requirement}")]
     BadConfig {
@@ -216,6 +220,30 @@ pub fn simulate_drive(
     cfg: &DriveConfig,
     seed: u64,
 ) -> Result<DriveTrajectory, DriveError> {
+    simulate_drive_with(p, p, 0.0, ratios, road, length_m, cruise_mps, cfg, seed)
+}
+
+/// [`simulate_drive`] with a plant that differs from what the controllers believe: the driver
+/// and the AMT act on the nominal parameters `p`, the driveline simulated is `plant` with a
+/// drive-shaft play of `lash_rad` (rad; [`FastDriveline::with_lash`]). Used to hide an effect
+/// ([`super::effects`]). With lash the driveline integrates at a tenth of the sample step
+/// (shaft impacts then overshoot the contact by at most `|ω_d − ω_w|·dt/10`) and keeps every
+/// tenth state.
+///
+/// # Errors
+/// As [`simulate_drive`].
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_drive_with(
+    p: &DrivelineParams,
+    plant: &DrivelineParams,
+    lash_rad: f64,
+    ratios: &[f64],
+    road: &RoadSlope,
+    length_m: f64,
+    cruise_mps: f64,
+    cfg: &DriveConfig,
+    seed: u64,
+) -> Result<DriveTrajectory, DriveError> {
     let (dt, ds) = (cfg.control_dt_s, cfg.sample_dt_s);
     let sub = (dt / ds).round();
     check("control_dt_s", dt, dt.is_finite() && dt > 0.0)?;
@@ -244,7 +272,9 @@ pub fn simulate_drive(
         check(name, v, v.is_finite() && v > 0.0)?;
     }
     let sub = sub as usize;
-    let mut fast = FastDriveline::new(p, ratios, ds);
+    // with lash, integrate at ds/10 and keep every tenth state
+    let fine = if lash_rad > 0.0 { 10 } else { 1 };
+    let mut fast = FastDriveline::new(plant, ratios, ds / fine as f64).with_lash(lash_rad);
     let mut driver = Driver::new(cfg.driver.clone(), cruise_mps, length_m, seed);
     let mut amt = Amt::new(cfg.amt.clone(), dt);
     let idle = cfg.amt.idle_rpm * std::f64::consts::PI / 30.0;
@@ -344,6 +374,7 @@ pub fn simulate_drive(
             standstill_events: true,
         };
         let tr = fast.simulate_span(&sc, t, t1, y, mode)?;
+        let tr = if fine > 1 { decimate(tr, fine) } else { tr };
         for j in 0..sub {
             let yj = &tr.y[j];
             if j > 0 {
@@ -364,7 +395,7 @@ pub fn simulate_drive(
             // never more than the capacity
             let ground_brake = if yj[7] == 0.0 {
                 let hold = tr.torques[j][3] / p.wheel_radius_m
-                    - p.mass_kg * p.gravity_m_per_s2 * slope.atan().sin();
+                    - plant.mass_kg * p.gravity_m_per_s2 * slope.atan().sin();
                 hold.clamp(-cmd.brake_n, cmd.brake_n)
             } else {
                 cmd.brake_n
@@ -381,12 +412,40 @@ pub fn simulate_drive(
     Ok(out)
 }
 
+/// Every `k`-th sample of a span trajectory (the first kept).
+fn decimate(tr: crate::sim::hybrid::Trajectory, k: usize) -> crate::sim::hybrid::Trajectory {
+    fn pick<T>(v: Vec<T>, k: usize) -> Vec<T> {
+        v.into_iter().step_by(k).collect()
+    }
+    crate::sim::hybrid::Trajectory {
+        t: pick(tr.t, k),
+        y: pick(tr.y, k),
+        mode: pick(tr.mode, k),
+        torques: pick(tr.torques, k),
+        gear: pick(tr.gear, k),
+        events: tr.events,
+        stats: tr.stats,
+    }
+}
+
 /// Runs the axle model on a drive's 100 Hz samples (static start).
 ///
 /// # Errors
 /// [`DriveError::Piecewise`] for fewer than two samples.
 pub fn simulate_axles(
     p: &crate::model::axle::AxleParams,
+    tr: &DriveTrajectory,
+) -> Result<AxleTrajectory, DriveError> {
+    simulate_axles_with(p, AxleExtensions::default(), tr)
+}
+
+/// [`simulate_axles`] with model extensions (a hidden axle effect).
+///
+/// # Errors
+/// [`DriveError::Piecewise`] for fewer than two samples.
+pub fn simulate_axles_with(
+    p: &crate::model::axle::AxleParams,
+    ext: AxleExtensions,
     tr: &DriveTrajectory,
 ) -> Result<AxleTrajectory, DriveError> {
     let held = |v: &[f64]| {
@@ -406,7 +465,9 @@ pub fn simulate_axles(
         held(&tr.brake_n)?,
         0.05,
     )?;
-    Ok(HalfTruck::new(p).simulate(&u, &tr.t_s, Start::Steady))
+    Ok(HalfTruck::new(p)
+        .with_extensions(ext)
+        .simulate(&u, &tr.t_s, Start::Steady))
 }
 
 /// The CAN truth of a drive: vehicle_speed, engine_speed, engine_torque, gear, road_slope,
@@ -444,16 +505,33 @@ pub struct SynthDrive {
     pub parquet: PathBuf,
     /// Copy of the nominal vehicle file.
     pub vehicle: PathBuf,
+    /// The hidden effect, if any.
+    pub injection: Option<Injection>,
+    /// The truth model the drive was made with.
+    pub truth: TruthModel,
 }
 
 /// Epoch time of truth time 0 of every synthetic drive: 2024-01-01T00:00:00Z, ns.
 pub const DRIVE_START_NS: i64 = 1_704_067_200_000_000_000;
+
+/// An effect to hide in a synthetic drive, and where its answer goes.
+#[derive(Debug, Clone)]
+pub struct HiddenEffect {
+    /// Which effect.
+    pub choice: EffectChoice,
+    /// The answer file (JSON), written apart from the drive's own files.
+    pub answer_path: PathBuf,
+}
 
 /// Generates a road of `length_km` from `rules` (bundled name or file) with `seed`, drives the
 /// vehicle of `vehicle_path` over it (cruise speed: the driver's limit or the rules' design
 /// speed) and writes `drive.mcap`, `drive.parquet` and `vehicle.toml` (a byte copy of the
 /// vehicle file) into `out_dir` (created if needed). Road grid 1 m. The CAN bus is
 /// [`CanBus::j1939_truck`] with the engine's largest full-load torque as reference.
+///
+/// With `hidden`, the truth carries that effect ([`super::effects`]): the vehicle file copied
+/// stays the nominal one, the drive's id and metadata do not mention the effect, and the answer
+/// (effect, parameter, nominal and truth values) is written to `hidden.answer_path` only.
 ///
 /// # Errors
 /// [`DriveError`] from every stage; a rule set without design speed and no speed limit is
@@ -465,6 +543,7 @@ pub fn synth_drive(
     seed: u64,
     out_dir: &Path,
     cfg: &DriveConfig,
+    hidden: Option<&HiddenEffect>,
 ) -> Result<SynthDrive, DriveError> {
     let v = VehicleFile::load(vehicle_path)?;
     let file = vehicle_path.display().to_string();
@@ -477,6 +556,24 @@ pub fn synth_drive(
         length_km,
         length_km.is_finite() && length_km > 0.0,
     )?;
+    let reference = d.engine_max_torque_nm.iter().fold(0.0f64, |m, &x| m.max(x));
+    let mut bus = CanBus::j1939_truck(reference);
+    let slope_resolution = bus
+        .channels()
+        .find(|(_, c)| c.column == "road_slope")
+        .map_or(0.01, |(_, c)| {
+            if c.wire_unit == "%" {
+                c.resolution / 100.0
+            } else {
+                c.resolution
+            }
+        });
+    let nominal = TruthModel::nominal(d, Some(a));
+    let (injection, truth_model) = match hidden {
+        None => (None, nominal),
+        Some(h) => resolve(h.choice, &nominal, slope_resolution, seed)?,
+    };
+    let plant_axles = truth_model.axles.as_ref().unwrap_or(a);
     let road = generate(&r, length_m, 1.0, seed)?;
     let cruise = cfg
         .driver
@@ -487,15 +584,25 @@ pub fn synth_drive(
         distance_m: road.profile.distance_m.clone(),
         slope: road.profile.slope.clone(),
     };
-    let drive = simulate_drive(d, &v.gearbox.ratios, &slope, length_m, cruise, cfg, seed)?;
-    let axles = simulate_axles(a, &drive)?;
-    let truth = drive_truth(&drive, &axles);
+    let drive = simulate_drive_with(
+        d,
+        &truth_model.driveline,
+        truth_model.lash_rad,
+        &v.gearbox.ratios,
+        &slope,
+        length_m,
+        cruise,
+        cfg,
+        seed,
+    )?;
+    let axles = simulate_axles_with(plant_axles, truth_model.axle_ext, &drive)?;
+    let mut truth = drive_truth(&drive, &axles);
+    truth_model.sensors.apply_to_truth(&mut truth);
+    truth_model.sensors.apply_to_bus(&mut bus);
     std::fs::create_dir_all(out_dir).map_err(|source| DriveError::Io {
         path: out_dir.to_path_buf(),
         source,
     })?;
-    let reference = d.engine_max_torque_nm.iter().fold(0.0f64, |m, &x| m.max(x));
-    let bus = CanBus::j1939_truck(reference);
     let opts = SynthOptions {
         start_ns: DRIVE_START_NS,
         seed,
@@ -510,6 +617,9 @@ pub fn synth_drive(
         path: vehicle.clone(),
         source,
     })?;
+    if let Some(h) = hidden {
+        Answer::new(&opts.drive_id, seed, injection.as_ref()).write(&h.answer_path)?;
+    }
     Ok(SynthDrive {
         drive,
         axles,
@@ -517,5 +627,7 @@ pub fn synth_drive(
         mcap,
         parquet,
         vehicle,
+        injection,
+        truth: truth_model,
     })
 }

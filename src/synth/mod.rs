@@ -7,12 +7,14 @@
 //! seed (the project's own PRNG, [`crate::road::rng`]).
 //!
 //! [`drive`] makes the truth itself: a [`driver`] and an [`amt`] co-simulated with the fast
-//! driveline model over a synthetic road, the axle model run on the result.
+//! driveline model over a synthetic road, the axle model run on the result. [`effects`] hides
+//! one physical effect of the diagnosis catalogue in that truth, with its answer kept apart.
 
 pub mod amt;
 pub mod can;
 pub mod drive;
 pub mod driver;
+pub mod effects;
 
 pub use can::{
     sample, write_can_drive, write_mcap, CanBus, CanChannel, CanFrame, CanMessage, Dropouts,

@@ -17,6 +17,7 @@ fn city_drive(dir: &Path, seed: u64) -> SynthDrive {
         seed,
         dir,
         &DriveConfig::default(),
+        None,
     )
     .unwrap()
 }
@@ -218,13 +219,13 @@ fn bad_drive_requests_are_typed_errors_and_the_cli_exits_2_writing_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let cfg = DriveConfig::default();
-    let e = synth_drive(&fixture(VEHICLE), "city-se", -1.0, 0, &out, &cfg).unwrap_err();
+    let e = synth_drive(&fixture(VEHICLE), "city-se", -1.0, 0, &out, &cfg, None).unwrap_err();
     assert!(matches!(e, DriveError::BadConfig { .. }), "{e}");
-    let e = synth_drive(&fixture(VEHICLE), "no-such-rules", 1.0, 0, &out, &cfg).unwrap_err();
+    let e = synth_drive(&fixture(VEHICLE), "no-such-rules", 1.0, 0, &out, &cfg, None).unwrap_err();
     assert!(matches!(e, DriveError::Rules(_)), "{e}");
     let mut bad = cfg.clone();
     bad.sample_dt_s = 0.03; // not a whole fraction of the 0.1 s control step
-    let e = synth_drive(&fixture(VEHICLE), "city-se", 1.0, 0, &out, &bad).unwrap_err();
+    let e = synth_drive(&fixture(VEHICLE), "city-se", 1.0, 0, &out, &bad, None).unwrap_err();
     assert!(matches!(e, DriveError::BadConfig { .. }), "{e}");
     assert!(!out.exists());
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
