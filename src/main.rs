@@ -253,23 +253,37 @@ enum SimulateCommand {
 
 #[derive(Subcommand)]
 enum SynthCommand {
-    /// Drive a vehicle over a synthetic road: launches, stops (every --stop-every-km and at the
-    /// road end), AMT shifts; writes drive.mcap, drive.parquet and vehicle.toml into the output
-    /// folder.
+    /// Drive a vehicle over a synthetic road (--rules) or a road file (--road-file): launches,
+    /// stops (every --stop-every-km and at the road end), AMT shifts, engine brake and retarder
+    /// before the service brake; writes drive.mcap (CAN topics and a 1 Hz GNSS fix),
+    /// drive.parquet and vehicle.toml into the output folder.
     Drive {
         /// Vehicle file with [driveline] and [axles] sections.
         #[arg(long)]
         vehicle: PathBuf,
         /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us) or a TOML file.
+        #[arg(
+            long,
+            required_unless_present = "road_file",
+            conflicts_with = "road_file"
+        )]
+        rules: Option<String>,
+        /// Road file instead of rules: a Parquet table with distance (m) and slope (tan α)
+        /// columns, optionally elevation (m) — e.g. a `road synth` or `road profile` output —
+        /// or a VECTO distance-based cycle (.vdri; its <grad> is used, not its <v> or <stop>).
+        /// Needs --speed-limit-km-per-h.
         #[arg(long)]
-        rules: String,
-        /// Road length, km.
+        road_file: Option<PathBuf>,
+        /// Start of the driven window in the road file, m from its first row.
         #[arg(long, allow_negative_numbers = true)]
-        length_km: f64,
-        /// Seed of the road, the driver's variations and the CAN noise.
+        road_start_m: Option<f64>,
+        /// Road length, km (with --road-file: the window's length, default to the file's end).
+        #[arg(long, allow_negative_numbers = true)]
+        length_km: Option<f64>,
+        /// Seed of the road, the driver's variations, the GNSS track and the CAN noise.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Speed limit, km/h (default: the rule set's design speed).
+        /// Speed limit, km/h (default: the rule set's design speed; needed with --road-file).
         #[arg(long)]
         speed_limit_km_per_h: Option<f64>,
         /// Distance between planned stops, km (0: only the stop at the road end).
@@ -284,6 +298,15 @@ enum SynthCommand {
         /// Answer file of --effect (JSON; default OUTPUT/answer.json).
         #[arg(long)]
         answer: Option<PathBuf>,
+        /// Largest retarder torque at the propeller shaft, N·m (0: no retarder).
+        #[arg(long, default_value_t = 3500.0)]
+        retarder_max_torque_nm: f64,
+        /// Latitude of the road's start for the GNSS track, WGS84 deg.
+        #[arg(long, default_value_t = 57.7, allow_negative_numbers = true)]
+        gnss_origin_lat_deg: f64,
+        /// Longitude of the road's start for the GNSS track, WGS84 deg.
+        #[arg(long, default_value_t = 11.9, allow_negative_numbers = true)]
+        gnss_origin_lon_deg: f64,
         /// Output folder.
         #[arg(short, long)]
         output: PathBuf,
@@ -954,19 +977,61 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Synth(SynthCommand::Drive {
             vehicle,
             rules,
+            road_file,
+            road_start_m,
             length_km,
             seed,
             speed_limit_km_per_h,
             stop_every_km,
             effect,
             answer,
+            retarder_max_torque_nm,
+            gnss_origin_lat_deg,
+            gnss_origin_lon_deg,
             output,
         }) => {
-            use fleetdyn::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
+            use fleetdyn::synth::drive::{synth_drive_on, DriveConfig, DriveError, HiddenEffect};
             use fleetdyn::synth::effects::{EffectChoice, EffectError};
+            use fleetdyn::synth::retarder::RetarderConfig;
+            use fleetdyn::synth::road_source::{RoadSource, RoadSourceError};
             let mut cfg = DriveConfig::default();
             cfg.driver.speed_limit_mps = speed_limit_km_per_h.map(|k| k / 3.6);
             cfg.driver.stop_every_m = (stop_every_km > 0.0).then_some(stop_every_km * 1000.0);
+            if !(retarder_max_torque_nm.is_finite() && retarder_max_torque_nm >= 0.0) {
+                return Err(usage(anyhow::anyhow!(
+                    "--retarder-max-torque-nm {retarder_max_torque_nm} must be finite and >= 0"
+                )));
+            }
+            cfg.driver.retarder = (retarder_max_torque_nm > 0.0).then(|| RetarderConfig {
+                max_torque_nm: retarder_max_torque_nm,
+                ..RetarderConfig::default()
+            });
+            if let Some(g) = cfg.gnss.as_mut() {
+                g.origin_lat_deg = gnss_origin_lat_deg;
+                g.origin_lon_deg = gnss_origin_lon_deg;
+            }
+            let road = match (rules, road_file) {
+                (Some(_), None) if road_start_m.is_some() => {
+                    return Err(usage(anyhow::anyhow!(
+                        "--road-start-m applies to --road-file, not to --rules"
+                    )))
+                }
+                (Some(rules), None) => RoadSource::Rules {
+                    rules,
+                    length_km: length_km
+                        .ok_or_else(|| usage(anyhow::anyhow!("--rules needs --length-km")))?,
+                },
+                (None, Some(path)) => RoadSource::File {
+                    path,
+                    start_m: road_start_m.unwrap_or(0.0),
+                    length_km,
+                },
+                _ => {
+                    return Err(usage(anyhow::anyhow!(
+                        "give exactly one of --rules and --road-file"
+                    )))
+                }
+            };
             let hidden = match &effect {
                 None => None,
                 Some(e) => Some(HiddenEffect {
@@ -974,30 +1039,27 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     answer_path: answer.unwrap_or_else(|| output.join("answer.json")),
                 }),
             };
-            let r = synth_drive(
-                &vehicle,
-                &rules,
-                length_km,
-                seed,
-                &output,
-                &cfg,
-                hidden.as_ref(),
-            )
-            .map_err(|e| match e {
-                DriveError::Io { .. }
-                | DriveError::Can(_)
-                | DriveError::Effect(EffectError::Io { .. }) => drive(e),
-                _ => usage(e),
-            })?;
+            let r = synth_drive_on(&vehicle, &road, seed, &output, &cfg, hidden.as_ref()).map_err(
+                |e| match e {
+                    DriveError::Io { .. }
+                    | DriveError::Can(_)
+                    | DriveError::Effect(EffectError::Io { .. })
+                    | DriveError::RoadFile(RoadSourceError::Io { .. }) => drive(e),
+                    _ => usage(e),
+                },
+            )?;
             if let Some(h) = &hidden {
                 say!("answer (hidden effect) -> {}", h.answer_path.display());
             }
             let d = &r.drive;
             let vmax = d.speed_mps.iter().fold(0.0f64, |m, &v| m.max(v));
+            let ret_max = d.retarder_torque_nm.iter().fold(0.0f64, |m, &v| m.max(v));
+            let me_min = d.engine_torque_nm.iter().fold(0.0f64, |m, &v| m.min(v));
             say!(
-                "{} km drive, seed {}: {:.1} s, {} launches, {} shifts, max {:.1} km/h, {:.0} m travelled -> {}, {}, {}",
-                length_km, seed, d.t_s.last().copied().unwrap_or(0.0), d.launches.len(),
-                d.shifts.len(), vmax * 3.6, d.distance_m.last().copied().unwrap_or(0.0),
+                "{:.3} km drive over {}, seed {}: {:.1} s, {} launches, {} shifts, max {:.1} km/h, {:.0} m travelled, engine torque down to {:.0} N·m, retarder up to {:.0} N·m -> {}, {}, {}",
+                r.road.length_m / 1000.0, r.road.label, seed, d.t_s.last().copied().unwrap_or(0.0),
+                d.launches.len(), d.shifts.len(), vmax * 3.6,
+                d.distance_m.last().copied().unwrap_or(0.0), me_min, ret_max,
                 r.mcap.display(), r.parquet.display(), r.vehicle.display()
             );
             Ok(())

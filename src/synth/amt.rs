@@ -9,8 +9,9 @@
 //!   engine torque is the clutch capacity plus a governor to [`AmtConfig::launch_rpm`]
 //!   (a clutch-slip engagement); it is abandoned for coasting if 1st gear would put the engine
 //!   above the upshift speed;
-//! - **driving**: clutch engaged (`x = 0`), engine torque = demand fraction × full-load torque;
-//!   upshift above [`AmtConfig::upshift_rpm`], downshift below [`AmtConfig::downshift_rpm`] while
+//! - **driving**: clutch engaged (`x = 0`), engine torque = demand fraction × full-load torque
+//!   for a demand ≥ 0, and demand fraction × |minimum torque| (engine brake, negative torque)
+//!   for a demand < 0; upshift above [`AmtConfig::upshift_rpm`], downshift below [`AmtConfig::downshift_rpm`] while
 //!   the driver asks for torque; below it without torque demand, or in 1st gear near idle, the
 //!   clutch opens (**coasting**, engine at idle) and re-engages in the highest gear whose engine
 //!   speed is at least `downshift_rpm + 100 rpm` once the driver asks for torque again (a launch
@@ -191,7 +192,8 @@ impl Amt {
         )
     }
 
-    /// Decides the step: `demand` is the driver's torque fraction (0…1), `w_e` the engine speed,
+    /// Decides the step: `demand` is the driver's torque fraction (−1…1; < 0 engine brake, see
+    /// [`super::driver::DriverCommand::torque_fraction`]), `w_e` the engine speed,
     /// `w_w` the wheel speed (rad/s), `locked` whether the clutch is locked at the step start.
     pub fn step(
         &mut self,
@@ -209,7 +211,12 @@ impl Amt {
         let clamp = |m: f64, w: f64| m.max(p.engine_min_torque_nm).min(p.engine_max_torque(w));
         let gov = |target: f64| k_gov * (target - w_e);
         let w_gear = |g: usize| ratios[g - 1] * p.final_drive_ratio * w_w;
-        let full = p.engine_max_torque(w_e);
+        // the driver's demand as an engine torque: full load above zero, engine brake below
+        let demanded = if demand >= 0.0 {
+            demand * p.engine_max_torque(w_e)
+        } else {
+            -demand * p.engine_min_torque_nm.min(0.0)
+        };
         let rpm = w_e / RPM;
         // state transitions decided at the step start
         self.state = match self.state {
@@ -318,17 +325,17 @@ impl Amt {
                 let x = clutch_position_for(p, cap);
                 (x, p.clutch_capacity(x) + gov(c.launch_rpm * RPM), false)
             }
-            AmtState::Driving { .. } => (0.0, demand * full, false),
+            AmtState::Driving { .. } => (0.0, demanded, false),
             AmtState::Shift {
                 to, phase, step, ..
             } => {
                 let frac = (step + 1) as f64 / self.phase_steps(phase) as f64;
                 match phase {
-                    ShiftPhase::RampDown => (0.0, demand * full * (1.0 - frac), false),
+                    ShiftPhase::RampDown => (0.0, demanded * (1.0 - frac), false),
                     ShiftPhase::Open => (x_open * frac, 0.0, false),
                     ShiftPhase::Change => (x_open, gov(w_gear(to)), step == 0),
                     ShiftPhase::Close => (x_open * (1.0 - frac), gov(w_gear(to)), false),
-                    ShiftPhase::RampUp => (0.0, demand * full * frac, false),
+                    ShiftPhase::RampUp => (0.0, demanded * frac, false),
                 }
             }
         };

@@ -320,8 +320,10 @@ impl CanBus {
     /// | ASC4 | `/can/asc4.BellowPressure{Front,Rear,Tag}Axle` | bellow_pressure_* | 10 Hz | 0.1 kPa | 0…6425.5 kPa | 1 kPa |
     /// | ERC1 | `/can/erc1.ActualRetarderPercentTorque` | retarder_torque | 10 Hz | 1 % of 3500 N·m | 0…125 % | 0 |
     /// | BRAKE | `/can/brake.ServiceBrakeForce` | brake_force | 10 Hz | 0.1 kN | 0…2000 kN | 0.2 kN |
+    /// | CLUTCH | `/can/clutch.ClutchActuatorPosition` | clutch_position | 10 Hz | 0.4 % | 0…100 % | 0 |
     ///
-    /// Phases stagger the topics by 2 ms (CCVS1 0 ms, EEC1 2 ms, ETC2 4 ms, …, BRAKE 12 ms), as
+    /// Phases stagger the topics by 2 ms (CCVS1 0 ms, EEC1 2 ms, ETC2 4 ms, …, BRAKE 12 ms,
+    /// CLUTCH 14 ms), as
     /// frames on one bus never share a time stamp. No delays, no dropouts.
     pub fn j1939_truck(reference_torque_nm: f64) -> Self {
         use TorqueReference as R;
@@ -446,6 +448,22 @@ impl CanBus {
                         0.2,
                         0.0,
                         2000.0,
+                    )],
+                ),
+                msg(
+                    "CLUTCH",
+                    "/can/clutch",
+                    10.0,
+                    0.014,
+                    vec![ch(
+                        "clutch_position",
+                        "ClutchActuatorPosition",
+                        "%",
+                        R::None,
+                        0.4,
+                        0.0,
+                        0.0,
+                        100.0,
                     )],
                 ),
             ],

@@ -4,11 +4,15 @@
 //!
 //! # Loop
 //! Control steps of [`DriveConfig::control_dt_s`] (0.1 s): at each step start the driver reads
-//! time, travelled distance, speed, slope and engine speed and commands a torque fraction and a
-//! brake force; the AMT turns them into gear, clutch position and engine torque; a one-step
+//! time, travelled distance, speed, slope, engine speed and whether the engine is coupled
+//! (AMT driving in a gear), and commands a torque fraction (negative: engine brake), a
+//! retarder torque and a service-brake force ([`super::driver`], brake blending); the AMT turns
+//! the fraction into gear, clutch position and engine torque; a one-step
 //! [`Scenario`] with these inputs held (and the road slope at the step's start position, looked
 //! up by the travelled distance) is simulated with [`FastDriveline::simulate_span`] at
-//! [`DriveConfig::sample_dt_s`] (0.01 s), carrying the state and the clutch mode. Rolling
+//! [`DriveConfig::sample_dt_s`] (0.01 s), carrying the state and the clutch mode. The
+//! retarder's wheel-equivalent force `T_r i_f / r_w` is added to the service-brake force input
+//! of the step ([`super::retarder`]: the driveline model has no retarder of its own). Rolling
 //! resistance is unsmoothed and the vehicle's stops are events (`standstill_events`). At a
 //! gear change the synchroniser sets the clutch-disc speed to the new input-shaft speed
 //! (`ω_c = i_t ω_p`, clutch-spring torsion 0).
@@ -19,12 +23,20 @@
 //!
 //! # Axles
 //! The axle model ([`HalfTruck`], static start) runs on the 100 Hz samples with
-//! [`axle_inputs_from_samples`] (acceleration differentiated over ±0.05 s).
+//! [`axle_inputs_from_samples`] (acceleration differentiated over ±0.05 s), the retarder torque
+//! `T_r i_f` as auxiliary brake torque at the driven wheels.
+//!
+//! # Roads and GNSS
+//! [`synth_drive_on`] drives over a [`RoadSource`]: a road generated from rules, or a window of
+//! a road file ([`super::road_source`]). With [`DriveConfig::gnss`] the log gets a GNSS track
+//! along the road ([`super::track`]) on `/gnss/fix`.
 
 use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
 use super::can::{write_can_drive, CanBus, SynthError as CanError, SynthOptions, Truth};
 use super::driver::{Driver, DriverConfig};
 use super::effects::{resolve, Answer, EffectChoice, EffectError, Injection, TruthModel};
+use super::road_source::{read_road_file, DriveRoad, RoadSource, RoadSourceError};
+use super::track::{gnss_message, gnss_track, GnssConfig, TrackError};
 use crate::model::driveline::DrivelineParams;
 use crate::model::vehicle::{VehicleError, VehicleFile};
 use crate::road::rules::{RoadRules, RulesError};
@@ -71,6 +83,18 @@ pub enum DriveError {
         /// What it must be.
         requirement: &'static str,
     },
+    /// A road file could not be used.
+    #[error(transparent)]
+    RoadFile(#[from] RoadSourceError),
+    /// A GNSS setting out of its domain.
+    #[error(transparent)]
+    Track(#[from] TrackError),
+    /// No cruise speed: no speed limit given and the road has no design speed.
+    #[error("road {road}: no cruise speed — give a speed limit (the road has no design speed)")]
+    NoCruiseSpeed {
+        /// The road's label.
+        road: String,
+    },
     /// The truck did not reach the road end in time.
     #[error("the truck did not finish within {max_s} s (at {x_m:.0} m of {length_m:.0} m)")]
     Timeout {
@@ -105,10 +129,12 @@ pub struct DriveConfig {
     pub sample_dt_s: f64,
     /// Longest drive before giving up, s.
     pub max_duration_s: f64,
+    /// GNSS track and receiver; `None`: no GNSS in the log.
+    pub gnss: Option<GnssConfig>,
 }
 
 impl Default for DriveConfig {
-    /// Default driver and AMT, 0.1 s control step, 0.01 s samples, at most 4 h.
+    /// Default driver and AMT, 0.1 s control step, 0.01 s samples, at most 4 h, default GNSS.
     fn default() -> Self {
         Self {
             driver: DriverConfig::default(),
@@ -116,6 +142,7 @@ impl Default for DriveConfig {
             control_dt_s: 0.1,
             sample_dt_s: 0.01,
             max_duration_s: 4.0 * 3600.0,
+            gnss: Some(GnssConfig::default()),
         }
     }
 }
@@ -179,10 +206,16 @@ pub struct DriveTrajectory {
     pub gear: Vec<f64>,
     /// Clutch position, 0 = engaged … x_max = open.
     pub clutch_x: Vec<f64>,
+    /// Clutch position normalised, `clutch_x / x_max`: 0 = engaged … 1 = open.
+    pub clutch_position: Vec<f64>,
     /// Road slope, tan α.
     pub slope: Vec<f64>,
     /// Service-brake force, N.
     pub brake_n: Vec<f64>,
+    /// Retarder torque at the propeller shaft, N·m (≥ 0 brakes).
+    pub retarder_torque_nm: Vec<f64>,
+    /// The retarder's torque at the driven wheels `T_r i_f`, N·m (≥ 0 brakes).
+    pub aux_brake_wheel_nm: Vec<f64>,
     /// Target speed of the driver, m/s.
     pub target_mps: Vec<f64>,
     /// Shifts while driving.
@@ -308,7 +341,9 @@ pub fn simulate_drive_with(
         let slope = road.at(x);
         let gear_now = amt.gear();
         let overall = ratios[gear_now - 1] * p.final_drive_ratio;
-        let cmd = driver.command(p, t, x, v, slope, y[0], overall);
+        let coupled = matches!(amt.state, AmtState::Driving { .. });
+        let cmd = driver.command(p, t, x, v, slope, y[0], overall, coupled);
+        let retarder_n = cmd.retarder_nm * p.final_drive_ratio / p.wheel_radius_m;
         if driver.finished() && finished_at.is_none() {
             finished_at = Some(t);
         }
@@ -368,7 +403,7 @@ pub fn simulate_drive_with(
             gear: Piecewise::constant(t1, o.gear as f64),
             clutch_x: Piecewise::constant(t1, o.clutch_x),
             slope: Piecewise::constant(t1, slope),
-            brake_n: Piecewise::constant(t1, cmd.brake_n),
+            brake_n: Piecewise::constant(t1, cmd.brake_n + retarder_n),
             engine: EngineInput::Torque(Piecewise::constant(t1, o.engine_torque_nm)),
             smoothing: false,
             standstill_events: true,
@@ -389,6 +424,7 @@ pub fn simulate_drive_with(
             out.drive_torque_nm.push(tr.torques[j][3]);
             out.gear.push(o.gear as f64);
             out.clutch_x.push(o.clutch_x);
+            out.clutch_position.push(o.clutch_x / p.clutch_x_max);
             out.slope.push(slope);
             // the drive log's brake_force is the force at the ground: the brakes' capacity
             // while rolling, but at standstill only what holds the truck (drive force and grade),
@@ -401,6 +437,9 @@ pub fn simulate_drive_with(
                 cmd.brake_n
             };
             out.brake_n.push(ground_brake);
+            out.retarder_torque_nm.push(cmd.retarder_nm);
+            out.aux_brake_wheel_nm
+                .push(cmd.retarder_nm * p.final_drive_ratio);
             out.target_mps.push(cmd.target_mps);
         }
         let last = sub.min(tr.y.len() - 1);
@@ -428,10 +467,13 @@ fn decimate(tr: crate::sim::hybrid::Trajectory, k: usize) -> crate::sim::hybrid:
     }
 }
 
-/// Runs the axle model on a drive's 100 Hz samples (static start).
+/// Runs the axle model on a drive's 100 Hz samples (static start), with the retarder's
+/// [`DriveTrajectory::aux_brake_wheel_nm`] (when not empty) as auxiliary brake torque at the
+/// driven wheels.
 ///
 /// # Errors
-/// [`DriveError::Piecewise`] for fewer than two samples.
+/// [`DriveError::Piecewise`] for fewer than two samples, or auxiliary brake samples that do
+/// not match the times.
 pub fn simulate_axles(
     p: &crate::model::axle::AxleParams,
     tr: &DriveTrajectory,
@@ -457,7 +499,7 @@ pub fn simulate_axles_with(
                 .collect(),
         )
     };
-    let (u, _) = axle_inputs_from_samples(
+    let (mut u, _) = axle_inputs_from_samples(
         &tr.t_s,
         &tr.speed_mps,
         &tr.drive_torque_nm,
@@ -465,13 +507,32 @@ pub fn simulate_axles_with(
         held(&tr.brake_n)?,
         0.05,
     )?;
+    let aux = &tr.aux_brake_wheel_nm;
+    if !aux.is_empty() {
+        if aux.len() != tr.t_s.len() {
+            return Err(PiecewiseError(format!(
+                "{} auxiliary brake samples for {} times",
+                aux.len(),
+                tr.t_s.len()
+            ))
+            .into());
+        }
+        u.aux_brake_torque_wheel_nm = Some(Piecewise::new(
+            tr.t_s
+                .windows(2)
+                .zip(aux.windows(2))
+                .map(|(t, a)| (t[0], t[1], a[0], a[1]))
+                .collect(),
+        )?);
+    }
     Ok(HalfTruck::new(p)
         .with_extensions(ext)
         .simulate(&u, &tr.t_s, Start::Steady))
 }
 
 /// The CAN truth of a drive: vehicle_speed, engine_speed, engine_torque, gear, road_slope,
-/// brake_force and the three bellow gauge pressures (SI, on the drive's samples).
+/// brake_force, retarder_torque, clutch_position and the three bellow gauge pressures (SI, on
+/// the drive's samples).
 pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
     let [pf, pr, pt] = axles.pressure_pa.clone();
     Truth {
@@ -483,6 +544,8 @@ pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
             ("gear".into(), tr.gear.clone()),
             ("road_slope".into(), tr.slope.clone()),
             ("brake_force".into(), tr.brake_n.clone()),
+            ("retarder_torque".into(), tr.retarder_torque_nm.clone()),
+            ("clutch_position".into(), tr.clutch_position.clone()),
             ("bellow_pressure_front".into(), pf),
             ("bellow_pressure_rear".into(), pr),
             ("bellow_pressure_tag".into(), pt),
@@ -497,6 +560,10 @@ pub struct SynthDrive {
     pub drive: DriveTrajectory,
     /// The axle-model trajectory on the same samples.
     pub axles: AxleTrajectory,
+    /// The road driven (grid from 0 m at the start of the drive).
+    pub road: DriveRoad,
+    /// The GNSS track and receiver readings on the drive's samples, if configured.
+    pub gnss: Option<super::track::GnssTrack>,
     /// The ingested drive log of the written MCAP.
     pub log: crate::table::DriveLog,
     /// Written MCAP file.
@@ -523,19 +590,15 @@ pub struct HiddenEffect {
     pub answer_path: PathBuf,
 }
 
-/// Generates a road of `length_km` from `rules` (bundled name or file) with `seed`, drives the
-/// vehicle of `vehicle_path` over it (cruise speed: the driver's limit or the rules' design
-/// speed) and writes `drive.mcap`, `drive.parquet` and `vehicle.toml` (a byte copy of the
-/// vehicle file) into `out_dir` (created if needed). Road grid 1 m. The CAN bus is
-/// [`CanBus::j1939_truck`] with the engine's largest full-load torque as reference.
+/// Generates a road of `length_km` from `rules` (bundled name or file) with `seed` and drives
+/// over it: [`synth_drive_on`] with [`RoadSource::Rules`].
 ///
 /// With `hidden`, the truth carries that effect ([`super::effects`]): the vehicle file copied
 /// stays the nominal one, the drive's id and metadata do not mention the effect, and the answer
 /// (effect, parameter, nominal and truth values) is written to `hidden.answer_path` only.
 ///
 /// # Errors
-/// [`DriveError`] from every stage; a rule set without design speed and no speed limit is
-/// [`DriveError::BadConfig`].
+/// As [`synth_drive_on`].
 pub fn synth_drive(
     vehicle_path: &Path,
     rules: &str,
@@ -545,17 +608,65 @@ pub fn synth_drive(
     cfg: &DriveConfig,
     hidden: Option<&HiddenEffect>,
 ) -> Result<SynthDrive, DriveError> {
+    let road = RoadSource::Rules {
+        rules: rules.into(),
+        length_km,
+    };
+    synth_drive_on(vehicle_path, &road, seed, out_dir, cfg, hidden)
+}
+
+/// Drives the vehicle of `vehicle_path` over `road` — generated from rules with `seed` on a
+/// 1 m grid, or a window of a road file ([`read_road_file`]) — with seed `seed` for the
+/// driver's variations, the GNSS track and the CAN noise, and writes `drive.mcap`,
+/// `drive.parquet` and `vehicle.toml` (a byte copy of the vehicle file) into `out_dir`
+/// (created if needed). Cruise speed: the driver's speed limit, else the rules' design speed.
+/// The CAN bus is [`CanBus::j1939_truck`] with the engine's largest full-load torque as
+/// reference, plus [`gnss_message`] when [`DriveConfig::gnss`] is set; the GNSS track's
+/// smallest radius follows the cruise speed unless configured.
+///
+/// # Errors
+/// [`DriveError`] from every stage; no speed limit on a road without design speed is
+/// [`DriveError::NoCruiseSpeed`]; a bad road file [`DriveError::RoadFile`].
+pub fn synth_drive_on(
+    vehicle_path: &Path,
+    road: &RoadSource,
+    seed: u64,
+    out_dir: &Path,
+    cfg: &DriveConfig,
+    hidden: Option<&HiddenEffect>,
+) -> Result<SynthDrive, DriveError> {
     let v = VehicleFile::load(vehicle_path)?;
     let file = vehicle_path.display().to_string();
     let d = v.driveline(&file)?;
     let a = v.axles(&file)?;
-    let r = RoadRules::resolve(rules)?;
-    let length_m = length_km * 1000.0;
-    check(
-        "length_km",
-        length_km,
-        length_km.is_finite() && length_km > 0.0,
-    )?;
+    if let Some(g) = &cfg.gnss {
+        g.validate()?;
+    }
+    let (road, length_label) = match road {
+        RoadSource::Rules { rules, length_km } => {
+            let r = RoadRules::resolve(rules)?;
+            check(
+                "length_km",
+                *length_km,
+                length_km.is_finite() && *length_km > 0.0,
+            )?;
+            let synthetic = generate(&r, length_km * 1000.0, 1.0, seed)?;
+            (DriveRoad::from_synthetic(&synthetic), *length_km)
+        }
+        RoadSource::File {
+            path,
+            start_m,
+            length_km,
+        } => {
+            if let Some(l) = length_km {
+                check("length_km", *l, l.is_finite() && *l > 0.0)?;
+            }
+            let r = read_road_file(path, *start_m, length_km.map(|l| l * 1000.0))?;
+            let l = r.length_m / 1000.0;
+            (r, l)
+        }
+    };
+    let length_m = road.length_m;
     let reference = d.engine_max_torque_nm.iter().fold(0.0f64, |m, &x| m.max(x));
     let mut bus = CanBus::j1939_truck(reference);
     let slope_resolution = bus
@@ -574,15 +685,16 @@ pub fn synth_drive(
         Some(h) => resolve(h.choice, &nominal, slope_resolution, seed)?,
     };
     let plant_axles = truth_model.axles.as_ref().unwrap_or(a);
-    let road = generate(&r, length_m, 1.0, seed)?;
     let cruise = cfg
         .driver
         .speed_limit_mps
-        .or(r.design_speed_km_per_h.map(|k| k / 3.6))
-        .unwrap_or(f64::NAN);
+        .or(road.design_speed_mps)
+        .ok_or_else(|| DriveError::NoCruiseSpeed {
+            road: road.label.clone(),
+        })?;
     let slope = RoadSlope {
-        distance_m: road.profile.distance_m.clone(),
-        slope: road.profile.slope.clone(),
+        distance_m: road.distance_m.clone(),
+        slope: road.slope.clone(),
     };
     let drive = simulate_drive_with(
         d,
@@ -599,6 +711,23 @@ pub fn synth_drive(
     let mut truth = drive_truth(&drive, &axles);
     truth_model.sensors.apply_to_truth(&mut truth);
     truth_model.sensors.apply_to_bus(&mut bus);
+    let gnss = match &cfg.gnss {
+        Some(g) => {
+            let track = gnss_track(
+                g,
+                road.step_m,
+                &road.elevation_m,
+                &drive.t_s,
+                &drive.distance_m,
+                cruise,
+                seed,
+            )?;
+            truth.columns.extend(track.receiver_columns());
+            bus.messages.push(gnss_message(g));
+            Some(track)
+        }
+        None => None,
+    };
     std::fs::create_dir_all(out_dir).map_err(|source| DriveError::Io {
         path: out_dir.to_path_buf(),
         source,
@@ -606,7 +735,7 @@ pub fn synth_drive(
     let opts = SynthOptions {
         start_ns: DRIVE_START_NS,
         seed,
-        drive_id: format!("synth-{}-{}km-seed{}", r.name, length_km, seed),
+        drive_id: format!("synth-{}-{}km-seed{}", road.label, length_label, seed),
         vehicle_id: Some(v.vehicle_id.clone()),
     };
     let mcap = out_dir.join("drive.mcap");
@@ -623,6 +752,8 @@ pub fn synth_drive(
     Ok(SynthDrive {
         drive,
         axles,
+        road,
+        gnss,
         log,
         mcap,
         parquet,

@@ -1,5 +1,6 @@
 //! A simple driver for synthetic drives: a target-speed profile along the road and a speed
-//! controller that turns it into an engine-torque demand and a service-brake force.
+//! controller that turns it into an engine-torque demand (negative: engine brake), a retarder
+//! torque and a service-brake force.
 //!
 //! # Target speed
 //! The cruise speed is the speed limit ([`DriverConfig::speed_limit_mps`]) or, when that is
@@ -14,18 +15,35 @@
 //! [`DriverConfig::speed_gain_per_s`]). Required wheel force `F = m_eff a + F_road(v, slope)`,
 //! `m_eff = m + J_w/r_w²`, `F_road` the driveline's road force without brake. `F > 0` becomes an
 //! engine torque `F r_w / (i_t i_f)` expressed as a fraction of the full-load torque at the
-//! current engine speed (clamped to 0…1) and multiplied by the tip-in/tip-out factor; `F < 0`
-//! becomes a service-brake force `−F` when the driver wants to slow down (`a < −0.05 m/s²`),
-//! otherwise the truck coasts. At standstill the driver holds the brake with
-//! [`DriverConfig::hold_brake_n`]. The drive starts with the truck standing for one dwell time;
-//! a stop counts as made once the speed is below 0.05 m/s within 25 m before (or beyond) its
-//! position.
+//! current engine speed (clamped to 0…1) and multiplied by the tip-in/tip-out factor.
+//!
+//! # Brake blending
+//! `F < 0` asks for a braking force `B = −F` at the wheels, whether the driver slows down
+//! (for a stop, or after overshooting the target) or holds the target speed downhill (a cruise
+//! control whose downhill speed control is set to the cruise speed). It is shared out in the
+//! order a truck's brake management uses — wear-free brakes first:
+//! 1. **engine brake**, when the engine is coupled (the AMT drives in a gear with the clutch
+//!    closed): `E = min(B, |M_min| i_t i_f / r_w)`, commanded as the negative torque fraction
+//!    `−E r_w / (i_t i_f |M_min|)` of the engine's minimum torque `M_min`
+//!    (`engine_min_torque_nm`);
+//! 2. **retarder** ([`DriverConfig::retarder`], [`super::retarder`]): the command
+//!    `(B − E) r_w / i_f` at the propeller shaft; the torque it delivers, `T_r`, is limited by
+//!    its speed-dependent capacity and its response rate;
+//! 3. **service brake**: the rest, `B − E − T_r i_f / r_w`, only when the driver wants to slow
+//!    down (`a < −0.05 m/s²`); otherwise the truck runs on with what engine brake and retarder
+//!    give (on a downhill steeper than they can hold, its speed creeps above the target until
+//!    the speed error asks for `a < −0.05 m/s²`, and the service brake takes the rest).
+//!
+//! At standstill the driver holds the brake with [`DriverConfig::hold_brake_n`]. The drive
+//! starts with the truck standing for one dwell time; a stop counts as made once the speed is
+//! below 0.05 m/s within 25 m before (or beyond) its position.
 //!
 //! # Tip-in / tip-out
 //! Every `U(3, 8)` s the torque demand's factor is redrawn as `1 + U(−tip, tip)`
 //! (`tip` = [`DriverConfig::tip_fraction`]), from a PRNG seeded with the drive's seed: the same
 //! seed gives the same variations.
 
+use super::retarder::RetarderConfig;
 use crate::model::driveline::DrivelineParams;
 use crate::road::rng::Xoshiro256StarStar;
 
@@ -48,11 +66,13 @@ pub struct DriverConfig {
     pub tip_fraction: f64,
     /// Brake force held at standstill, N.
     pub hold_brake_n: f64,
+    /// The truck's driveline retarder; `None`: none fitted.
+    pub retarder: Option<RetarderConfig>,
 }
 
 impl Default for DriverConfig {
     /// No speed limit override, a stop every 1 km held 8 s, 0.8 m/s² up, 1.2 m/s² down,
-    /// k_v = 0.5 1/s, ±5 % tip variations, a 30 kN holding brake.
+    /// k_v = 0.5 1/s, ±5 % tip variations, a 30 kN holding brake, the default retarder.
     fn default() -> Self {
         Self {
             speed_limit_mps: None,
@@ -63,6 +83,7 @@ impl Default for DriverConfig {
             speed_gain_per_s: 0.5,
             tip_fraction: 0.05,
             hold_brake_n: 30_000.0,
+            retarder: Some(RetarderConfig::default()),
         }
     }
 }
@@ -70,10 +91,13 @@ impl Default for DriverConfig {
 /// What the driver asks for in one control step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DriverCommand {
-    /// Engine torque demand as a fraction of the full-load torque at the current engine speed, 0…1.
+    /// Engine torque demand, −1…1: ≥ 0 a fraction of the full-load torque at the current
+    /// engine speed, < 0 a fraction of the minimum torque's magnitude (engine brake).
     pub torque_fraction: f64,
     /// Service-brake force at the ground, N (≥ 0).
     pub brake_n: f64,
+    /// Retarder torque at the propeller shaft over the step, N·m (≥ 0 brakes).
+    pub retarder_nm: f64,
     /// Desired acceleration, m/s².
     pub accel_mps2: f64,
     /// Target speed, m/s.
@@ -92,6 +116,9 @@ pub struct Driver {
     rng: Xoshiro256StarStar,
     tip: f64,
     next_tip_s: f64,
+    /// Retarder torque of the previous step, N·m, and that step's time, s.
+    retarder_nm: f64,
+    last_t_s: Option<f64>,
 }
 
 impl Driver {
@@ -116,6 +143,8 @@ impl Driver {
             rng: Xoshiro256StarStar::seed_from_u64(seed ^ 0x6472_6976_6572),
             tip: 1.0,
             next_tip_s: 0.0,
+            retarder_nm: 0.0,
+            last_t_s: None,
         }
     }
 
@@ -131,7 +160,10 @@ impl Driver {
     }
 
     /// The driver's command at time `t_s`, position `x_m`, speed `v_mps` on `slope` (tan α),
-    /// with engine speed `w_e` (rad/s) and overall ratio `i_t i_f` of the engaged gear.
+    /// with engine speed `w_e` (rad/s), overall ratio `i_t i_f` of the engaged gear, and whether
+    /// the engine is coupled to the wheels (clutch closed in a gear: the engine brake works).
+    /// Call once per control step, in time order (the retarder's response integrates over the
+    /// time between calls).
     #[allow(clippy::too_many_arguments)]
     pub fn command(
         &mut self,
@@ -142,8 +174,55 @@ impl Driver {
         slope: f64,
         w_e_rad_s: f64,
         overall_ratio: f64,
+        engine_coupled: bool,
     ) -> DriverCommand {
+        let (mut cmd, wanted) = self.demand(
+            p,
+            t_s,
+            x_m,
+            v_mps,
+            slope,
+            w_e_rad_s,
+            overall_ratio,
+            engine_coupled,
+        );
+        let dt = self.last_t_s.map_or(0.0, |t0| t_s - t0);
+        self.last_t_s = Some(t_s);
+        if let Some(r) = &self.cfg.retarder {
+            let w_p = v_mps / p.wheel_radius_m * p.final_drive_ratio;
+            let command_nm = wanted.retarder_force_n * p.wheel_radius_m / p.final_drive_ratio;
+            self.retarder_nm = r.follow(self.retarder_nm, command_nm, w_p, dt);
+        } else {
+            self.retarder_nm = 0.0;
+        }
+        cmd.retarder_nm = self.retarder_nm;
+        if wanted.service_takes_rest {
+            let delivered = self.retarder_nm * p.final_drive_ratio / p.wheel_radius_m;
+            cmd.brake_n = (wanted.retarder_force_n - delivered).max(0.0);
+        }
+        cmd
+    }
+
+    /// The command before the retarder's response: the command with `retarder_nm = 0`, and the
+    /// braking force wanted from the retarder (the service brake takes what the retarder does
+    /// not deliver when `service_takes_rest`).
+    #[allow(clippy::too_many_arguments)]
+    fn demand(
+        &mut self,
+        p: &DrivelineParams,
+        t_s: f64,
+        x_m: f64,
+        v_mps: f64,
+        slope: f64,
+        w_e_rad_s: f64,
+        overall_ratio: f64,
+        engine_coupled: bool,
+    ) -> (DriverCommand, WantedBrake) {
         let c = &self.cfg;
+        let none = WantedBrake {
+            retarder_force_n: 0.0,
+            service_takes_rest: false,
+        };
         if t_s >= self.next_tip_s {
             self.tip = 1.0 + self.rng.uniform(-c.tip_fraction, c.tip_fraction);
             self.next_tip_s = t_s + self.rng.uniform(3.0, 8.0);
@@ -151,22 +230,23 @@ impl Driver {
         let hold = DriverCommand {
             torque_fraction: 0.0,
             brake_n: c.hold_brake_n,
+            retarder_nm: 0.0,
             accel_mps2: 0.0,
             target_mps: 0.0,
         };
         if t_s < c.stop_dwell_s {
             // standing at the start for one dwell time
-            return hold;
+            return (hold, none);
         }
         if let Some(until) = self.dwell_until_s {
             if t_s < until {
-                return hold;
+                return (hold, none);
             }
             self.dwell_until_s = None;
             self.next_stop += 1;
         }
         let Some(&x_s) = self.stops_m.get(self.next_stop) else {
-            return hold;
+            return (hold, none);
         };
         if v_mps.abs() < 0.05 && x_m > x_s - 25.0 {
             // arrived: stand for the dwell time (for ever at the road end)
@@ -175,7 +255,7 @@ impl Driver {
             } else {
                 t_s + c.stop_dwell_s
             });
-            return hold;
+            return (hold, none);
         }
         let b = 0.8 * c.decel_mps2;
         let curve = (2.0 * b * (x_s - x_m).max(0.0)).sqrt();
@@ -187,26 +267,61 @@ impl Driver {
         let a = (a_ff + c.speed_gain_per_s * (target - v_mps)).clamp(-c.decel_mps2, c.accel_mps2);
         let m_eff = p.mass_kg + p.j_w_kg_m2 / p.wheel_radius_m.powi(2);
         let f = m_eff * a + p.road_force(v_mps, slope, 0.0, false);
+        let ratio = overall_ratio.max(1e-9);
+        let mut wanted = none;
         let (frac, brake) = if f > 0.0 {
-            let m = f * p.wheel_radius_m / overall_ratio.max(1e-9);
+            let m = f * p.wheel_radius_m / ratio;
             let full = p.engine_max_torque(w_e_rad_s).max(1.0);
             ((m / full * self.tip).clamp(0.0, 1.0), 0.0)
-        } else if a < -0.05 {
-            (0.0, -f)
         } else {
-            (0.0, 0.0)
+            // brake blending (module doc): engine brake, retarder, service brake
+            let need = -f;
+            let drag = (-p.engine_min_torque_nm).max(0.0);
+            let engine = if engine_coupled && drag > 0.0 {
+                need.min(drag * ratio / p.wheel_radius_m)
+            } else {
+                0.0
+            };
+            let frac = -(engine * p.wheel_radius_m / ratio / drag.max(1e-9)).min(1.0);
+            let rest = need - engine;
+            let slowing = a < -0.05;
+            if c.retarder.is_some() {
+                wanted = WantedBrake {
+                    retarder_force_n: rest,
+                    service_takes_rest: slowing,
+                };
+                (frac, 0.0)
+            } else {
+                (frac, if slowing { rest } else { 0.0 })
+            }
         };
         // creeping to the stop point at near-zero target: hold the brake once slow enough
+        if target < 0.3 && v_mps < 0.5 {
+            wanted.service_takes_rest = false;
+        }
         let brake = if target < 0.3 && v_mps < 0.5 {
             brake.max(c.hold_brake_n)
         } else {
             brake
         };
-        DriverCommand {
-            torque_fraction: frac,
-            brake_n: brake,
-            accel_mps2: a,
-            target_mps: target,
-        }
+        (
+            DriverCommand {
+                torque_fraction: frac,
+                brake_n: brake,
+                retarder_nm: 0.0,
+                accel_mps2: a,
+                target_mps: target,
+            },
+            wanted,
+        )
     }
+}
+
+/// What the blending wants from the retarder (see [`Driver::demand`]).
+#[derive(Debug, Clone, Copy)]
+struct WantedBrake {
+    /// Braking force wanted from the retarder at the wheels, N.
+    retarder_force_n: f64,
+    /// The service brake takes what the retarder does not deliver.
+    service_takes_rest: bool,
 }

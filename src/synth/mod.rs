@@ -7,14 +7,19 @@
 //! seed (the project's own PRNG, [`crate::road::rng`]).
 //!
 //! [`drive`] makes the truth itself: a [`driver`] and an [`amt`] co-simulated with the fast
-//! driveline model over a synthetic road, the axle model run on the result. [`effects`] hides
-//! one physical effect of the diagnosis catalogue in that truth, with its answer kept apart.
+//! driveline model over a synthetic road (or one read by [`road_source`]), the axle model run
+//! on the result; the driver brakes with engine brake, [`retarder`] and service brake in that
+//! order, and [`track`] adds a GNSS track along the road. [`effects`] hides one physical effect
+//! of the diagnosis catalogue in that truth, with its answer kept apart.
 
 pub mod amt;
 pub mod can;
 pub mod drive;
 pub mod driver;
 pub mod effects;
+pub mod retarder;
+pub mod road_source;
+pub mod track;
 
 pub use can::{
     sample, write_can_drive, write_mcap, CanBus, CanChannel, CanFrame, CanMessage, Dropouts,

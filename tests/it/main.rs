@@ -27,3 +27,4 @@ mod slope_pipeline;
 mod synth_can;
 mod synth_drive;
 mod synth_effects;
+mod synth_extras;

@@ -31,6 +31,7 @@ fn ramp_truth(duration_s: f64) -> Truth {
             col("bellow_pressure_tag", &|t| 350e3 + 101.3 * t),
             col("retarder_torque", &|t| 200.0 + 10.7 * t),
             col("brake_force", &|t| 1000.0 + 713.0 * t),
+            col("clutch_position", &|t| 0.1 + 0.006 * t),
         ],
         t_s,
     }
@@ -70,7 +71,7 @@ fn default_bus_uses_the_bundled_mapping_names_and_units() {
         .find(|m| m.name == "j1939-json-mcap")
         .unwrap();
     let ours = bus.mapping().unwrap();
-    assert_eq!(bus.channels().count(), 10);
+    assert_eq!(bus.channels().count(), 11);
     for (m, c) in bus.channels() {
         let b = &bundled.signals[&c.column];
         let o = &ours.signals[&c.column];
@@ -107,11 +108,11 @@ fn every_value_is_a_multiple_of_its_resolution_and_in_range() {
             checked += 1;
         }
     }
-    // 30 s: CCVS1 (phase 0) 301 messages; ETC2, SLOPE, ERC1, BRAKE (phases 4–12 ms) 300 each;
-    // EEC1 (2 ms, 50 Hz) 1500 × 2 fields; ASC4 (8 ms) 300 × 3 fields
+    // 30 s: CCVS1 (phase 0) 301 messages; ETC2, SLOPE, ERC1, BRAKE, CLUTCH (phases 4–14 ms)
+    // 300 each; EEC1 (2 ms, 50 Hz) 1500 × 2 fields; ASC4 (8 ms) 300 × 3 fields
     assert_eq!(
         checked,
-        301 + 4 * 300 + 1500 * 2 + 300 * 3,
+        301 + 5 * 300 + 1500 * 2 + 300 * 3,
         "fields written"
     );
 }
@@ -218,6 +219,7 @@ fn noise_free_ramp_reproduces_the_quantised_truth() {
                 1.0,
             )],
             "/can/brake" => vec![("ServiceBrakeForce", (1000.0 + 713.0 * t) / 1e3, 0.1)],
+            "/can/clutch" => vec![("ClutchActuatorPosition", (0.1 + 0.006 * t) * 100.0, 0.4)],
             other => panic!("unexpected topic {other}"),
         };
         for (field, x, res) in want {
@@ -345,6 +347,7 @@ fn mcap_ingests_with_the_bundled_mapping_within_one_step_of_the_truth() {
         ("bellow_pressure_tag", "Pa", 100.0),
         ("retarder_torque", "N*m", 35.0),
         ("brake_force", "N", 100.0),
+        ("clutch_position", "1", 0.004),
     ];
     assert_eq!(log.signals.len(), steps.len());
     for (col, unit, step) in steps {

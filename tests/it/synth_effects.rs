@@ -59,13 +59,17 @@ fn smooth(v: &[f64], w: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Engine work minus service-brake work over the drive, ∫ (M_e ω_e − F_b v) dt (truth, J):
-/// what the driver spends against the resistances, up to the driveline's losses.
+/// Engine work minus service-brake and retarder work over the drive,
+/// ∫ (M_e ω_e − (F_b + T_aux/r_w) v) dt (truth, J): what the driver spends against the
+/// resistances, up to the driveline's losses.
 fn net_work(d: &SynthDrive) -> f64 {
     let (t, r) = (&d.drive.t_s, &d.drive);
+    let r_w = d.truth.driveline.wheel_radius_m;
+    let aux = |i: usize| r.aux_brake_wheel_nm.get(i).copied().unwrap_or(0.0) / r_w;
     (1..t.len())
         .map(|i| {
-            (r.engine_torque_nm[i] * r.engine_speed_rad_s[i] - r.brake_n[i] * r.speed_mps[i])
+            (r.engine_torque_nm[i] * r.engine_speed_rad_s[i]
+                - (r.brake_n[i] + aux(i)) * r.speed_mps[i])
                 * (t[i] - t[i - 1])
         })
         .sum()
@@ -367,6 +371,7 @@ fn axle_effects_leave_the_driveline_alone_and_follow_their_fingerprint() {
     let t_axle: Vec<f64> = (0..t.len())
         .map(|i| {
             none.drive.drive_torque_nm[i]
+                - none.drive.aux_brake_wheel_nm.get(i).copied().unwrap_or(0.0)
                 - a0.service_brake_share_rear * none.drive.brake_n[i] * r_w
         })
         .collect();
