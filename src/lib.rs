@@ -8,6 +8,7 @@
 //! The binary `fleetdyn` is a thin shell over this library.
 #![deny(missing_docs)]
 
+pub mod diagnose;
 pub mod ingest;
 pub mod io;
 pub mod model;

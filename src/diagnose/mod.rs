@@ -1,0 +1,4 @@
+//! Model-vs-recording mismatch diagnosis (issue 7, `diagnosis.md`): compare, locate, explain,
+//! show.
+
+pub mod catalogue;
