@@ -83,6 +83,7 @@ pub fn run(
             p,
             &v.gearbox.ratios,
             v.final_drive_ratio(),
+            v.driveline.as_ref(),
             slope,
             &cfg.validation,
         )?),

@@ -22,7 +22,10 @@
 //! [`axle_inputs_from_samples`] (acceleration differentiated over ±0.05 s).
 
 use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
-use super::can::{write_can_drive, CanBus, SynthError as CanError, SynthOptions, Truth};
+use super::can::{
+    write_can_drive, CanBus, CanChannel, CanMessage, Dropouts, SynthError as CanError,
+    SynthOptions, TorqueReference, Truth,
+};
 use super::driver::{Driver, DriverConfig};
 use crate::model::driveline::DrivelineParams;
 use crate::model::vehicle::{VehicleError, VehicleFile};
@@ -410,8 +413,16 @@ pub fn simulate_axles(
 }
 
 /// The CAN truth of a drive: vehicle_speed, engine_speed, engine_torque, gear, road_slope,
-/// brake_force and the three bellow gauge pressures (SI, on the drive's samples).
-pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
+/// brake_force, clutch_position and the three bellow gauge pressures (SI, on the drive's
+/// samples).
+///
+/// `brake_force` is the magnitude of the ground force (the CAN signal is ≥ 0): at standstill the
+/// trajectory's holding force is signed (negative = the ground pushes the truck uphill), and a
+/// recording's reader recovers that sign from the grade (`sim::axle_recorded`).
+/// `clutch_position` is the AMT's actuator position normalised by `clutch_x_max` (0 = engaged,
+/// 1 = open): the recorded-input simulation needs every input the truth used (physics.md §1,
+/// diagnosis.md step 1).
+pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory, clutch_x_max: f64) -> Truth {
     let [pf, pr, pt] = axles.pressure_pa.clone();
     Truth {
         t_s: tr.t_s.clone(),
@@ -421,12 +432,49 @@ pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
             ("engine_torque".into(), tr.engine_torque_nm.clone()),
             ("gear".into(), tr.gear.clone()),
             ("road_slope".into(), tr.slope.clone()),
-            ("brake_force".into(), tr.brake_n.clone()),
+            (
+                "brake_force".into(),
+                tr.brake_n.iter().map(|b| b.abs()).collect(),
+            ),
+            (
+                "clutch_position".into(),
+                tr.clutch_x.iter().map(|x| x / clutch_x_max).collect(),
+            ),
             ("bellow_pressure_front".into(), pf),
             ("bellow_pressure_rear".into(), pr),
             ("bellow_pressure_tag".into(), pt),
         ],
     }
+}
+
+/// `bus` with the AMT's clutch actuator position added when it carries none: a 50 Hz
+/// transmission-controller message `/can/clutch`, field `ClutchActuatorPosition` in % of full
+/// travel (0.4 %/bit, the J1939 1-byte percent), no noise (an actuator position sensor), as the
+/// bundled `j1939-json-mcap` mapping reads it. A bus that already has a `clutch_position`
+/// channel is returned unchanged.
+pub fn with_clutch_channel(mut bus: CanBus) -> CanBus {
+    if bus.channels().any(|(_, c)| c.column == "clutch_position") {
+        return bus;
+    }
+    bus.messages.push(CanMessage {
+        name: "CLUTCH".into(),
+        topic: "/can/clutch".into(),
+        rate_hz: 50.0,
+        phase_s: 0.014,
+        dropouts: Dropouts::NONE,
+        channels: vec![CanChannel {
+            column: "clutch_position".into(),
+            field: "ClutchActuatorPosition".into(),
+            wire_unit: "%".into(),
+            torque_reference: TorqueReference::None,
+            resolution: 0.4,
+            noise_sigma: 0.0,
+            delay_s: 0.0,
+            wire_min: 0.0,
+            wire_max: 100.0,
+        }],
+    });
+    bus
 }
 
 /// A finished synthetic drive: the trajectories and the files written.
@@ -453,7 +501,8 @@ pub const DRIVE_START_NS: i64 = 1_704_067_200_000_000_000;
 /// vehicle of `vehicle_path` over it (cruise speed: the driver's limit or the rules' design
 /// speed) and writes `drive.mcap`, `drive.parquet` and `vehicle.toml` (a byte copy of the
 /// vehicle file) into `out_dir` (created if needed). Road grid 1 m. The CAN bus is
-/// [`CanBus::j1939_truck`] with the engine's largest full-load torque as reference.
+/// [`CanBus::j1939_truck`] with the engine's largest full-load torque as reference, plus the clutch
+/// actuator position ([`with_clutch_channel`]).
 ///
 /// # Errors
 /// [`DriveError`] from every stage; a rule set without design speed and no speed limit is
@@ -489,13 +538,13 @@ pub fn synth_drive(
     };
     let drive = simulate_drive(d, &v.gearbox.ratios, &slope, length_m, cruise, cfg, seed)?;
     let axles = simulate_axles(a, &drive)?;
-    let truth = drive_truth(&drive, &axles);
+    let truth = drive_truth(&drive, &axles, d.clutch_x_max);
     std::fs::create_dir_all(out_dir).map_err(|source| DriveError::Io {
         path: out_dir.to_path_buf(),
         source,
     })?;
     let reference = d.engine_max_torque_nm.iter().fold(0.0f64, |m, &x| m.max(x));
-    let bus = CanBus::j1939_truck(reference);
+    let bus = with_clutch_channel(CanBus::j1939_truck(reference));
     let opts = SynthOptions {
         start_ns: DRIVE_START_NS,
         seed,

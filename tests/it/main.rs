@@ -26,3 +26,4 @@ mod seed_slope_step;
 mod slope_pipeline;
 mod synth_can;
 mod synth_drive;
+mod synth_nominal;
