@@ -83,6 +83,7 @@ pub fn run(
             p,
             &v.gearbox.ratios,
             v.final_drive_ratio(),
+            v.driveline.as_ref(),
             slope,
             &cfg.validation,
         )?),
@@ -98,8 +99,13 @@ pub fn run(
                 ..Default::default()
             };
             let sim = validate_shuffle(log, d, &v.gearbox.ratios, slope, &dcfg)?;
-            let sc = scenario_from_log(log, v.gearbox.ratios.len(), slope)
-                .map_err(|e| AxleStageError::Driveline(e.into()))?;
+            let sc = scenario_from_log(
+                log,
+                v.gearbox.ratios.len(),
+                slope,
+                Some(d.final_drive_ratio / d.wheel_radius_m),
+            )
+            .map_err(|e| AxleStageError::Driveline(e.into()))?;
             let t: Vec<f64> = sim
                 .timestamp_ns
                 .iter()

@@ -14,6 +14,7 @@ use super::axle_recorded::{axle_inputs_from_log, AxleRecordConfig, RecordedAxleI
 use super::recorded::RecordedError;
 use super::validate::error_metrics;
 use crate::model::axle::{Axle, AxleParams};
+use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
@@ -122,15 +123,18 @@ const SEGMENTS: [Segment; 4] = [
 ];
 
 /// Simulates `log` with the axle model, its inputs taken from the recording, and compares it
-/// with the recorded pressures and travel.
+/// with the recorded pressures and travel. `driveline`: the vehicle's driveline parameters, when
+/// it has them (the drive torque by inverse dynamics, [`axle_inputs_from_log`]).
 ///
 /// # Errors
 /// [`AxleValidationError`] when inputs cannot be built or a bellow pressure column is missing.
+#[allow(clippy::too_many_arguments)]
 pub fn validate_axle(
     log: &DriveLog,
     p: &AxleParams,
     gear_ratios: &[f64],
     final_drive_ratio: Option<f64>,
+    driveline: Option<&DrivelineParams>,
     slope_column: Option<&str>,
     cfg: &AxleValidationConfig,
 ) -> Result<AxleValidation, AxleValidationError> {
@@ -142,6 +146,7 @@ pub fn validate_axle(
         p.gravity_m_per_s2,
         gear_ratios,
         final_drive_ratio,
+        driveline,
         slope_column,
         &cfg.record,
     )?;

@@ -8,9 +8,14 @@
 //! when the recording says it is engaged and the vehicle moves, else slipping with the measured
 //! engine speed — and is simulated open loop with the fast path (exponential integrator).
 //!
+//! The recorded scenario holds the vehicle at standstill by its brakes and static rolling
+//! resistance ([`super::recorded`]); the initial state is the steady state of that unsmoothed
+//! model.
+//!
 //! **Metrics** per signal (vehicle speed, engine speed), overall and per gear, on the samples
-//! where the vehicle moves (measured speed ≥ `min_speed_mps`; the model has no standstill
-//! mode yet): RMSE, MAE and fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖).
+//! where the vehicle moves (measured speed ≥ `min_speed_mps`: at standstill the vehicle speed
+//! is trivially 0 and the engine idles with the clutch open): RMSE, MAE and
+//! fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖).
 
 use super::fast::FastDriveline;
 use super::hybrid::{steady_state_locked, ClutchMode, SimError, N_STATES};
@@ -164,7 +169,12 @@ pub fn validate_shuffle(
     cfg: &ValidationConfig,
 ) -> Result<ShuffleValidation, ValidationError> {
     let file = log.meta.source_file.clone();
-    let rec = scenario_from_log(log, ratios.len(), slope_column)?;
+    let rec = scenario_from_log(
+        log,
+        ratios.len(),
+        slope_column,
+        Some(p.final_drive_ratio / p.wheel_radius_m),
+    )?;
     let v_meas = log
         .signal("vehicle_speed")
         .and_then(|v| crate::signal::distance::fill_gaps(v, crate::schema::Interpolation::Linear))
@@ -201,7 +211,7 @@ pub fn validate_shuffle(
         let gear = sc.gear.eval(ta + 1e-9).round() as usize;
         let slope = sc.slope.eval(ta + 1e-9);
         let x = sc.clutch_x.eval(ta + 1e-9);
-        let (mut y0, _) = steady_state_locked(p, ratios, gear, v0, slope, true);
+        let (mut y0, _) = steady_state_locked(p, ratios, gear, v0, slope, sc.smoothing);
         let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
         let mode = if engaged && v0 >= cfg.min_speed_mps {
             ClutchMode::Locked

@@ -533,6 +533,10 @@ pub fn simulate_axles_with(
 /// The CAN truth of a drive: vehicle_speed, engine_speed, engine_torque, gear, road_slope,
 /// brake_force, retarder_torque, clutch_position and the three bellow gauge pressures (SI, on
 /// the drive's samples).
+///
+/// `brake_force` is the magnitude of the ground force (the CAN signal is ≥ 0): at standstill the
+/// trajectory's holding force is signed (negative = the ground pushes the truck uphill), and a
+/// recording's reader recovers that sign from the grade (`sim::axle_recorded`).
 pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
     let [pf, pr, pt] = axles.pressure_pa.clone();
     Truth {
@@ -543,7 +547,10 @@ pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
             ("engine_torque".into(), tr.engine_torque_nm.clone()),
             ("gear".into(), tr.gear.clone()),
             ("road_slope".into(), tr.slope.clone()),
-            ("brake_force".into(), tr.brake_n.clone()),
+            (
+                "brake_force".into(),
+                tr.brake_n.iter().map(|b| b.abs()).collect(),
+            ),
             ("retarder_torque".into(), tr.retarder_torque_nm.clone()),
             ("clutch_position".into(), tr.clutch_position.clone()),
             ("bellow_pressure_front".into(), pf),

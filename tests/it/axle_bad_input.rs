@@ -132,6 +132,7 @@ fn validation_without_pressure_channels_is_a_clear_error() {
         v.axles.as_ref().unwrap(),
         &v.gearbox.ratios,
         v.final_drive_ratio(),
+        v.driveline.as_ref(),
         None,
         &AxleValidationConfig::default(),
     )

@@ -28,3 +28,4 @@ mod synth_can;
 mod synth_drive;
 mod synth_effects;
 mod synth_extras;
+mod synth_nominal;
