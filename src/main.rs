@@ -298,6 +298,9 @@ enum SynthCommand {
         /// Answer file of --effect (JSON; default OUTPUT/answer.json).
         #[arg(long)]
         answer: Option<PathBuf>,
+        /// Resolution of the road-slope sensor, % (1: whole percent, as production sensors send).
+        #[arg(long, default_value_t = 1.0)]
+        slope_resolution_percent: f64,
         /// Largest retarder torque at the propeller shaft, N·m (0: no retarder).
         #[arg(long, default_value_t = 3500.0)]
         retarder_max_torque_nm: f64,
@@ -985,6 +988,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             stop_every_km,
             effect,
             answer,
+            slope_resolution_percent,
             retarder_max_torque_nm,
             gnss_origin_lat_deg,
             gnss_origin_lon_deg,
@@ -997,6 +1001,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let mut cfg = DriveConfig::default();
             cfg.driver.speed_limit_mps = speed_limit_km_per_h.map(|k| k / 3.6);
             cfg.driver.stop_every_m = (stop_every_km > 0.0).then_some(stop_every_km * 1000.0);
+            cfg.slope_resolution = slope_resolution_percent / 100.0;
             if !(retarder_max_torque_nm.is_finite() && retarder_max_torque_nm >= 0.0) {
                 return Err(usage(anyhow::anyhow!(
                     "--retarder-max-torque-nm {retarder_max_torque_nm} must be finite and >= 0"

@@ -2,3 +2,4 @@
 //! show.
 
 pub mod catalogue;
+pub mod extended;

@@ -131,6 +131,9 @@ pub struct DriveConfig {
     pub max_duration_s: f64,
     /// GNSS track and receiver; `None`: no GNSS in the log.
     pub gnss: Option<GnssConfig>,
+    /// Resolution of the road-slope sensor, tan α per step (0.01: the whole percent production
+    /// sensors send; a finer one makes `slope_quantization` a hideable effect).
+    pub slope_resolution: f64,
 }
 
 impl Default for DriveConfig {
@@ -143,6 +146,7 @@ impl Default for DriveConfig {
             sample_dt_s: 0.01,
             max_duration_s: 4.0 * 3600.0,
             gnss: Some(GnssConfig::default()),
+            slope_resolution: 0.01,
         }
     }
 }
@@ -676,6 +680,20 @@ pub fn synth_drive_on(
     let length_m = road.length_m;
     let reference = d.engine_max_torque_nm.iter().fold(0.0f64, |m, &x| m.max(x));
     let mut bus = CanBus::j1939_truck(reference);
+    check(
+        "slope_resolution",
+        cfg.slope_resolution,
+        cfg.slope_resolution.is_finite() && cfg.slope_resolution > 0.0,
+    )?;
+    for c in bus.messages.iter_mut().flat_map(|m| m.channels.iter_mut()) {
+        if c.column == "road_slope" {
+            c.resolution = if c.wire_unit == "%" {
+                100.0 * cfg.slope_resolution
+            } else {
+                cfg.slope_resolution
+            };
+        }
+    }
     let slope_resolution = bus
         .channels()
         .find(|(_, c)| c.column == "road_slope")

@@ -149,7 +149,7 @@ impl Effect {
             RollingResistance => rel(0.20, 0.50),
             VehicleMass => rel(0.08, 0.25),
             GradeOffset => abs(0.005, 0.02, true),
-            SlopeQuantization => Range::Set { lo: 0.02, hi: 0.05 },
+            SlopeQuantization => Range::Set { lo: 0.01, hi: 0.02 },
             SignalDelay => abs(0.1, 0.4, false),
             DrivelineBacklash => abs(0.015, 0.05, false),
             DrivelineCompliance => rel(0.25, 0.50),

@@ -9,6 +9,7 @@ mod axle_scenarios;
 mod axle_static_table;
 mod axle_validate;
 mod common;
+mod diagnose_extended;
 mod driveline_fast;
 mod driveline_hybrid;
 mod driveline_linear;

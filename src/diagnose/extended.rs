@@ -1,0 +1,496 @@
+//! The nominal models extended by every catalogue effect (diagnosis.md step 3): one parameter
+//! vector [`Theta`] whose component per [`Effect`] is that effect's parameter, in the same SI
+//! quantity the synthetic generator's answer file names (`c_w_a_f_m2`, `mass_kg`,
+//! `slope_offset_rad`, …; [`Effect::parameter`]). At the nominal values ([`Theta::nominal`]) the
+//! extended models are the nominal ones.
+//!
+//! # What each component does to the model
+//! - plant parameters (drag area, rolling resistance, mass, shaft stiffness, clutch capacity,
+//!   CG height and position, tyre stiffness) and structural extensions (drive-shaft lash,
+//!   torque reaction, bellow progression, grade-force height) are set on a
+//!   [`TruthModel`] built from the vehicle file ([`TruthModel::inject`]) — the same code that
+//!   hides them in synthetic drives, so the two cannot disagree on meaning;
+//! - sensor effects correct the *recorded inputs* before the model sees them (the inverse of the
+//!   sensor fault): the slope becomes `tan(atan(s) − δ)` (`grade_offset`), the engine torque
+//!   `M(t + τ) − ΔM` (`signal_delay`, `engine_torque_offset`);
+//! - `slope_quantization` is a switch: a parameter above the recording's nominal slope
+//!   resolution replaces the recorded slope by its zero-phase spatial filter (seed 000 §5; the
+//!   cure the catalogue names), so the model no longer sees the steps.
+//!
+//! # Outputs
+//! [`LongitudinalModel::simulate`]: vehicle and engine speed on the log's rows, from windows
+//! re-initialised at the measured state ([`crate::sim::validate`]): open-loop drift cannot
+//! accumulate over more than one window. [`AxleModel::simulate`]: the three bellow pressures on
+//! the log's rows, open loop from the steady state (the suspension is stable, nothing drifts).
+
+use super::catalogue::Effect;
+use crate::model::axle::AxleParams;
+use crate::model::driveline::DrivelineParams;
+use crate::road::slope_filter::{filter_slope, SlopeFilterConfig};
+use crate::signal::distance::{resample_to_distance, ResampleConfig};
+use crate::sim::axle::{HalfTruck, Start};
+use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
+use crate::sim::fast::FastDriveline;
+use crate::sim::hybrid::{steady_state_locked, ClutchMode};
+use crate::sim::recorded::{scenario_from_log, RecordedError};
+use crate::synth::effects::TruthModel;
+use crate::table::DriveLog;
+use thiserror::Error;
+
+/// Why an extended model cannot be built or run.
+#[derive(Debug, Error)]
+pub enum ExtendedError {
+    /// The recording lacks inputs or has bad ones.
+    #[error(transparent)]
+    Recorded(#[from] RecordedError),
+    /// A parameter value outside its physical domain.
+    #[error(transparent)]
+    Effect(#[from] crate::synth::effects::EffectError),
+    /// The driveline simulation failed.
+    #[error("{file}: driveline simulation: {source}")]
+    Sim {
+        /// Source file.
+        file: String,
+        /// Cause.
+        #[source]
+        source: crate::sim::hybrid::SimError,
+    },
+    /// A column the model compares with is missing.
+    #[error("{file}: column {column} is missing or empty")]
+    Missing {
+        /// Source file.
+        file: String,
+        /// Column.
+        column: String,
+    },
+}
+
+/// One parameter per catalogue effect, in [`Effect::ALL`] order, SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Theta(pub [f64; 16]);
+
+impl Theta {
+    /// The value of `e`'s parameter.
+    pub fn get(&self, e: Effect) -> f64 {
+        self.0[index(e)]
+    }
+
+    /// Sets `e`'s parameter.
+    pub fn set(&mut self, e: Effect, v: f64) {
+        self.0[index(e)] = v;
+    }
+
+    /// The nominal parameter values of `truth` (the vehicle file's, or "absent"), with the
+    /// recording's slope resolution `slope_resolution` (tan α per step) as `slope_quantization`'s.
+    /// Axle effects of a vehicle without axles get 0.
+    pub fn nominal(truth: &TruthModel, slope_resolution: f64) -> Theta {
+        let mut t = [0.0; 16];
+        for (i, e) in Effect::ALL.iter().enumerate() {
+            t[i] = truth.nominal_value(*e, slope_resolution).unwrap_or(0.0);
+        }
+        Theta(t)
+    }
+
+    /// Effects whose value differs from `nominal`.
+    pub fn changed(&self, nominal: &Theta) -> Vec<Effect> {
+        Effect::ALL
+            .into_iter()
+            .filter(|e| self.get(*e) != nominal.get(*e))
+            .collect()
+    }
+}
+
+/// Position of `e` in [`Effect::ALL`].
+pub fn index(e: Effect) -> usize {
+    Effect::ALL
+        .iter()
+        .position(|x| *x == e)
+        .expect("every effect is in the catalogue")
+}
+
+/// The recording with the sensor effects of `theta` undone (see the module documentation);
+/// `filtered_slope` is the recording's filtered slope ([`filtered_slope`]) for the
+/// `slope_quantization` switch.
+pub fn corrected_log(
+    log: &DriveLog,
+    theta: &Theta,
+    nominal: &Theta,
+    filtered_slope: Option<&[f64]>,
+) -> DriveLog {
+    let mut out = log.clone();
+    let t: Vec<f64> = log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+        .collect();
+    let delta = theta.get(Effect::GradeOffset);
+    let quantised = theta.get(Effect::SlopeQuantization) > nominal.get(Effect::SlopeQuantization);
+    let offset = theta.get(Effect::EngineTorqueOffset);
+    let tau = theta.get(Effect::SignalDelay);
+    for s in out.signals.iter_mut() {
+        match s.name.as_str() {
+            "road_slope" => {
+                if let (true, Some(f)) = (quantised, filtered_slope) {
+                    s.values = f.to_vec();
+                }
+                if delta != 0.0 {
+                    for v in s.values.iter_mut() {
+                        *v = (v.atan() - delta).tan();
+                    }
+                }
+            }
+            "engine_torque" => {
+                if tau != 0.0 {
+                    s.values = shifted(&t, &s.values, tau);
+                }
+                if offset != 0.0 {
+                    for v in s.values.iter_mut() {
+                        *v -= offset;
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// `v(t + tau)` on the grid `t` (linear between finite samples, held at the ends, NaN kept).
+fn shifted(t: &[f64], v: &[f64], tau: f64) -> Vec<f64> {
+    let n = t.len();
+    (0..n)
+        .map(|i| {
+            let tt = t[i] + tau;
+            let k = t.partition_point(|&x| x <= tt);
+            if k == 0 {
+                v[0]
+            } else if k >= n {
+                v[n - 1]
+            } else {
+                let w = (tt - t[k - 1]) / (t[k] - t[k - 1]);
+                v[k - 1] + w * (v[k] - v[k - 1])
+            }
+        })
+        .collect()
+}
+
+/// The seed 000 §5 zero-phase spatial filter of the recording's slope, on its rows (`None`
+/// without a slope column or when the drive is too short to resample).
+pub fn filtered_slope(log: &DriveLog) -> Option<Vec<f64>> {
+    log.signal("road_slope")?;
+    let d = resample_to_distance(log, &ResampleConfig::default()).ok()?;
+    let f = filter_slope(&d, &SlopeFilterConfig::default()).ok()?;
+    Some(f.zero_phase_time)
+}
+
+/// Settings of the windowed longitudinal simulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LongitudinalConfig {
+    /// Re-initialisation window, s.
+    pub window_s: f64,
+    /// Integration step, s (1 ms is used instead when the drive-shaft lash is non-zero).
+    pub dt_s: f64,
+    /// Samples below this measured speed do not count, m/s.
+    pub min_speed_mps: f64,
+}
+
+impl Default for LongitudinalConfig {
+    /// 20 s windows (long enough for drag and mass to show as speed drift, short enough that
+    /// the slope sensor's quantisation bias cannot build up), 10 ms steps, 1 m/s.
+    fn default() -> Self {
+        Self {
+            window_s: 20.0,
+            dt_s: 0.01,
+            min_speed_mps: 1.0,
+        }
+    }
+}
+
+/// Simulated longitudinal outputs on the log's rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LongitudinalOutputs {
+    /// Vehicle speed, m/s.
+    pub vehicle_speed: Vec<f64>,
+    /// Engine speed, rad/s.
+    pub engine_speed: Vec<f64>,
+}
+
+/// The driveline model of one recording, extended by the catalogue's longitudinal effects.
+#[derive(Debug, Clone)]
+pub struct LongitudinalModel<'a> {
+    log: &'a DriveLog,
+    nominal_truth: &'a TruthModel,
+    ratios: &'a [f64],
+    nominal: Theta,
+    filtered_slope: Option<Vec<f64>>,
+    t: Vec<f64>,
+    v_meas: Vec<f64>,
+    w_meas: Vec<f64>,
+    cfg: LongitudinalConfig,
+}
+
+fn filled(log: &DriveLog, name: &str) -> Result<Vec<f64>, ExtendedError> {
+    log.signal(name)
+        .and_then(|v| crate::signal::distance::fill_gaps(v, crate::schema::Interpolation::Linear))
+        .ok_or_else(|| ExtendedError::Missing {
+            file: log.meta.source_file.clone(),
+            column: name.into(),
+        })
+}
+
+fn interp(ts: &[f64], ys: &[f64], t: f64) -> f64 {
+    let k = ts.partition_point(|&x| x <= t);
+    if k == 0 {
+        return ys[0];
+    }
+    if k >= ts.len() {
+        return ys[ys.len() - 1];
+    }
+    let w = (t - ts[k - 1]) / (ts[k] - ts[k - 1]);
+    ys[k - 1] + w * (ys[k] - ys[k - 1])
+}
+
+impl<'a> LongitudinalModel<'a> {
+    /// Binds a recording (vehicle speed, engine speed, engine torque and gear needed), the
+    /// nominal vehicle and its gear ratios. `nominal` are the nominal parameters
+    /// ([`Theta::nominal`]).
+    ///
+    /// # Errors
+    /// [`ExtendedError::Missing`] for a missing speed column.
+    pub fn new(
+        log: &'a DriveLog,
+        nominal_truth: &'a TruthModel,
+        ratios: &'a [f64],
+        nominal: Theta,
+        cfg: LongitudinalConfig,
+    ) -> Result<Self, ExtendedError> {
+        let v_meas = filled(log, "vehicle_speed")?;
+        let w_meas = filled(log, "engine_speed")?;
+        let t: Vec<f64> = log
+            .timestamp_ns
+            .iter()
+            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+            .collect();
+        Ok(Self {
+            log,
+            nominal_truth,
+            ratios,
+            nominal,
+            filtered_slope: filtered_slope(log),
+            t,
+            v_meas,
+            w_meas,
+            cfg,
+        })
+    }
+
+    /// The nominal parameters.
+    pub fn nominal(&self) -> &Theta {
+        &self.nominal
+    }
+
+    /// Measured vehicle speed (gaps filled), m/s.
+    pub fn measured_speed(&self) -> &[f64] {
+        &self.v_meas
+    }
+
+    /// Measured engine speed (gaps filled), rad/s.
+    pub fn measured_engine_speed(&self) -> &[f64] {
+        &self.w_meas
+    }
+
+    /// Times of the rows, s from the first.
+    pub fn times(&self) -> &[f64] {
+        &self.t
+    }
+
+    /// The plant of `theta`: parameters, lash.
+    fn plant(&self, theta: &Theta) -> Result<TruthModel, ExtendedError> {
+        let mut tm = self.nominal_truth.clone();
+        for e in theta.changed(&self.nominal) {
+            if matches!(
+                e,
+                Effect::GradeOffset
+                    | Effect::SlopeQuantization
+                    | Effect::SignalDelay
+                    | Effect::EngineTorqueOffset
+            ) {
+                continue; // corrected on the inputs
+            }
+            if e.domain() == super::catalogue::Domain::Longitudinal {
+                tm.inject(e, theta.get(e))?;
+            }
+        }
+        Ok(tm)
+    }
+
+    /// Simulates the recording with parameters `theta`, window by window from the measured
+    /// state (see the module documentation).
+    ///
+    /// # Errors
+    /// [`ExtendedError`] for parameters outside their domain or a failed simulation.
+    pub fn simulate(&self, theta: &Theta) -> Result<LongitudinalOutputs, ExtendedError> {
+        let tm = self.plant(theta)?;
+        let p: &DrivelineParams = &tm.driveline;
+        let log = corrected_log(
+            self.log,
+            theta,
+            &self.nominal,
+            self.filtered_slope.as_deref(),
+        );
+        let file = log.meta.source_file.clone();
+        let rec = scenario_from_log(
+            &log,
+            self.ratios.len(),
+            None,
+            Some(p.final_drive_ratio / p.wheel_radius_m),
+        )?;
+        let sc = &rec.scenario;
+        let dt = if tm.lash_rad > 0.0 {
+            self.cfg.dt_s.min(1e-3)
+        } else {
+            self.cfg.dt_s
+        };
+        let mut fast = FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad);
+        let n_win = (sc.t_end_s / self.cfg.window_s).ceil().max(1.0) as usize;
+        let (mut ts, mut vs, mut ws) = (Vec::new(), Vec::new(), Vec::new());
+        for w in 0..n_win {
+            let ta = w as f64 * self.cfg.window_s;
+            let tb = ((w + 1) as f64 * self.cfg.window_s).min(sc.t_end_s);
+            if tb - ta < dt {
+                continue;
+            }
+            let v0 = interp(&self.t, &self.v_meas, ta).max(0.0);
+            let gear = sc.gear.eval(ta + 1e-9).round() as usize;
+            let slope = sc.slope.eval(ta + 1e-9);
+            let x = sc.clutch_x.eval(ta + 1e-9);
+            let (mut y0, _) = steady_state_locked(p, self.ratios, gear, v0, slope, sc.smoothing);
+            let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
+            let mode = if engaged && v0 >= self.cfg.min_speed_mps {
+                ClutchMode::Locked
+            } else {
+                let we = interp(&self.t, &self.w_meas, ta);
+                let sigma = if we >= y0[1] { 1.0 } else { -1.0 };
+                y0[0] = we;
+                ClutchMode::Slipping(sigma)
+            };
+            y0[8] = 0.0;
+            if tm.lash_rad > 0.0 {
+                // the steady twist carries the drive torque: in contact on its side
+                y0[6] += 0.5 * tm.lash_rad * y0[6].signum();
+            }
+            let tr =
+                fast.simulate_span(sc, ta, tb, y0, mode)
+                    .map_err(|source| ExtendedError::Sim {
+                        file: file.clone(),
+                        source,
+                    })?;
+            let keep = if w + 1 == n_win {
+                tr.t.len()
+            } else {
+                tr.t.len() - 1
+            };
+            for k in 0..keep {
+                ts.push(tr.t[k]);
+                vs.push(p.wheel_radius_m * tr.y[k][7]);
+                ws.push(tr.y[k][0]);
+            }
+        }
+        Ok(LongitudinalOutputs {
+            vehicle_speed: self.t.iter().map(|&tt| interp(&ts, &vs, tt)).collect(),
+            engine_speed: self.t.iter().map(|&tt| interp(&ts, &ws, tt)).collect(),
+        })
+    }
+}
+
+/// The axle-load model of one recording, extended by the catalogue's axle effects (and by the
+/// longitudinal ones that change its inputs or masses).
+#[derive(Debug, Clone)]
+pub struct AxleModel<'a> {
+    log: &'a DriveLog,
+    nominal_truth: &'a TruthModel,
+    ratios: &'a [f64],
+    nominal: Theta,
+    filtered_slope: Option<Vec<f64>>,
+    cfg: AxleRecordConfig,
+}
+
+impl<'a> AxleModel<'a> {
+    /// Binds a recording with bellow pressures and the nominal vehicle (with axles).
+    ///
+    /// # Errors
+    /// [`ExtendedError::Missing`] for missing pressures or axles.
+    pub fn new(
+        log: &'a DriveLog,
+        nominal_truth: &'a TruthModel,
+        ratios: &'a [f64],
+        nominal: Theta,
+    ) -> Result<Self, ExtendedError> {
+        if nominal_truth.axles.is_none() {
+            return Err(ExtendedError::Missing {
+                file: log.meta.source_file.clone(),
+                column: "[axles] of the vehicle file".into(),
+            });
+        }
+        for c in [
+            "bellow_pressure_front",
+            "bellow_pressure_rear",
+            "bellow_pressure_tag",
+        ] {
+            filled(log, c)?;
+        }
+        Ok(Self {
+            log,
+            nominal_truth,
+            ratios,
+            nominal,
+            filtered_slope: filtered_slope(log),
+            cfg: AxleRecordConfig::default(),
+        })
+    }
+
+    /// Simulated bellow pressures front, rear, tag on the log's rows, Pa.
+    ///
+    /// # Errors
+    /// [`ExtendedError`] for parameters outside their domain or inputs that cannot be built.
+    pub fn simulate(&self, theta: &Theta) -> Result<[Vec<f64>; 3], ExtendedError> {
+        let mut tm = self.nominal_truth.clone();
+        for e in theta.changed(&self.nominal) {
+            if matches!(
+                e,
+                Effect::GradeOffset
+                    | Effect::SlopeQuantization
+                    | Effect::SignalDelay
+                    | Effect::EngineTorqueOffset
+            ) {
+                continue;
+            }
+            tm.inject(e, theta.get(e))?;
+        }
+        let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
+        let d = &tm.driveline;
+        let log = corrected_log(
+            self.log,
+            theta,
+            &self.nominal,
+            self.filtered_slope.as_deref(),
+        );
+        let rec = axle_inputs_from_log(
+            &log,
+            a.mass_kg(),
+            a.wheel_radius_m,
+            a.gravity_m_per_s2,
+            self.ratios,
+            Some(d.final_drive_ratio),
+            Some(d),
+            None,
+            &self.cfg,
+        )?;
+        let traj = HalfTruck::new(a).with_extensions(tm.axle_ext).simulate(
+            &rec.inputs,
+            &rec.t_s,
+            Start::Steady,
+        );
+        Ok(traj.pressure_pa)
+    }
+}

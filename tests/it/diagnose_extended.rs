@@ -1,0 +1,227 @@
+//! The extended models of the diagnosis (src/diagnose/extended.rs) against synthetic drives
+//! with one hidden effect each: with the effect's parameter at its nominal value the model
+//! misses the recording; set to the truth value (from the answer) it reproduces it about as well
+//! as the nominal model reproduces a clean drive. This pins that every catalogue effect means
+//! the same in the generator and in the diagnosis.
+
+use crate::common::fixture;
+use fleetdyn::diagnose::catalogue::{Domain, Effect};
+use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel, Theta};
+use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
+use fleetdyn::synth::effects::{EffectChoice, TruthModel};
+use std::path::Path;
+
+const VEHICLE: &str = "fixtures/vehicles/seed002-6x2-diesel.toml";
+
+/// A 2 km city drive (seed 5), or for the slope effects a 3 km highway drive over a fine
+/// (0.1 %) slope sensor: the spatial slope filter is the cure for quantisation on roads whose
+/// grade changes more slowly than its 250 m cut-off wavelength, which city roads do not.
+fn drive(dir: &Path, effect: Option<(Effect, f64)>, highway: bool) -> SynthDrive {
+    let hidden = effect.map(|(e, v)| HiddenEffect {
+        choice: EffectChoice::Given(e, Some(v)),
+        answer_path: dir.join("answer.json"),
+    });
+    let mut cfg = DriveConfig::default();
+    let (rules, km) = if highway {
+        cfg.slope_resolution = 0.001;
+        ("highway-se", 3.0)
+    } else {
+        ("city-se", 2.0)
+    };
+    synth_drive(
+        &fixture(VEHICLE),
+        rules,
+        km,
+        5,
+        &dir.join("d"),
+        &cfg,
+        hidden.as_ref(),
+    )
+    .unwrap()
+}
+
+fn rmse(a: &[f64], b: &[f64], keep: &[bool]) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for i in 0..a.len() {
+        if keep[i] && a[i].is_finite() && b[i].is_finite() {
+            s += (a[i] - b[i]).powi(2);
+            n += 1;
+        }
+    }
+    (s / n as f64).sqrt()
+}
+
+/// (engine-speed RMSE rad/s, vehicle-speed RMSE m/s) or the three bellow RMSEs (Pa) summed in
+/// quadrature, of the extended model with `theta` on the drive's log.
+fn error(d: &SynthDrive, truth: &TruthModel, ratios: &[f64], theta: &Theta, domain: Domain) -> f64 {
+    let log = &d.log;
+    let nominal = Theta::nominal(
+        truth,
+        if d.truth.sensors.slope_resolution.is_some() || theta.get(Effect::SlopeQuantization) < 0.01
+        {
+            0.001
+        } else {
+            0.01
+        },
+    );
+    match domain {
+        Domain::Longitudinal => {
+            let m =
+                LongitudinalModel::new(log, truth, ratios, nominal, LongitudinalConfig::default())
+                    .unwrap();
+            let o = m.simulate(theta).unwrap();
+            let keep: Vec<bool> = m.measured_speed().iter().map(|v| *v >= 1.0).collect();
+            // engine speed in rad/s and vehicle speed scaled to the engine by a typical
+            // overall ratio / r_w (≈ 40 rad/s per m/s) weigh alike
+            let ew = rmse(&o.engine_speed, m.measured_engine_speed(), &keep);
+            let ev = rmse(&o.vehicle_speed, m.measured_speed(), &keep);
+            (ew * ew + (40.0 * ev).powi(2)).sqrt()
+        }
+        Domain::Axle => {
+            let m = AxleModel::new(log, truth, ratios, nominal).unwrap();
+            let p = m.simulate(theta).unwrap();
+            let keep = vec![true; log.len()];
+            [
+                "bellow_pressure_front",
+                "bellow_pressure_rear",
+                "bellow_pressure_tag",
+            ]
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let meas: Vec<f64> = log.signal(c).unwrap().to_vec();
+                rmse(&p[i], &meas, &keep).powi(2)
+            })
+            .sum::<f64>()
+            .sqrt()
+        }
+    }
+}
+
+#[test]
+fn each_effect_at_its_truth_value_restores_the_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.01);
+    let clean = drive(&dir.path().join("clean"), None, false);
+    let floor =
+        [Domain::Longitudinal, Domain::Axle].map(|d| error(&clean, &truth, &ratios, &nominal, d));
+    eprintln!(
+        "clean drive: longitudinal {:.2}, axle {:.0} Pa",
+        floor[0], floor[1]
+    );
+    let clean_hw = drive(&dir.path().join("clean_hw"), None, true);
+    let floor_hw = error(
+        &clean_hw,
+        &truth,
+        &ratios,
+        &Theta::nominal(&truth, 0.001),
+        Domain::Longitudinal,
+    );
+    eprintln!("clean highway drive (0.1 % slope sensor): longitudinal {floor_hw:.2}");
+    let a0 = truth.axles.as_ref().unwrap();
+    let d0 = &truth.driveline;
+    let cases: Vec<(Effect, f64)> = vec![
+        (Effect::AeroDrag, 1.4 * d0.c_w_a_f_m2),
+        (Effect::RollingResistance, 1.5 * d0.c_r1),
+        (Effect::VehicleMass, 1.2 * d0.mass_kg),
+        (Effect::GradeOffset, 0.015),
+        (Effect::SignalDelay, 0.3),
+        (Effect::DrivelineBacklash, 0.04),
+        (Effect::DrivelineCompliance, 0.6 * d0.k_d_nm_per_rad),
+        (Effect::EngineTorqueOffset, 100.0),
+        (Effect::ClutchSlip, 0.65 * d0.clutch_max_torque_nm),
+        (Effect::BogieTorqueReaction, 0.5),
+        (Effect::LoadTransferHeight, a0.chassis_cg_height_m + 0.3),
+        (Effect::AirSpringNonlinearity, 4.0),
+        (Effect::CgPosition, 0.25),
+        (Effect::TyreStiffness, 0.7),
+        (Effect::GradeLoadTransfer, 0.8),
+    ];
+    // slope_quantization is not in the list: its fingerprint is shuffle-band oscillation after
+    // slope steps, and on this truck a whole-percent step excites too little of it to separate
+    // from the raw slope's own errors (measured in the test below); issue 7 reports it as such.
+    let mut failures = Vec::new();
+    for (e, v) in cases {
+        let d = drive(&dir.path().join(e.id()), Some((e, v)), false);
+        let mut th = nominal;
+        th.set(e, v);
+        let (before, after) = (
+            error(&d, &truth, &ratios, &nominal, e.domain()),
+            error(&d, &truth, &ratios, &th, e.domain()),
+        );
+        let fl = floor[if e.domain() == Domain::Longitudinal {
+            0
+        } else {
+            1
+        }];
+        eprintln!(
+            "{:<24} nominal {before:>9.2}  at truth {after:>9.2}  (clean floor {fl:.2})",
+            e.id()
+        );
+        if !(after < 0.7 * before || after < 1.2 * fl) {
+            failures.push(format!("{}: {before} -> {after} (floor {fl})", e.id()));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
+    // 3 km highway drive over a 0.1 % slope sensor, and the same drive over a whole-percent one
+    let dir = tempfile::tempdir().unwrap();
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.001);
+    let fine = drive(&dir.path().join("fine"), None, true);
+    let coarse = drive(
+        &dir.path().join("coarse"),
+        Some((Effect::SlopeQuantization, 0.01)),
+        true,
+    );
+    let mut filtered = nominal;
+    filtered.set(Effect::SlopeQuantization, 0.01);
+    // RMS of the engine-speed error band-passed to the shuffle band, 1.5–6 Hz (zero phase)
+    let band = |d: &SynthDrive, th: &Theta| {
+        use fleetdyn::signal::{butter, sosfiltfilt, BandType, EdgeMode};
+        let m = LongitudinalModel::new(
+            &d.log,
+            &truth,
+            &ratios,
+            nominal,
+            LongitudinalConfig::default(),
+        )
+        .unwrap();
+        let o = m.simulate(th).unwrap();
+        let fs = 1.0 / (m.times()[1] - m.times()[0]);
+        let e: Vec<f64> = o
+            .engine_speed
+            .iter()
+            .zip(m.measured_engine_speed())
+            .map(|(a, b)| a - b)
+            .collect();
+        let em = EdgeMode::default();
+        let hp = butter(2, 1.5, fs, BandType::Highpass).unwrap();
+        let lp = butter(2, 6.0, fs, BandType::Lowpass).unwrap();
+        let x = sosfiltfilt(&lp, &sosfiltfilt(&hp, &e, &em).unwrap(), &em).unwrap();
+        let keep: Vec<bool> = m.measured_speed().iter().map(|v| *v >= 1.0).collect();
+        rmse(&x, &vec![0.0; x.len()], &keep)
+    };
+    let (f_raw, c_raw, c_filt) = (
+        band(&fine, &nominal),
+        band(&coarse, &nominal),
+        band(&coarse, &filtered),
+    );
+    eprintln!(
+        "shuffle-band engine-speed error, rad/s: 0.1 % sensor {f_raw:.3}; 1 % sensor raw slope {c_raw:.3}, filtered {c_filt:.3}"
+    );
+    // the band error is finite and of the order of the engine-speed sensor noise (≤ 2 rad/s):
+    // whole-percent steps add no shuffle the band can tell from noise on this truck
+    for x in [f_raw, c_raw, c_filt] {
+        assert!(x.is_finite() && x < 2.0, "{x}");
+    }
+}
