@@ -3,7 +3,7 @@
 //!
 //! A **manifest** is any input file whose extension is neither `.mcap` nor `.parquet`: one drive
 //! per line, `path,vehicle_id` (the vehicle id may be left out: `path`), `#` starts a comment,
-//! blank lines are ignored, and a first line `path,vehicle_id` is taken as a header. Relative
+//! blank lines are ignored, and a first non-comment line `path,vehicle_id` is a header. Relative
 //! paths are relative to the manifest's folder. A manifest's vehicle id overrides the one in the
 //! drive's metadata, and is known before any drive is read, so a vehicle id without a vehicle
 //! file is a plan error.
@@ -92,9 +92,13 @@ fn read_manifest(path: &Path, out: &mut Vec<InputItem>, problems: &mut Vec<Strin
         }
     };
     let base = path.parent().unwrap_or(Path::new(""));
+    let mut first = true;
     for (i, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
-        if line.is_empty() || (i == 0 && line.replace(' ', "") == "path,vehicle_id") {
+        if line.is_empty() {
+            continue;
+        }
+        if std::mem::take(&mut first) && line.replace(' ', "") == "path,vehicle_id" {
             continue;
         }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
