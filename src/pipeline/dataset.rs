@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! OUT/<table>/model_version=<M>/vehicle_id=<V>/date=<YYYY-MM-DD>/<drive_id>.parquet
-//! OUT/_state/model_version=<M>/<aa>/<input sha-256>.json      done-marker of one input
+//! OUT/_state/model_version=<M>/<aa>/<key>.json    done-marker of one input (key: hash of its
+//!                                                 content hash and its path as listed)
 //! OUT/_reports/<pipeline>/model_version=<M>[/shard-<i>-of-<N>]/  run report, fleet tables, plots
 //! ```
 //!
@@ -18,7 +19,8 @@
 //! **Commit protocol.** A drive's tables are each written atomically (temporary name, rename),
 //! `drive_summary` last, then the done-marker, also atomically. The marker is the drive's commit:
 //! it records the input's content hash, the drive's configuration hash and its outputs. A re-run
-//! skips an input whose marker has the same hashes and whose outputs all exist; anything else is
+//! skips an input (same path, same bytes) whose marker has the same configuration hash and whose
+//! outputs all exist; anything else is
 //! processed again (deterministic outputs overwrite identical bytes), and files the previous
 //! configuration wrote but the new one does not are removed. Temporary files a killed run left
 //! are removed before a target is written again.
@@ -98,12 +100,12 @@ impl Dataset {
             .join(format!("{}.parquet", escape(drive_id)))
     }
 
-    /// Path of the done-marker of an input with content hash `sha`, relative to the root.
-    pub fn marker_rel(&self, sha: &str) -> PathBuf {
+    /// Path of the done-marker with key `key` (hex), relative to the root.
+    pub fn marker_rel(&self, key: &str) -> PathBuf {
         PathBuf::from("_state")
             .join(format!("model_version={}", escape(&self.model_version)))
-            .join(&sha[..2])
-            .join(format!("{sha}.json"))
+            .join(&key[..2])
+            .join(format!("{key}.json"))
     }
 
     /// Folder of a run's report.
@@ -119,9 +121,9 @@ impl Dataset {
         }
     }
 
-    /// The marker of an input, if present and readable.
-    pub fn read_marker(&self, sha: &str) -> Option<DriveRecord> {
-        let text = std::fs::read(self.root.join(self.marker_rel(sha))).ok()?;
+    /// The marker with key `key`, if present and readable.
+    pub fn read_marker(&self, key: &str) -> Option<DriveRecord> {
+        let text = std::fs::read(self.root.join(self.marker_rel(key))).ok()?;
         serde_json::from_slice(&text).ok()
     }
 }

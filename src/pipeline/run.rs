@@ -708,7 +708,10 @@ fn process_inner(
     let ing_st = PipelineStage::Ingest;
     let sha = file_sha256(&item.path)
         .map_err(|e| (None, fail(ing_st, format!("{input}: reading: {e}"))))?;
-    let prev = ctx.ds.read_marker(&sha);
+    // one marker per input file: its content and its path as listed (two files with the same
+    // bytes are two drives when their ids come from their names)
+    let key = config_hash(&[sha.as_bytes(), input.as_bytes()]);
+    let prev = ctx.ds.read_marker(&key);
     if let (false, Some(rec)) = (ctx.force, &prev) {
         let vid = (rec.vehicle_id != UNKNOWN_VEHICLE).then_some(rec.vehicle_id.as_str());
         let v = plan.vehicles.resolve(item.vehicle_id.as_deref().or(vid));
@@ -776,7 +779,7 @@ fn process_inner(
     let rec = write_drive(
         ctx,
         &c,
-        &sha,
+        (&sha, &key),
         &hash,
         input,
         vehicle.as_deref(),
@@ -924,7 +927,7 @@ fn metrics_of(c: &Computed) -> DriveMetrics {
 fn write_drive(
     ctx: &Ctx<'_>,
     computed: &(Computed, Vec<StageNote>),
-    sha: &str,
+    (sha, key): (&str, &str),
     hash: &str,
     input: &str,
     vehicle: Option<&LoadedVehicle>,
@@ -1075,7 +1078,7 @@ fn write_drive(
             }
         }
     }
-    let marker = root.join(ctx.ds.marker_rel(sha));
+    let marker = root.join(ctx.ds.marker_rel(key));
     sweep_temps(&marker);
     let json = serde_json::to_vec_pretty(&rec).map_err(|e| fail(wst, e))?;
     if let Err(e) = AtomicFile::write_all(&marker, &json) {
