@@ -70,6 +70,9 @@ pub const METRICS: [MetricDef; 17] = [
     ("slope_knee_99", "1/m", |m| m.slope_knee_99_per_m),
 ];
 
+/// A metric's distribution: name, unit, and `drives, mean, min, p05, p50, p95, max`.
+type Distribution = (&'static str, &'static str, [f64; 7]);
+
 const STATISTICS: [&str; 7] = ["drives", "mean", "min", "p05", "p50", "p95", "max"];
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -219,9 +222,7 @@ fn distribution(mut v: Vec<f64>) -> [f64; 7] {
     ]
 }
 
-fn fleet_validation(
-    report: &RunReport,
-) -> (Vec<OutColumn>, Vec<(&'static str, &'static str, [f64; 7])>) {
+fn fleet_validation(report: &RunReport) -> (Vec<OutColumn>, Vec<Distribution>) {
     let mut cols = vec![strings(
         "statistic",
         STATISTICS.iter().map(|s| s.to_string()).collect(),
@@ -612,7 +613,7 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
 fn summary_md(
     plan: &Plan,
     report: &RunReport,
-    dist: &[(&str, &str, [f64; 7])],
+    dist: &[Distribution],
     plots: &[(&str, &str)],
     spectrum_line: Option<&str>,
 ) -> String {
