@@ -166,16 +166,28 @@ enum Command {
     /// and axle models over a synthetic road, written as a CAN log (MCAP + canonical Parquet).
     #[command(subcommand)]
     Synth(SynthCommand),
-    /// Run a pipeline file (pipelines/*.toml) over its inputs; exit 1 if any drive failed.
+    /// Run a pipeline file (pipelines/*.toml) over its inputs, in parallel, into a
+    /// hive-partitioned dataset with a run report; drives already done with the same input and
+    /// configuration are reused. Exit 1 if any drive failed.
     Run {
         /// Pipeline file.
         pipeline: PathBuf,
-        /// Inputs instead of the pipeline's (files, folders, `*` globs).
+        /// Inputs instead of the pipeline's: files, folders (recursive), `*` globs, manifest
+        /// files (`path,vehicle_id` per line). Repeatable.
         #[arg(long)]
         input: Vec<PathBuf>,
-        /// Output folder instead of the pipeline's output_dir.
+        /// Output root instead of the pipeline's output_dir.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Worker threads (default: all cores); outputs are the same bytes for any number.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Process only shard I of N (0-based, e.g. 2/8): inputs split by a hash of their path.
+        #[arg(long)]
+        shard: Option<String>,
+        /// Recompute drives whose outputs are up to date.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -1073,50 +1085,161 @@ fn run(cli: Cli) -> Result<(), Failure> {
             pipeline,
             input,
             out,
-        } => {
-            let spec = PipelineSpec::load(&pipeline).map_err(usage)?;
-            let inputs = (!input.is_empty()).then_some(input.as_slice());
-            let plan = spec
-                .plan(&pipeline.display().to_string(), inputs)
-                .map_err(usage)?;
-            let out_root = out.unwrap_or_else(|| plan.spec.output_dir.clone());
-            say!(
-                "pipeline {}: {} drives, stages {:?} -> {}",
-                plan.spec.name,
-                plan.inputs.len(),
-                plan.spec.stages,
-                out_root.display()
-            );
-            let report = run_plan(&plan, &out_root, |o| match &o.error {
-                None => say!(
-                    "  ok      {:<24} {:>8.3} km  {}",
+            jobs,
+            shard,
+            force,
+        } => run_pipeline(pipeline, input, out, jobs, shard, force),
+    }
+}
+
+/// `fleetdyn run`: plan errors exit 2 (every problem listed), a failed drive exits 1.
+fn run_pipeline(
+    pipeline: PathBuf,
+    input: Vec<PathBuf>,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+    shard: Option<String>,
+    force: bool,
+) -> Result<(), Failure> {
+    use fleetdyn::pipeline::run::{DriveOutcome, DriveStatus, RunOptions, Shard};
+    use std::io::IsTerminal as _;
+    let shard = shard
+        .map(|s| Shard::parse(&s))
+        .transpose()
+        .map_err(|e| usage(anyhow::anyhow!(e)))?;
+    let jobs = match jobs {
+        Some(0) => return Err(usage(anyhow::anyhow!("--jobs must be at least 1"))),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let spec = PipelineSpec::load(&pipeline).map_err(usage)?;
+    let inputs = (!input.is_empty()).then_some(input.as_slice());
+    let plan = spec
+        .plan(&pipeline.display().to_string(), inputs)
+        .map_err(usage)?;
+    let out_root = out.unwrap_or_else(|| plan.spec.output_dir.clone());
+    let mine = plan
+        .inputs
+        .iter()
+        .filter(|it| shard.is_none_or(|s| s.owns(&it.path)))
+        .count();
+    let tty = std::io::stderr().is_terminal();
+    if !tty {
+        let _ = tracing_subscriber::fmt()
+            .with_writer(std::io::stderr)
+            .with_target(false)
+            .try_init();
+    }
+    say!(
+        "pipeline {} (model {}): {} of {} drives{}, stages {} -> {} ({} jobs)",
+        plan.spec.name,
+        plan.spec.model_version,
+        mine,
+        plan.inputs.len(),
+        shard.map_or(String::new(), |s| format!(
+            " in shard {}/{}",
+            s.index, s.count
+        )),
+        plan.spec.stages.join(" > "),
+        out_root.display(),
+        jobs
+    );
+    let bar = tty.then(|| {
+        let b = indicatif::ProgressBar::new(mine as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} drives {msg} [{elapsed_precise}, eta {eta}]",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let counts = std::sync::Mutex::new((0usize, 0usize, 0u64, std::time::Instant::now()));
+    let on_drive = |o: &DriveOutcome| {
+        let mut c = counts.lock().unwrap_or_else(|p| p.into_inner());
+        if o.status == DriveStatus::Failed {
+            c.1 += 1;
+        } else {
+            c.0 += 1;
+        }
+        if o.status == DriveStatus::Ok {
+            c.2 += o.record.as_ref().map_or(0, |r| r.metrics.rows);
+        }
+        let rate = c.2 as f64 / c.3.elapsed().as_secs_f64().max(1e-9);
+        match &bar {
+            Some(b) => {
+                b.set_message(format!("({} failed, {:.0} rows/s)", c.1, rate));
+                if let Some(e) = &o.error {
+                    b.println(format!(
+                        "FAILED {} at {}: {e}",
+                        o.drive_id,
+                        o.failed_stage.unwrap_or("?")
+                    ));
+                }
+                b.inc(1);
+            }
+            None => match &o.error {
+                None => tracing::info!(
+                    "{:?} {} {:.3} s ({}/{} done, {} failed, {:.0} rows/s) {}",
+                    o.status,
                     o.drive_id,
-                    o.distance_m.unwrap_or(0.0) / 1000.0,
+                    o.elapsed_s,
+                    c.0 + c.1,
+                    mine,
+                    c.1,
+                    rate,
                     o.input
                 ),
-                Some(e) => say!(
-                    "  FAILED  {:<24} at {}: {e}",
+                Some(e) => tracing::warn!(
+                    "FAILED {} at {}: {e} ({}/{} done)",
                     o.drive_id,
-                    o.failed_stage.unwrap_or("?")
+                    o.failed_stage.unwrap_or("?"),
+                    c.0 + c.1,
+                    mine
                 ),
-            })
-            .map_err(usage)?;
-            say!(
-                "{} ok, {} failed; report {}",
-                report.ok,
-                report.failed,
-                out_root.join("run_report.json").display()
-            );
-            if report.failed > 0 {
-                return Err(drive(anyhow::anyhow!(
-                    "{} of {} drives failed",
-                    report.failed,
-                    report.ok + report.failed
-                )));
-            }
-            Ok(())
+            },
         }
+    };
+    let opts = RunOptions {
+        out_root: out_root.clone(),
+        jobs,
+        shard,
+        force,
+    };
+    let report = run_plan(&plan, &opts, &on_drive).map_err(drive)?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
     }
+    say!(
+        "{} processed, {} reused (up to date), {} failed in {:.2} s; report {}",
+        report.ok,
+        report.reused,
+        report.failed,
+        report.elapsed_s,
+        std::path::Path::new(&report.report_dir)
+            .join("summary.md")
+            .display()
+    );
+    for d in report
+        .drives
+        .iter()
+        .filter(|d| d.status == DriveStatus::Failed)
+    {
+        say!(
+            "  FAILED  {:<24} at {}: {}",
+            d.drive_id,
+            d.failed_stage.unwrap_or("?"),
+            d.error.as_deref().unwrap_or("")
+        );
+    }
+    if report.failed > 0 {
+        return Err(drive(anyhow::anyhow!(
+            "{} of {} drives failed",
+            report.failed,
+            report.drives.len()
+        )));
+    }
+    Ok(())
 }
 
 /// `fleetdyn road …`: configuration errors (rules, lengths, seeds, Welch settings) exit 2;

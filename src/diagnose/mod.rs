@@ -2,4 +2,5 @@
 //! show.
 
 pub mod catalogue;
+pub mod compare;
 pub mod extended;

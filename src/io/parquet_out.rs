@@ -212,6 +212,21 @@ fn check_drive_log(cols: &[(&str, Dtype, &str)]) -> Result<(), SchemaError> {
 /// (`drive_log` checks against the canonical schema); [`OutputError::Ragged`] for unequal
 /// lengths; I/O and encoder errors. On any error no file is left at `path`.
 pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<(), OutputError> {
+    write_table_with_constants(path, meta, cols, &[])
+}
+
+/// [`write_table`], then `constants` appended as `utf8` columns holding one value on every row
+/// (unit `1`), after the schema check: the identity columns of a dataset table (`drive_id`),
+/// so that files read together as one table still say which drive each row belongs to.
+///
+/// # Errors
+/// As [`write_table`]; nothing is left at `path` on error.
+pub fn write_table_with_constants(
+    path: &Path,
+    meta: &TableMeta,
+    cols: &[OutColumn],
+    constants: &[(&str, &str)],
+) -> Result<(), OutputError> {
     let described: Vec<(&str, Dtype, &str)> = cols
         .iter()
         .map(|c| (c.name.as_str(), c.data.dtype(), c.unit.as_str()))
@@ -226,7 +241,16 @@ pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<
         schema.check(&described)?;
     }
     let n = cols.first().map(|c| c.data.len()).unwrap_or(0);
-    for c in cols {
+    let extra: Vec<OutColumn> = constants
+        .iter()
+        .map(|(name, value)| OutColumn {
+            name: (*name).to_string(),
+            unit: "1".into(),
+            data: OutData::Str(vec![(*value).to_string(); n]),
+        })
+        .collect();
+    let cols: Vec<&OutColumn> = cols.iter().chain(extra.iter()).collect();
+    for c in &cols {
         if c.data.len() != n {
             return Err(OutputError::Ragged {
                 table: meta.table.clone(),

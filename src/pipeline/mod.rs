@@ -1,9 +1,14 @@
-//! Pipelines: stages over drives. Each stage kind is one file with its configuration (TOML keys
+//! Pipelines: stages over many drives. A pipeline file (`spec`) is validated into a plan before
+//! any drive is read, then run (`run`) in parallel with isolated failures into a partitioned,
+//! idempotent dataset (`dataset`). Each stage kind is one file with its configuration (TOML keys
 //! with units in their names), its run function and its output writer.
 
 pub mod axle_stage;
+pub mod dataset;
 pub mod ingest_stage;
+pub mod inputs;
 pub mod resample_stage;
 pub mod run;
 pub mod slope_stage;
 pub mod spec;
+pub mod vehicles;

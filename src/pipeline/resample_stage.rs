@@ -14,6 +14,13 @@ pub fn fingerprint(cfg: &ResampleConfig) -> String {
 /// # Errors
 /// [`OutputError`]; nothing is left at `path` on error.
 pub fn write(path: &Path, d: &DistanceLog, config_fingerprint: &str) -> Result<(), OutputError> {
+    let (meta, cols) = table(d, config_fingerprint);
+    write_table(path, &meta, &cols)
+}
+
+/// The distance log as a table: metadata and columns (`distance`, `timestamp`, then the
+/// drive's signals).
+pub fn table(d: &DistanceLog, config_fingerprint: &str) -> (TableMeta, Vec<OutColumn>) {
     let mut cols = vec![
         OutColumn::f64("distance", "m", d.distance_m.clone()),
         OutColumn::timestamp(d.timestamp_ns.clone()),
@@ -35,5 +42,5 @@ pub fn write(path: &Path, d: &DistanceLog, config_fingerprint: &str) -> Result<(
             ("reverse_samples".into(), d.map.reverse_samples.to_string()),
         ],
     };
-    write_table(path, &meta, &cols)
+    (meta, cols)
 }

@@ -40,7 +40,7 @@ pub struct AxleSimExtra<'a> {
 }
 
 /// The table's columns in schema order.
-fn columns(traj: &AxleTrajectory, extra: &AxleSimExtra<'_>) -> Vec<OutColumn> {
+pub fn axle_sim_columns(traj: &AxleTrajectory, extra: &AxleSimExtra<'_>) -> Vec<OutColumn> {
     const AXLES: [&str; 3] = ["front", "rear", "tag"];
     let n = traj.t_s.len();
     let mut cols = Vec::with_capacity(27);
@@ -144,5 +144,5 @@ pub fn write_axle_sim(
         table: "axle_sim".into(),
         ..meta.clone()
     };
-    write_table(path, &meta, &columns(traj, extra))
+    write_table(path, &meta, &axle_sim_columns(traj, extra))
 }

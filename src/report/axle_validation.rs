@@ -61,6 +61,15 @@ pub fn write_axle_validation(
     v: &AxleValidation,
     fp: &str,
 ) -> Result<(), OutputError> {
+    write_table(
+        path,
+        &axle_meta("axle_validation", log, fp, v),
+        &axle_validation_columns(v),
+    )
+}
+
+/// The validation table's columns in schema order: one row per axle and segment.
+pub fn axle_validation_columns(v: &AxleValidation) -> Vec<OutColumn> {
     let mut rows: Vec<(Axle, Segment)> = Vec::new();
     for a in Axle::ALL {
         for s in SEGMENTS {
@@ -109,7 +118,7 @@ pub fn write_axle_validation(
             get(|m| m.bias),
         ));
     }
-    write_table(path, &axle_meta("axle_validation", log, fp, v), &cols)
+    cols
 }
 
 /// The bellow-pressure rows of the validation table as text (kPa).

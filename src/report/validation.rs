@@ -29,16 +29,9 @@ fn meta(table: &str, log: &DriveLog, fp: &str, v: &ShuffleValidation) -> TableMe
     }
 }
 
-/// Writes `shuffle_sim.parquet` and `validation.parquet` into `dir`; both or neither.
-///
-/// # Errors
-/// [`OutputError`].
-pub fn write(
-    dir: &Path,
-    log: &DriveLog,
-    v: &ShuffleValidation,
-    fp: &str,
-) -> Result<(), OutputError> {
+/// The two tables of a shuffle validation, ready to write: (`shuffle_sim` metadata and
+/// columns, `validation` metadata and columns).
+pub fn tables(log: &DriveLog, v: &ShuffleValidation, fp: &str) -> [(TableMeta, Vec<OutColumn>); 2] {
     let meas = |c: &str| {
         log.signal(c)
             .map_or_else(|| vec![f64::NAN; log.len()], <[f64]>::to_vec)
@@ -95,12 +88,29 @@ pub fn write(
         col("engine_speed_mae", "rad/s", "engine_speed", |m| m.mae),
         col("engine_speed_fit", "%", "engine_speed", |m| m.fit_percent),
     ];
+    [
+        (meta("shuffle_sim", log, fp, v), sim),
+        (meta("validation", log, fp, v), table),
+    ]
+}
+
+/// Writes `shuffle_sim.parquet` and `validation.parquet` into `dir`; both or neither.
+///
+/// # Errors
+/// [`OutputError`].
+pub fn write(
+    dir: &Path,
+    log: &DriveLog,
+    v: &ShuffleValidation,
+    fp: &str,
+) -> Result<(), OutputError> {
+    let [(ma, sim), (mb, table)] = tables(log, v, fp);
     let (a, b) = (
         dir.join("shuffle_sim.parquet"),
         dir.join("validation.parquet"),
     );
-    write_table(&a, &meta("shuffle_sim", log, fp, v), &sim)?;
-    write_table(&b, &meta("validation", log, fp, v), &table).inspect_err(|_| {
+    write_table(&a, &ma, &sim)?;
+    write_table(&b, &mb, &table).inspect_err(|_| {
         let _ = std::fs::remove_file(&a);
     })
 }

@@ -54,6 +54,18 @@ const FILES: &[(&str, &str)] = &[
         "road_study_knees",
         include_str!("../../schemas/outputs/road-study-knees.toml"),
     ),
+    (
+        "drive_summary",
+        include_str!("../../schemas/outputs/drive-summary.toml"),
+    ),
+    (
+        "drive_validation",
+        include_str!("../../schemas/outputs/drive-validation.toml"),
+    ),
+    (
+        "fleet_validation",
+        include_str!("../../schemas/outputs/fleet-validation.toml"),
+    ),
 ];
 
 /// One column of an output table.
@@ -162,7 +174,8 @@ impl OutputSchema {
 
 /// The embedded output schema called `name` (`distance_log`, `slope_distance`, `slope_time`,
 /// `spectrum`, `bode`, `axle_validation`, `shuffle_sim`, `validation`, `axle_sim`,
-/// `road_profile`, `road_spectrum`, `road_study_psd`, `road_study_knees`), or `None`.
+/// `road_profile`, `road_spectrum`, `road_study_psd`, `road_study_knees`, `drive_summary`,
+/// `drive_validation`, `fleet_validation`), or `None`.
 ///
 /// # Panics
 /// Never in a released build: every embedded schema is parsed by the test suite.

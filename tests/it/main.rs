@@ -8,6 +8,7 @@ mod axle_reference;
 mod axle_scenarios;
 mod axle_static_table;
 mod axle_validate;
+mod batch_pipeline;
 mod common;
 mod diagnose_extended;
 mod driveline_fast;
