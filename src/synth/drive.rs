@@ -34,7 +34,10 @@
 use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
 use super::can::{write_can_drive, CanBus, SynthError as CanError, SynthOptions, Truth};
 use super::driver::{Driver, DriverConfig};
-use super::effects::{resolve, Answer, EffectChoice, EffectError, Injection, TruthModel};
+use super::effects::{
+    resolve, Answer, EffectChoice, EffectError, Injection, OutOfCatalogue, ResistanceStretch,
+    TruthModel, LOCAL_ROLLING_RESISTANCE,
+};
 use super::road_source::{read_road_file, DriveRoad, RoadSource, RoadSourceError};
 use super::track::{gnss_message, gnss_track, GnssConfig, TrackError};
 use crate::model::driveline::DrivelineParams;
@@ -134,6 +137,8 @@ pub struct DriveConfig {
     /// Resolution of the road-slope sensor, tan α per step (0.01: the whole percent production
     /// sensors send; a finer one makes `slope_quantization` a hideable effect).
     pub slope_resolution: f64,
+    /// Dropouts of every CAN message (`None`: none), [`super::can::Dropouts`].
+    pub dropouts: Option<super::can::Dropouts>,
 }
 
 impl Default for DriveConfig {
@@ -147,6 +152,7 @@ impl Default for DriveConfig {
             max_duration_s: 4.0 * 3600.0,
             gnss: Some(GnssConfig::default()),
             slope_resolution: 0.01,
+            dropouts: None,
         }
     }
 }
@@ -257,12 +263,32 @@ pub fn simulate_drive(
     cfg: &DriveConfig,
     seed: u64,
 ) -> Result<DriveTrajectory, DriveError> {
-    simulate_drive_with(p, p, 0.0, ratios, road, length_m, cruise_mps, cfg, seed)
+    simulate_drive_with(
+        p,
+        p,
+        &PlantExtras::default(),
+        ratios,
+        road,
+        length_m,
+        cruise_mps,
+        cfg,
+        seed,
+    )
+}
+
+/// What the plant has beyond its parameters (hidden effects, [`super::effects`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlantExtras {
+    /// Total drive-shaft play, rad ([`FastDriveline::with_lash`]).
+    pub lash_rad: f64,
+    /// Extra rolling resistance on a stretch of road (added to the step's brake-force input,
+    /// as a force against the motion; not logged).
+    pub stretch: Option<super::effects::ResistanceStretch>,
 }
 
 /// [`simulate_drive`] with a plant that differs from what the controllers believe: the driver
-/// and the AMT act on the nominal parameters `p`, the driveline simulated is `plant` with a
-/// drive-shaft play of `lash_rad` (rad; [`FastDriveline::with_lash`]). Used to hide an effect
+/// and the AMT act on the nominal parameters `p`, the driveline simulated is `plant` with
+/// `extras` (drive-shaft play, [`FastDriveline::with_lash`]; a stretch of extra resistance). Used to hide an effect
 /// ([`super::effects`]). With lash the driveline integrates at a tenth of the sample step
 /// (shaft impacts then overshoot the contact by at most `|ω_d − ω_w|·dt/10`) and keeps every
 /// tenth state.
@@ -273,7 +299,7 @@ pub fn simulate_drive(
 pub fn simulate_drive_with(
     p: &DrivelineParams,
     plant: &DrivelineParams,
-    lash_rad: f64,
+    extras: &PlantExtras,
     ratios: &[f64],
     road: &RoadSlope,
     length_m: f64,
@@ -310,6 +336,7 @@ pub fn simulate_drive_with(
     }
     let sub = sub as usize;
     // with lash, integrate at ds/10 and keep every tenth state
+    let lash_rad = extras.lash_rad;
     let fine = if lash_rad > 0.0 { 10 } else { 1 };
     let mut fast = FastDriveline::new(plant, ratios, ds / fine as f64).with_lash(lash_rad);
     let mut driver = Driver::new(cfg.driver.clone(), cruise_mps, length_m, seed);
@@ -407,7 +434,14 @@ pub fn simulate_drive_with(
             gear: Piecewise::constant(t1, o.gear as f64),
             clutch_x: Piecewise::constant(t1, o.clutch_x),
             slope: Piecewise::constant(t1, slope),
-            brake_n: Piecewise::constant(t1, cmd.brake_n + retarder_n),
+            brake_n: Piecewise::constant(
+                t1,
+                cmd.brake_n
+                    + retarder_n
+                    + extras.stretch.map_or(0.0, |st| {
+                        st.force_n(x, plant.mass_kg, plant.gravity_m_per_s2, slope)
+                    }),
+            ),
             engine: EngineInput::Torque(Piecewise::constant(t1, o.engine_torque_nm)),
             smoothing: false,
             standstill_events: true,
@@ -705,10 +739,13 @@ pub fn synth_drive_on(
             }
         });
     let nominal = TruthModel::nominal(d, Some(a));
-    let (injection, truth_model) = match hidden {
+    let (injection, mut truth_model) = match hidden {
         None => (None, nominal),
         Some(h) => resolve(h.choice, &nominal, slope_resolution, seed)?,
     };
+    if let Some(EffectChoice::LocalRollingResistance) = hidden.map(|h| h.choice) {
+        truth_model.stretch = Some(ResistanceStretch::draw(length_m, d.c_r1, seed));
+    }
     let plant_axles = truth_model.axles.as_ref().unwrap_or(a);
     let cruise = cfg
         .driver
@@ -724,7 +761,10 @@ pub fn synth_drive_on(
     let drive = simulate_drive_with(
         d,
         &truth_model.driveline,
-        truth_model.lash_rad,
+        &PlantExtras {
+            lash_rad: truth_model.lash_rad,
+            stretch: truth_model.stretch,
+        },
         &v.gearbox.ratios,
         &slope,
         length_m,
@@ -736,6 +776,9 @@ pub fn synth_drive_on(
     let mut truth = drive_truth(&drive, &axles);
     truth_model.sensors.apply_to_truth(&mut truth);
     truth_model.sensors.apply_to_bus(&mut bus);
+    if let Some(dr) = cfg.dropouts {
+        bus = bus.with_dropouts(dr);
+    }
     let gnss = match &cfg.gnss {
         Some(g) => {
             let track = gnss_track(
@@ -772,7 +815,13 @@ pub fn synth_drive_on(
         source,
     })?;
     if let Some(h) = hidden {
-        Answer::new(&opts.drive_id, seed, injection.as_ref()).write(&h.answer_path)?;
+        let mut answer = Answer::new(&opts.drive_id, seed, injection.as_ref());
+        answer.out_of_catalogue = truth_model.stretch.map(|stretch| OutOfCatalogue {
+            kind: LOCAL_ROLLING_RESISTANCE,
+            description: "rolling resistance that rises on one stretch of road only",
+            stretch,
+        });
+        answer.write(&h.answer_path)?;
     }
     Ok(SynthDrive {
         drive,

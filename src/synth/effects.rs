@@ -262,6 +262,8 @@ pub struct TruthModel {
     pub axle_ext: AxleExtensions,
     /// Sensor faults.
     pub sensors: SensorFaults,
+    /// Out-of-catalogue extra rolling resistance on a stretch of road.
+    pub stretch: Option<ResistanceStretch>,
 }
 
 /// One injected effect with its parameter's nominal and truth values.
@@ -288,10 +290,55 @@ pub enum EffectChoice {
     Random,
     /// This effect, with the given truth value of its parameter or a drawn one.
     Given(Effect, Option<f64>),
+    /// An effect outside the catalogue: rolling resistance that rises on one stretch of road
+    /// only (wet or broken surface), [`ResistanceStretch`], drawn by the seed. The diagnosis must
+    /// not explain it with a catalogue effect.
+    LocalRollingResistance,
+}
+
+/// Identifier of the out-of-catalogue effect [`EffectChoice::LocalRollingResistance`].
+pub const LOCAL_ROLLING_RESISTANCE: &str = "local_rolling_resistance";
+
+/// Extra rolling resistance on one stretch of road: `ΔF = Δc_r m g cos α` against the motion
+/// while the truck is between `start_m` and `end_m` (travelled distance).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ResistanceStretch {
+    /// Start, m.
+    pub start_m: f64,
+    /// End, m.
+    pub end_m: f64,
+    /// Extra rolling-resistance coefficient Δc_r (1).
+    pub c_r_extra: f64,
+}
+
+impl ResistanceStretch {
+    /// A stretch of a road of `length_m` drawn with `seed` (its own stream): it starts in the
+    /// 20–60 % part of the road, is 15–30 % of the road long, and adds 1–2 times the vehicle's
+    /// `c_r1` (a wet or broken surface).
+    pub fn draw(length_m: f64, c_r1: f64, seed: u64) -> Self {
+        let mut rng = Xoshiro256StarStar::seed_from_u64(seed ^ EFFECT_STREAM ^ 0x5AFE);
+        let start = rng.uniform(0.2, 0.6) * length_m;
+        let len = rng.uniform(0.15, 0.30) * length_m;
+        Self {
+            start_m: start,
+            end_m: (start + len).min(length_m),
+            c_r_extra: rng.uniform(1.0, 2.0) * c_r1,
+        }
+    }
+
+    /// The extra force against the motion at travelled distance `x_m`, N.
+    pub fn force_n(&self, x_m: f64, mass_kg: f64, g: f64, slope: f64) -> f64 {
+        if x_m >= self.start_m && x_m < self.end_m {
+            self.c_r_extra * mass_kg * g * slope.atan().cos()
+        } else {
+            0.0
+        }
+    }
 }
 
 impl EffectChoice {
-    /// Parses `none`, `random`, `ID` or `ID=VALUE` (VALUE in the parameter's unit).
+    /// Parses `none`, `random`, `local_rolling_resistance`, `ID` or `ID=VALUE` (VALUE in the
+    /// parameter's unit).
     ///
     /// # Errors
     /// [`EffectError::Unknown`] for an id outside the catalogue; [`EffectError::BadValue`] for a
@@ -300,6 +347,7 @@ impl EffectChoice {
         match s {
             "none" => return Ok(EffectChoice::None),
             "random" => return Ok(EffectChoice::Random),
+            LOCAL_ROLLING_RESISTANCE => return Ok(EffectChoice::LocalRollingResistance),
             _ => {}
         }
         let (id, value) = match s.split_once('=') {
@@ -329,6 +377,7 @@ impl TruthModel {
             lash_rad: 0.0,
             axle_ext: AxleExtensions::default(),
             sensors: SensorFaults::default(),
+            stretch: None,
         }
     }
 
@@ -539,7 +588,9 @@ pub fn resolve(
 ) -> Result<(Option<Injection>, TruthModel), EffectError> {
     let mut rng = Xoshiro256StarStar::seed_from_u64(seed ^ EFFECT_STREAM);
     let (effect, given) = match choice {
-        EffectChoice::None => return Ok((None, nominal.clone())),
+        EffectChoice::None | EffectChoice::LocalRollingResistance => {
+            return Ok((None, nominal.clone()))
+        }
         EffectChoice::Random => {
             let k = (rng.next_u64() % (Effect::ALL.len() as u64 + 1)) as usize;
             match Effect::ALL.get(k) {
@@ -594,8 +645,21 @@ pub struct Answer {
     pub seed: u64,
     /// Generator and version.
     pub generator: String,
-    /// The hidden effect, `null` for a drive without one.
+    /// The hidden catalogue effect, `null` for a drive without one.
     pub effect: Option<AnswerEffect>,
+    /// A hidden effect outside the catalogue, `null` for none.
+    pub out_of_catalogue: Option<OutOfCatalogue>,
+}
+
+/// The answer file's out-of-catalogue entry.
+#[derive(Debug, Clone, Serialize)]
+pub struct OutOfCatalogue {
+    /// What it is ([`LOCAL_ROLLING_RESISTANCE`]).
+    pub kind: &'static str,
+    /// In words.
+    pub description: &'static str,
+    /// The stretch.
+    pub stretch: ResistanceStretch,
 }
 
 impl Answer {
@@ -615,6 +679,7 @@ impl Answer {
                 truth: i.truth,
                 relative_change: (i.nominal != 0.0).then(|| i.truth / i.nominal - 1.0),
             }),
+            out_of_catalogue: None,
         }
     }
 

@@ -454,3 +454,61 @@ fn axle_effects_leave_the_driveline_alone_and_follow_their_fingerprint() {
     );
     assert!(d.iter().any(|x| x.abs() > 100.0));
 }
+
+#[test]
+fn out_of_catalogue_resistance_stretch_costs_its_work_and_is_answered_apart() {
+    use fleetdyn::synth::effects::EffectChoice;
+    let dir = tempfile::tempdir().unwrap();
+    let none = drive(&dir.path().join("none"), None);
+    let st = drive(
+        &dir.path().join("st"),
+        Some(EffectChoice::LocalRollingResistance),
+    );
+    let stretch = st.truth.stretch.expect("a stretch was drawn");
+    let answer: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("st/answer.json")).unwrap()).unwrap();
+    assert!(answer["effect"].is_null());
+    assert_eq!(
+        answer["out_of_catalogue"]["kind"],
+        "local_rolling_resistance"
+    );
+    assert_eq!(
+        answer["out_of_catalogue"]["stretch"]["start_m"]
+            .as_f64()
+            .unwrap(),
+        stretch.start_m
+    );
+    // the stretch lies where the rule says (20–60 % in, 15–30 % long, 1–2 × c_r1)
+    let l = 2000.0;
+    let c_r1 = none.truth.driveline.c_r1;
+    assert!(stretch.start_m >= 0.2 * l && stretch.start_m <= 0.6 * l);
+    let len = stretch.end_m - stretch.start_m;
+    assert!(len >= 0.15 * l - 1e-9 && len <= 0.30 * l + 1e-9);
+    assert!(stretch.c_r_extra >= c_r1 && stretch.c_r_extra <= 2.0 * c_r1);
+    // the vehicle file stays nominal; the engine pays the stretch's work (±5 %, as for drag)
+    let p = &st.truth.driveline;
+    let (t, v, s, x) = (
+        &st.drive.t_s,
+        &st.drive.speed_mps,
+        &st.drive.slope,
+        &st.drive.distance_m,
+    );
+    let expected: f64 = (1..t.len())
+        .map(|i| {
+            stretch.force_n(x[i], p.mass_kg, p.gravity_m_per_s2, s[i]) * v[i] * (t[i] - t[i - 1])
+        })
+        .sum();
+    let got = net_work(&st) - net_work(&none);
+    eprintln!(
+        "stretch {:.0}–{:.0} m, Δc_r {:.4}: engine − brake work +{:.0} kJ for {:.0} kJ",
+        stretch.start_m,
+        stretch.end_m,
+        stretch.c_r_extra,
+        got / 1e3,
+        expected / 1e3
+    );
+    assert!(
+        got > 0.95 * expected && got < 1.05 * expected,
+        "{got} for {expected}"
+    );
+}
