@@ -3,4 +3,5 @@
 
 pub mod catalogue;
 pub mod compare;
+pub mod contract;
 pub mod extended;

@@ -66,6 +66,14 @@ const FILES: &[(&str, &str)] = &[
         "fleet_validation",
         include_str!("../../schemas/outputs/fleet-validation.toml"),
     ),
+    (
+        "mismatch",
+        include_str!("../../schemas/outputs/mismatch.toml"),
+    ),
+    (
+        "findings",
+        include_str!("../../schemas/outputs/findings.toml"),
+    ),
 ];
 
 /// One column of an output table.
