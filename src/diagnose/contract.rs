@@ -191,8 +191,7 @@ impl Diagnosis {
         source: &str,
         fp: &str,
     ) -> Result<(), OutputError> {
-        let mut rows: Vec<(usize, &FindingEntry, &str, &ParameterEntry, &str, &FitEntry)> =
-            Vec::new();
+        let mut rows: Vec<FindingRow> = Vec::new();
         for (k, fe) in self.findings.iter().enumerate() {
             for (pn, pe) in &fe.parameters {
                 for (sn, fit) in &fe.fit {
@@ -200,13 +199,8 @@ impl Diagnosis {
                 }
             }
         }
-        let s = |g: &dyn Fn(
-            &(usize, &FindingEntry, &str, &ParameterEntry, &str, &FitEntry),
-        ) -> String| { OutData::Str(rows.iter().map(g).collect()) };
-        let f =
-            |g: &dyn Fn(&(usize, &FindingEntry, &str, &ParameterEntry, &str, &FitEntry)) -> f64| {
-                rows.iter().map(g).collect::<Vec<f64>>()
-            };
+        let s = |g: &dyn Fn(&FindingRow) -> String| OutData::Str(rows.iter().map(g).collect());
+        let f = |g: &dyn Fn(&FindingRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
         let cols = vec![
             OutColumn {
                 name: "rank".into(),
@@ -284,6 +278,17 @@ impl Diagnosis {
         write_table(path, &self.meta("findings", vehicle_id, source, fp), &cols)
     }
 }
+
+/// One row of `findings.parquet`: (finding index, finding, parameter name, parameter, signal,
+/// fit).
+type FindingRow<'a> = (
+    usize,
+    &'a FindingEntry,
+    &'a str,
+    &'a ParameterEntry,
+    &'a str,
+    &'a FitEntry,
+);
 
 /// SI unit of a compared canonical signal.
 pub fn signal_unit(signal: &str) -> &'static str {
