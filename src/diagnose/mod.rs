@@ -5,3 +5,4 @@ pub mod catalogue;
 pub mod compare;
 pub mod contract;
 pub mod extended;
+pub mod prove;
