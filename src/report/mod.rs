@@ -5,6 +5,7 @@ pub mod axle_scenario;
 pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
+pub mod diagnosis;
 pub mod fleet;
 mod ingest_summary;
 pub mod road_plot;
