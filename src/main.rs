@@ -267,10 +267,12 @@ enum SimulateCommand {
 enum SynthCommand {
     /// Drive a vehicle over a synthetic road (--rules) or a road file (--road-file): launches,
     /// stops (every --stop-every-km and at the road end), AMT shifts, engine brake and retarder
-    /// before the service brake; writes drive.mcap (CAN topics and a 1 Hz GNSS fix),
-    /// drive.parquet and vehicle.toml into the output folder.
+    /// before the service brake; writes the log (drive.mcap with CAN topics and a 1 Hz GNSS fix,
+    /// or a portal export, --log-format), drive.parquet, vehicle.toml and optionally
+    /// truth.parquet (--truth-rate-hz) into the output folder.
     Drive {
-        /// Vehicle file with [driveline] and [axles] sections.
+        /// Vehicle file with a [driveline] section; with [axles] the axle model runs and the log
+        /// carries bellow pressures.
         #[arg(long)]
         vehicle: PathBuf,
         /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us) or a TOML file.
@@ -298,9 +300,16 @@ enum SynthCommand {
         /// Speed limit, km/h (default: the rule set's design speed; needed with --road-file).
         #[arg(long)]
         speed_limit_km_per_h: Option<f64>,
+        /// Follow the road file's speed limits below --speed-limit-km-per-h (a VECTO cycle's
+        /// <v>, held from its row; its stops are not used).
+        #[arg(long)]
+        road_speed_limits: bool,
         /// Distance between planned stops, km (0: only the stop at the road end).
         #[arg(long, default_value_t = 1.0)]
         stop_every_km: f64,
+        /// Standstill time at the start, at each planned stop and at the road end, s.
+        #[arg(long, default_value_t = 8.0, allow_negative_numbers = true)]
+        stop_dwell_s: f64,
         /// Hide an effect of the diagnosis catalogue in the truth: `ID` (magnitude drawn from
         /// the seed), `ID=VALUE` (the parameter's truth value in its SI unit), `random` (one of
         /// the catalogue or none, by the seed) or `none`. The vehicle file written stays the
@@ -322,10 +331,62 @@ enum SynthCommand {
         /// Longitude of the road's start for the GNSS track, WGS84 deg.
         #[arg(long, default_value_t = 11.9, allow_negative_numbers = true)]
         gnss_origin_lon_deg: f64,
+        /// Log format: mcap (drive.mcap, multi-rate JSON topics), portal-export
+        /// (drive-export.parquet: wide 20 Hz fleet-portal export, mapping fleet-portal-export)
+        /// or long-export (drive-long.parquet: ts, signal, value; mapping j1939-long-export).
+        #[arg(long, value_enum, default_value = "mcap")]
+        log_format: LogFormatArg,
+        /// Chunk compression of an MCAP log.
+        #[arg(long, value_enum, default_value = "zstd")]
+        mcap_compression: McapCompressionArg,
+        /// Compression level of an MCAP log's chunks (0: the encoder's default; zstd 1-22,
+        /// lz4 1-12, from 3 its high-compression mode).
+        #[arg(long, default_value_t = 0)]
+        mcap_compression_level: u32,
+        /// Drive id in the log's metadata (default synth-ROAD-LENGTHkm-seedSEED).
+        #[arg(long)]
+        drive_id: Option<String>,
+        /// Vehicle id in the log's metadata (default: the vehicle file's).
+        #[arg(long)]
+        vehicle_id: Option<String>,
+        /// Start of the drive, RFC 3339 UTC (default 2024-01-01T00:00:00Z).
+        #[arg(long)]
+        start_utc: Option<String>,
+        /// Logger timestamp jitter, s: each frame's log time is its sample time plus a uniform
+        /// delay in ±this, in whole µs (0: none).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        timestamp_jitter_s: f64,
+        /// Canonical columns whose CAN messages get dropouts (comma separated, e.g.
+        /// vehicle_speed,road_slope).
+        #[arg(long, value_delimiter = ',')]
+        dropout_columns: Vec<String>,
+        /// Probability that a dropout starts at a scheduled message of --dropout-columns.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        dropout_start_probability: f64,
+        /// Mean dropout length, s (exponentially distributed).
+        #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
+        dropout_mean_length_s: f64,
+        /// Write truth.parquet, the drive's pre-sensor signals (SI, canonical names, plus
+        /// distance) at this rate, Hz (a whole divisor of 100 Hz).
+        #[arg(long, allow_negative_numbers = true)]
+        truth_rate_hz: Option<f64>,
         /// Output folder.
         #[arg(short, long)]
         output: PathBuf,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LogFormatArg {
+    Mcap,
+    PortalExport,
+    LongExport,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum McapCompressionArg {
+    Zstd,
+    Lz4,
 }
 
 #[derive(Subcommand)]
@@ -997,23 +1058,91 @@ fn run(cli: Cli) -> Result<(), Failure> {
             length_km,
             seed,
             speed_limit_km_per_h,
+            road_speed_limits,
             stop_every_km,
+            stop_dwell_s,
             effect,
             answer,
             slope_resolution_percent,
             retarder_max_torque_nm,
             gnss_origin_lat_deg,
             gnss_origin_lon_deg,
+            log_format,
+            mcap_compression,
+            mcap_compression_level,
+            drive_id,
+            vehicle_id,
+            start_utc,
+            timestamp_jitter_s,
+            dropout_columns,
+            dropout_start_probability,
+            dropout_mean_length_s,
+            truth_rate_hz,
             output,
         }) => {
-            use fleetdyn::synth::drive::{synth_drive_on, DriveConfig, DriveError, HiddenEffect};
+            use fleetdyn::synth::drive::{
+                synth_drive_logged, DriveConfig, DriveError, HiddenEffect,
+            };
             use fleetdyn::synth::effects::{EffectChoice, EffectError};
+            use fleetdyn::synth::export::ExportError;
+            use fleetdyn::synth::log_writer::{DropoutSpec, LogFormat, LogOptions};
             use fleetdyn::synth::retarder::RetarderConfig;
             use fleetdyn::synth::road_source::{RoadSource, RoadSourceError};
+            use fleetdyn::synth::{Dropouts, McapCompression, SynthError};
             let mut cfg = DriveConfig::default();
             cfg.driver.speed_limit_mps = speed_limit_km_per_h.map(|k| k / 3.6);
             cfg.driver.stop_every_m = (stop_every_km > 0.0).then_some(stop_every_km * 1000.0);
             cfg.slope_resolution = slope_resolution_percent / 100.0;
+            if !(stop_dwell_s.is_finite() && stop_dwell_s >= 0.0) {
+                return Err(usage(anyhow::anyhow!(
+                    "--stop-dwell-s {stop_dwell_s} must be finite and >= 0"
+                )));
+            }
+            cfg.driver.stop_dwell_s = stop_dwell_s;
+            cfg.road_speed_limits = road_speed_limits;
+            let p = dropout_start_probability;
+            if !(0.0..=1.0).contains(&p) {
+                return Err(usage(anyhow::anyhow!(
+                    "--dropout-start-probability {p} must be in [0, 1]"
+                )));
+            }
+            if !(dropout_mean_length_s.is_finite() && dropout_mean_length_s >= 0.0) {
+                return Err(usage(anyhow::anyhow!(
+                    "--dropout-mean-length-s {dropout_mean_length_s} must be finite and >= 0"
+                )));
+            }
+            if p > 0.0 && dropout_columns.is_empty() {
+                return Err(usage(anyhow::anyhow!(
+                    "--dropout-start-probability needs --dropout-columns"
+                )));
+            }
+            let log = LogOptions {
+                format: match log_format {
+                    LogFormatArg::Mcap => LogFormat::Mcap(match mcap_compression {
+                        McapCompressionArg::Zstd => McapCompression::Zstd,
+                        McapCompressionArg::Lz4 => McapCompression::Lz4,
+                    }),
+                    LogFormatArg::PortalExport => LogFormat::PortalExport,
+                    LogFormatArg::LongExport => LogFormat::LongExport,
+                },
+                mcap_compression_level,
+                drive_id,
+                vehicle_id,
+                start_ns: start_utc
+                    .as_deref()
+                    .map(fleetdyn::time_fmt::parse_rfc3339_utc_ns)
+                    .transpose()
+                    .map_err(usage)?,
+                timestamp_jitter_s,
+                dropouts: (!dropout_columns.is_empty()).then_some(DropoutSpec {
+                    columns: dropout_columns,
+                    dropouts: Dropouts {
+                        start_probability: p,
+                        mean_length_s: dropout_mean_length_s,
+                    },
+                }),
+                truth_rate_hz,
+            };
             if !(retarder_max_torque_nm.is_finite() && retarder_max_torque_nm >= 0.0) {
                 return Err(usage(anyhow::anyhow!(
                     "--retarder-max-torque-nm {retarder_max_torque_nm} must be finite and >= 0"
@@ -1056,15 +1185,21 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     answer_path: answer.unwrap_or_else(|| output.join("answer.json")),
                 }),
             };
-            let r = synth_drive_on(&vehicle, &road, seed, &output, &cfg, hidden.as_ref()).map_err(
-                |e| match e {
+            let r = synth_drive_logged(&vehicle, &road, seed, &output, &cfg, hidden.as_ref(), &log)
+                .map_err(|e| match e {
                     DriveError::Io { .. }
                     | DriveError::Can(_)
                     | DriveError::Effect(EffectError::Io { .. })
                     | DriveError::RoadFile(RoadSourceError::Io { .. }) => drive(e),
+                    DriveError::Export(
+                        ExportError::BadInput { .. }
+                        | ExportError::Mismatch { .. }
+                        | ExportError::Mapping { .. }
+                        | ExportError::Can(SynthError::BadCompressionLevel { .. }),
+                    ) => usage(e),
+                    DriveError::Export(_) => drive(e),
                     _ => usage(e),
-                },
-            )?;
+                })?;
             if let Some(h) = &hidden {
                 say!("answer (hidden effect) -> {}", h.answer_path.display());
             }
@@ -1073,11 +1208,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let ret_max = d.retarder_torque_nm.iter().fold(0.0f64, |m, &v| m.max(v));
             let me_min = d.engine_torque_nm.iter().fold(0.0f64, |m, &v| m.min(v));
             say!(
-                "{:.3} km drive over {}, seed {}: {:.1} s, {} launches, {} shifts, max {:.1} km/h, {:.0} m travelled, engine torque down to {:.0} N·m, retarder up to {:.0} N·m -> {}, {}, {}",
+                "{:.3} km drive over {}, seed {}: {:.1} s, {} launches, {} shifts, max {:.1} km/h, {:.0} m travelled, engine torque down to {:.0} N·m, retarder up to {:.0} N·m -> {}, {}, {}{}",
                 r.road.length_m / 1000.0, r.road.label, seed, d.t_s.last().copied().unwrap_or(0.0),
                 d.launches.len(), d.shifts.len(), vmax * 3.6,
                 d.distance_m.last().copied().unwrap_or(0.0), me_min, ret_max,
-                r.mcap.display(), r.parquet.display(), r.vehicle.display()
+                r.log_file.display(), r.parquet.display(), r.vehicle.display(),
+                r.truth_file.as_ref().map(|p| format!(", {}", p.display())).unwrap_or_default()
             );
             Ok(())
         }

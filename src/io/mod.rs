@@ -5,6 +5,6 @@ mod parquet_out;
 
 pub use atomic::AtomicFile;
 pub use parquet_out::{
-    config_hash, drive_log_columns, write_table, write_table_with_constants, OutColumn, OutData,
-    OutputError, TableMeta,
+    config_hash, drive_log_columns, write_table, write_table_with, write_table_with_constants,
+    OutColumn, OutData, OutputError, TableEncoding, TableMeta,
 };

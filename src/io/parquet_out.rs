@@ -18,9 +18,10 @@ use arrow::array::{
 use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
 use arrow::record_batch::RecordBatch;
 use parquet::arrow::ArrowWriter;
-use parquet::basic::{Compression, ZstdLevel};
+use parquet::basic::{Compression, Encoding, ZstdLevel};
 use parquet::file::metadata::KeyValue;
 use parquet::file::properties::WriterProperties;
+use parquet::schema::types::ColumnPath;
 use sha2::{Digest, Sha256};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -205,6 +206,27 @@ fn check_drive_log(cols: &[(&str, Dtype, &str)]) -> Result<(), SchemaError> {
     Ok(())
 }
 
+/// How a table's pages are encoded and compressed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TableEncoding {
+    /// zstd level (1…22).
+    pub zstd_level: i32,
+    /// Float columns as BYTE_STREAM_SPLIT without dictionaries and timestamps as
+    /// DELTA_BINARY_PACKED (smaller for smooth, full-precision signals such as simulation
+    /// output), instead of the writer's defaults.
+    pub split_floats: bool,
+}
+
+impl Default for TableEncoding {
+    /// zstd level 3, the writer's default encodings: the settings of every fleetdyn table.
+    fn default() -> Self {
+        Self {
+            zstd_level: 3,
+            split_floats: false,
+        }
+    }
+}
+
 /// Writes `cols` as a Parquet file at `path`, atomically.
 ///
 /// # Errors
@@ -212,7 +234,20 @@ fn check_drive_log(cols: &[(&str, Dtype, &str)]) -> Result<(), SchemaError> {
 /// (`drive_log` checks against the canonical schema); [`OutputError::Ragged`] for unequal
 /// lengths; I/O and encoder errors. On any error no file is left at `path`.
 pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<(), OutputError> {
-    write_table_with_constants(path, meta, cols, &[])
+    write_table_full(path, meta, cols, &[], TableEncoding::default())
+}
+
+/// [`write_table`] with the page encoding and compression chosen.
+///
+/// # Errors
+/// As [`write_table`]; an invalid zstd level is an encoder error.
+pub fn write_table_with(
+    path: &Path,
+    meta: &TableMeta,
+    cols: &[OutColumn],
+    encoding: TableEncoding,
+) -> Result<(), OutputError> {
+    write_table_full(path, meta, cols, &[], encoding)
 }
 
 /// [`write_table`], then `constants` appended as `utf8` columns holding one value on every row
@@ -226,6 +261,16 @@ pub fn write_table_with_constants(
     meta: &TableMeta,
     cols: &[OutColumn],
     constants: &[(&str, &str)],
+) -> Result<(), OutputError> {
+    write_table_full(path, meta, cols, constants, TableEncoding::default())
+}
+
+fn write_table_full(
+    path: &Path,
+    meta: &TableMeta,
+    cols: &[OutColumn],
+    constants: &[(&str, &str)],
+    encoding: TableEncoding,
 ) -> Result<(), OutputError> {
     let described: Vec<(&str, Dtype, &str)> = cols
         .iter()
@@ -334,13 +379,26 @@ pub fn write_table_with_constants(
                 .collect::<HashMap<String, String>>(),
         ),
     );
-    let props = WriterProperties::builder()
-        .set_compression(Compression::ZSTD(
-            ZstdLevel::try_new(3).expect("valid level"),
-        ))
+    let level = ZstdLevel::try_new(encoding.zstd_level).map_err(pq_err)?;
+    let mut props = WriterProperties::builder()
+        .set_compression(Compression::ZSTD(level))
         .set_max_row_group_row_count(Some(1 << 20))
-        .set_key_value_metadata(Some(kv))
-        .build();
+        .set_key_value_metadata(Some(kv));
+    if encoding.split_floats {
+        for c in cols {
+            let col = ColumnPath::from(c.name.as_str());
+            props = match c.data {
+                OutData::F64(_) => props
+                    .set_column_dictionary_enabled(col.clone(), false)
+                    .set_column_encoding(col, Encoding::BYTE_STREAM_SPLIT),
+                OutData::Timestamp(_) | OutData::I16(_) => props
+                    .set_column_dictionary_enabled(col.clone(), false)
+                    .set_column_encoding(col, Encoding::DELTA_BINARY_PACKED),
+                _ => props,
+            };
+        }
+    }
+    let props = props.build();
 
     let batch = RecordBatch::try_new(schema.clone(), arrays)
         .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;

@@ -167,6 +167,16 @@ pub enum SynthError {
         #[source]
         source: Box<mcap::McapError>,
     },
+    /// A chunk compression level the encoder does not have.
+    #[error("MCAP {compression} compression level {level} must be 0 (default) … {max}")]
+    BadCompressionLevel {
+        /// `zstd` or `lz4`.
+        compression: &'static str,
+        /// The level given.
+        level: u32,
+        /// The highest level.
+        max: u32,
+    },
     /// The bus's mapping did not parse, or the written MCAP did not ingest.
     #[error(transparent)]
     Ingest(Box<IngestError>),
@@ -659,7 +669,7 @@ fn step_range(c: &CanChannel) -> (f64, f64) {
 }
 
 /// `q · resolution`, exact where `1/resolution` is an integer.
-fn step_value(q: f64, resolution: f64) -> f64 {
+pub(crate) fn step_value(q: f64, resolution: f64) -> f64 {
     let inv = 1.0 / resolution;
     let n = inv.round();
     if n >= 1.0 && (inv - n).abs() <= 1e-9 * n {
@@ -770,7 +780,7 @@ fn fnv1a64(name: &str) -> u64 {
     h
 }
 
-fn stream(seed: u64, name: &str) -> Xoshiro256StarStar {
+pub(crate) fn stream(seed: u64, name: &str) -> Xoshiro256StarStar {
     let mut s = seed;
     Xoshiro256StarStar::seed_from_u64(splitmix64(&mut s) ^ fnv1a64(name))
 }
@@ -784,7 +794,7 @@ fn json_number(x: f64) -> Value {
 }
 
 /// Inverse of `conv`: SI → wire.
-fn to_wire(conv: Conversion, si: f64) -> f64 {
+pub(crate) fn to_wire(conv: Conversion, si: f64) -> f64 {
     match conv {
         Conversion::Linear { factor, offset } => (si - offset) / factor,
         Conversion::AngleToGrade { to_rad } => si.atan() / to_rad,
@@ -925,6 +935,17 @@ fn json_schema(bus: &CanBus, m: &CanMessage) -> Vec<u8> {
     serde_json::to_vec(&Value::Object(s)).expect("JSON of strings and maps")
 }
 
+/// Chunk compression of a written MCAP file (both are what ingest reads).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum McapCompression {
+    /// zstd at the encoder's default level (3), single-threaded.
+    #[default]
+    Zstd,
+    /// LZ4 frames at the encoder's default level, no block checksums (the chunk CRC covers
+    /// them).
+    Lz4,
+}
+
 /// Writes `frames` as MCAP, atomically: zstd chunks (single-threaded, so the bytes do not depend
 /// on the machine), one JSON-schema record and one `json` channel per bus message that has
 /// frames, a metadata record `drive` with `drive_id`, `vehicle_id` (if any), `seed` and
@@ -939,6 +960,35 @@ pub fn write_mcap(
     frames: &[CanFrame],
     opts: &SynthOptions,
 ) -> Result<(), SynthError> {
+    write_mcap_with(path, bus, frames, opts, McapCompression::Zstd, 0)
+}
+
+/// [`write_mcap`] with the chunk compression and its level chosen (`level` 0: the encoder's
+/// default, zstd 3 or LZ4's fast mode; zstd 1…22, LZ4 1…12 with ≥ 3 its high-compression
+/// mode). Chunks hold at most 1 MiB of uncompressed records (the encoder's default); every chunk
+/// carries its CRC; message indexes and the summary are written.
+///
+/// # Errors
+/// As [`write_mcap`]; [`SynthError::BadCompressionLevel`] for a level above the encoder's.
+pub fn write_mcap_with(
+    path: &Path,
+    bus: &CanBus,
+    frames: &[CanFrame],
+    opts: &SynthOptions,
+    compression: McapCompression,
+    level: u32,
+) -> Result<(), SynthError> {
+    let (name, max) = match compression {
+        McapCompression::Zstd => ("zstd", 22),
+        McapCompression::Lz4 => ("lz4", 12),
+    };
+    if level > max {
+        return Err(SynthError::BadCompressionLevel {
+            compression: name,
+            level,
+            max,
+        });
+    }
     let io_err = |source| SynthError::Io {
         path: path.to_path_buf(),
         source,
@@ -950,8 +1000,12 @@ pub fn write_mcap(
     let tmp = AtomicFile::create(path).map_err(io_err)?;
     let handle = BufWriter::new(tmp.try_clone_file().map_err(io_err)?);
     let mut w = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
+        .compression(Some(match compression {
+            McapCompression::Zstd => mcap::Compression::Zstd,
+            McapCompression::Lz4 => mcap::Compression::Lz4,
+        }))
         .compression_threads(0)
+        .compression_level(level)
         .library("fleetdyn-synth")
         .create(handle)
         .map_err(mcap_err)?;

@@ -1,6 +1,6 @@
 //! Closed-loop synthetic drives (issue 5 point 4): a [`Driver`] and an [`Amt`] co-simulated
 //! with the fast driveline model ([`FastDriveline`]) over a synthetic road, the axle model run
-//! on the result, and the truth written as a CAN log ([`write_can_drive`]).
+//! on the result, and the truth written as a CAN log ([`super::log_writer::write_drive_log`]).
 //!
 //! # Loop
 //! Control steps of [`DriveConfig::control_dt_s`] (0.1 s): at each step start the driver reads
@@ -26,20 +26,34 @@
 //! [`axle_inputs_from_samples`] (acceleration differentiated over ±0.05 s), the retarder torque
 //! `T_r i_f` as auxiliary brake torque at the driven wheels.
 //!
+//! The axle model runs only for vehicles with an `[axles]` section; a vehicle with only a
+//! driveline (e.g. a tractor-semitrailer, for which the half-truck axle model does not apply)
+//! gets no axle trajectory and no bellow-pressure channels.
+//!
 //! # Roads and GNSS
 //! [`synth_drive_on`] drives over a [`RoadSource`]: a road generated from rules, or a window of
 //! a road file ([`super::road_source`]). With [`DriveConfig::gnss`] the log gets a GNSS track
-//! along the road ([`super::track`]) on `/gnss/fix`.
+//! along the road ([`super::track`]) on `/gnss/fix`. With [`DriveConfig::road_speed_limits`]
+//! the driver follows the road file's speed limits (a VECTO cycle's `<v>`).
+//!
+//! # Logs
+//! [`synth_drive_logged`] writes the log as [`LogOptions`] say ([`super::log_writer`]): MCAP
+//! with zstd or LZ4 chunks or one of the portal exports ([`super::export`]), with the drive's
+//! own ids, start time, logger jitter and dropouts, and optionally the truth table
+//! ([`super::truth_file`]).
 
 use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
-use super::can::{write_can_drive, CanBus, SynthError as CanError, SynthOptions, Truth};
-use super::driver::{Driver, DriverConfig};
+use super::can::{CanBus, SynthError as CanError, SynthOptions, Truth};
+use super::driver::{Driver, DriverConfig, SpeedLimits};
 use super::effects::{
     resolve, Answer, EffectChoice, EffectError, Injection, OutOfCatalogue, ResistanceStretch,
     TruthModel, LOCAL_ROLLING_RESISTANCE,
 };
+use super::export::{fuel_rate_lph, ExportError, Series};
+use super::log_writer::{apply_dropouts, write_drive_log, LogOptions};
 use super::road_source::{read_road_file, DriveRoad, RoadSource, RoadSourceError};
 use super::track::{gnss_message, gnss_track, GnssConfig, TrackError};
+use super::truth_file::{truth_columns, write_truth, TruthMeta};
 use crate::model::driveline::DrivelineParams;
 use crate::model::vehicle::{VehicleError, VehicleFile};
 use crate::road::rules::{RoadRules, RulesError};
@@ -92,6 +106,15 @@ pub enum DriveError {
     /// A GNSS setting out of its domain.
     #[error(transparent)]
     Track(#[from] TrackError),
+    /// The log or the truth table could not be written.
+    #[error(transparent)]
+    Export(#[from] ExportError),
+    /// Speed limits along the road were asked for, but the road has none.
+    #[error("road {road}: no speed limits along the road (only a VECTO cycle's <v> gives them)")]
+    NoSpeedLimits {
+        /// The road's label.
+        road: String,
+    },
     /// No cruise speed: no speed limit given and the road has no design speed.
     #[error("road {road}: no cruise speed — give a speed limit (the road has no design speed)")]
     NoCruiseSpeed {
@@ -139,10 +162,14 @@ pub struct DriveConfig {
     pub slope_resolution: f64,
     /// Dropouts of every CAN message (`None`: none), [`super::can::Dropouts`].
     pub dropouts: Option<super::can::Dropouts>,
+    /// Follow the road's own speed limits (a VECTO cycle's `<v>`, [`DriveRoad::speed_limit_mps`])
+    /// below the cruise speed; the road must have them.
+    pub road_speed_limits: bool,
 }
 
 impl Default for DriveConfig {
-    /// Default driver and AMT, 0.1 s control step, 0.01 s samples, at most 4 h, default GNSS.
+    /// Default driver and AMT, 0.1 s control step, 0.01 s samples, at most 4 h, default GNSS,
+    /// no speed limits from the road.
     fn default() -> Self {
         Self {
             driver: DriverConfig::default(),
@@ -153,6 +180,7 @@ impl Default for DriveConfig {
             gnss: Some(GnssConfig::default()),
             slope_resolution: 0.01,
             dropouts: None,
+            road_speed_limits: false,
         }
     }
 }
@@ -333,6 +361,21 @@ pub fn simulate_drive_with(
         ("speed_gain_per_s", c.speed_gain_per_s),
     ] {
         check(name, v, v.is_finite() && v > 0.0)?;
+    }
+    if let Some(l) = &c.speed_limits {
+        check(
+            "speed_limits.step_m",
+            l.step_m,
+            l.step_m.is_finite() && l.step_m > 0.0,
+        )?;
+        check(
+            "speed_limits.limit_mps (count)",
+            l.limit_mps.len() as f64,
+            !l.limit_mps.is_empty(),
+        )?;
+        for &v in &l.limit_mps {
+            check("speed_limits.limit_mps", v, v.is_finite() && v > 0.0)?;
+        }
     }
     let sub = sub as usize;
     // with lash, integrate at ds/10 and keep every tenth state
@@ -569,32 +612,34 @@ pub fn simulate_axles_with(
 }
 
 /// The CAN truth of a drive: vehicle_speed, engine_speed, engine_torque, gear, road_slope,
-/// brake_force, retarder_torque, clutch_position and the three bellow gauge pressures (SI, on
-/// the drive's samples).
-///
-/// `brake_force` is the magnitude of the ground force (the CAN signal is ≥ 0): at standstill the
-/// trajectory's holding force is signed (negative = the ground pushes the truck uphill), and a
-/// recording's reader recovers that sign from the grade (`sim::axle_recorded`).
-pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
-    let [pf, pr, pt] = axles.pressure_pa.clone();
+/// brake_force, retarder_torque, clutch_position and, with `axles`, the three bellow gauge
+/// pressures (SI, on the drive's samples).
+pub fn drive_truth(tr: &DriveTrajectory, axles: Option<&AxleTrajectory>) -> Truth {
+    let mut columns: Vec<(String, Vec<f64>)> = vec![
+        ("vehicle_speed".into(), tr.speed_mps.clone()),
+        ("engine_speed".into(), tr.engine_speed_rad_s.clone()),
+        ("engine_torque".into(), tr.engine_torque_nm.clone()),
+        ("gear".into(), tr.gear.clone()),
+        ("road_slope".into(), tr.slope.clone()),
+        // the magnitude of the ground force (the CAN signal is >= 0): at standstill the
+        // trajectory's holding force is signed (negative = the ground pushes the truck uphill),
+        // and a recording's reader recovers that sign from the grade (`sim::axle_recorded`)
+        (
+            "brake_force".into(),
+            tr.brake_n.iter().map(|b| b.abs()).collect(),
+        ),
+        ("retarder_torque".into(), tr.retarder_torque_nm.clone()),
+        ("clutch_position".into(), tr.clutch_position.clone()),
+    ];
+    if let Some(a) = axles {
+        let [pf, pr, pt] = a.pressure_pa.clone();
+        columns.push(("bellow_pressure_front".into(), pf));
+        columns.push(("bellow_pressure_rear".into(), pr));
+        columns.push(("bellow_pressure_tag".into(), pt));
+    }
     Truth {
         t_s: tr.t_s.clone(),
-        columns: vec![
-            ("vehicle_speed".into(), tr.speed_mps.clone()),
-            ("engine_speed".into(), tr.engine_speed_rad_s.clone()),
-            ("engine_torque".into(), tr.engine_torque_nm.clone()),
-            ("gear".into(), tr.gear.clone()),
-            ("road_slope".into(), tr.slope.clone()),
-            (
-                "brake_force".into(),
-                tr.brake_n.iter().map(|b| b.abs()).collect(),
-            ),
-            ("retarder_torque".into(), tr.retarder_torque_nm.clone()),
-            ("clutch_position".into(), tr.clutch_position.clone()),
-            ("bellow_pressure_front".into(), pf),
-            ("bellow_pressure_rear".into(), pr),
-            ("bellow_pressure_tag".into(), pt),
-        ],
+        columns,
     }
 }
 
@@ -603,18 +648,20 @@ pub fn drive_truth(tr: &DriveTrajectory, axles: &AxleTrajectory) -> Truth {
 pub struct SynthDrive {
     /// The driveline-side trajectory.
     pub drive: DriveTrajectory,
-    /// The axle-model trajectory on the same samples.
-    pub axles: AxleTrajectory,
+    /// The axle-model trajectory on the same samples (vehicles with `[axles]` only).
+    pub axles: Option<AxleTrajectory>,
     /// The road driven (grid from 0 m at the start of the drive).
     pub road: DriveRoad,
     /// The GNSS track and receiver readings on the drive's samples, if configured.
     pub gnss: Option<super::track::GnssTrack>,
-    /// The ingested drive log of the written MCAP.
+    /// The ingested drive log of the written log file.
     pub log: crate::table::DriveLog,
-    /// Written MCAP file.
-    pub mcap: PathBuf,
+    /// Written log file (MCAP or an export, [`LogOptions::format`]).
+    pub log_file: PathBuf,
     /// Written canonical Parquet file.
     pub parquet: PathBuf,
+    /// Written truth table, if asked for ([`LogOptions::truth_rate_hz`]).
+    pub truth_file: Option<PathBuf>,
     /// Copy of the nominal vehicle file.
     pub vehicle: PathBuf,
     /// The hidden effect, if any.
@@ -664,14 +711,10 @@ pub fn synth_drive(
 /// 1 m grid, or a window of a road file ([`read_road_file`]) — with seed `seed` for the
 /// driver's variations, the GNSS track and the CAN noise, and writes `drive.mcap`,
 /// `drive.parquet` and `vehicle.toml` (a byte copy of the vehicle file) into `out_dir`
-/// (created if needed). Cruise speed: the driver's speed limit, else the rules' design speed.
-/// The CAN bus is [`CanBus::j1939_truck`] with the engine's largest full-load torque as
-/// reference, plus [`gnss_message`] when [`DriveConfig::gnss`] is set; the GNSS track's
-/// smallest radius follows the cruise speed unless configured.
+/// (created if needed): [`synth_drive_logged`] with the default [`LogOptions`].
 ///
 /// # Errors
-/// [`DriveError`] from every stage; no speed limit on a road without design speed is
-/// [`DriveError::NoCruiseSpeed`]; a bad road file [`DriveError::RoadFile`].
+/// As [`synth_drive_logged`].
 pub fn synth_drive_on(
     vehicle_path: &Path,
     road: &RoadSource,
@@ -680,10 +723,66 @@ pub fn synth_drive_on(
     cfg: &DriveConfig,
     hidden: Option<&HiddenEffect>,
 ) -> Result<SynthDrive, DriveError> {
+    synth_drive_logged(
+        vehicle_path,
+        road,
+        seed,
+        out_dir,
+        cfg,
+        hidden,
+        &LogOptions::default(),
+    )
+}
+
+/// Drives the vehicle of `vehicle_path` over `road` — generated from rules with `seed` on a
+/// 1 m grid, or a window of a road file ([`read_road_file`]) — with seed `seed` for the
+/// driver's variations, the GNSS track and the CAN noise, and writes into `out_dir` (created if
+/// needed) the log as `log` says ([`LogFormat::file_name`](super::log_writer::LogFormat::file_name)),
+/// `drive.parquet` (what ingest makes of it), `vehicle.toml` (a byte copy of the vehicle file)
+/// and, with [`LogOptions::truth_rate_hz`], `truth.parquet` ([`super::truth_file`]).
+/// Cruise speed: the driver's speed limit, else the rules' design speed; with
+/// [`DriveConfig::road_speed_limits`] the road's limits below it. The CAN bus is
+/// [`CanBus::j1939_truck`] with the engine's largest full-load torque as reference (its bellow
+/// channels stay silent for a vehicle without `[axles]`, and without a retarder
+/// ([`DriverConfig::retarder`](super::driver::DriverConfig::retarder) `None`) it has no ERC1
+/// message), plus [`gnss_message`] when
+/// [`DriveConfig::gnss`] is set; the GNSS track's smallest radius follows the cruise speed
+/// unless configured.
+///
+/// # Errors
+/// [`DriveError`] from every stage; no speed limit on a road without design speed is
+/// [`DriveError::NoCruiseSpeed`]; road speed limits on a road without them
+/// [`DriveError::NoSpeedLimits`]; a bad road file [`DriveError::RoadFile`]; a truth rate that
+/// does not divide the sample rate [`DriveError::BadConfig`]; bad jitter, dropout columns or a
+/// failed log [`DriveError::Export`].
+pub fn synth_drive_logged(
+    vehicle_path: &Path,
+    road: &RoadSource,
+    seed: u64,
+    out_dir: &Path,
+    cfg: &DriveConfig,
+    hidden: Option<&HiddenEffect>,
+    log: &LogOptions,
+) -> Result<SynthDrive, DriveError> {
     let v = VehicleFile::load(vehicle_path)?;
     let file = vehicle_path.display().to_string();
     let d = v.driveline(&file)?;
-    let a = v.axles(&file)?;
+    let a = v.axles.as_ref();
+    let truth_every = match log.truth_rate_hz {
+        None => None,
+        Some(r) => {
+            let k = 1.0 / (r * cfg.sample_dt_s);
+            let ok = r.is_finite() && r > 0.0 && k >= 1.0 && (k - k.round()).abs() < 1e-9;
+            if !ok {
+                return Err(DriveError::BadConfig {
+                    parameter: "truth_rate_hz",
+                    value: r,
+                    requirement: "finite, > 0 and a whole divisor of the sample rate",
+                });
+            }
+            Some(k.round() as usize)
+        }
+    };
     if let Some(g) = &cfg.gnss {
         g.validate()?;
     }
@@ -738,7 +837,7 @@ pub fn synth_drive_on(
                 c.resolution
             }
         });
-    let nominal = TruthModel::nominal(d, Some(a));
+    let nominal = TruthModel::nominal(d, a);
     let (injection, mut truth_model) = match hidden {
         None => (None, nominal),
         Some(h) => resolve(h.choice, &nominal, slope_resolution, seed)?,
@@ -746,7 +845,6 @@ pub fn synth_drive_on(
     if let Some(EffectChoice::LocalRollingResistance) = hidden.map(|h| h.choice) {
         truth_model.stretch = Some(ResistanceStretch::draw(length_m, d.c_r1, seed));
     }
-    let plant_axles = truth_model.axles.as_ref().unwrap_or(a);
     let cruise = cfg
         .driver
         .speed_limit_mps
@@ -757,6 +855,23 @@ pub fn synth_drive_on(
     let slope = RoadSlope {
         distance_m: road.distance_m.clone(),
         slope: road.slope.clone(),
+    };
+    let mut cfg_run;
+    let cfg = if cfg.road_speed_limits {
+        let limits = road
+            .speed_limit_mps
+            .clone()
+            .ok_or_else(|| DriveError::NoSpeedLimits {
+                road: road.label.clone(),
+            })?;
+        cfg_run = cfg.clone();
+        cfg_run.driver.speed_limits = Some(SpeedLimits {
+            step_m: road.step_m,
+            limit_mps: limits,
+        });
+        &cfg_run
+    } else {
+        cfg
     };
     let drive = simulate_drive_with(
         d,
@@ -772,8 +887,17 @@ pub fn synth_drive_on(
         cfg,
         seed,
     )?;
-    let axles = simulate_axles_with(plant_axles, truth_model.axle_ext, &drive)?;
-    let mut truth = drive_truth(&drive, &axles);
+    let axles = match truth_model.axles.as_ref() {
+        Some(pa) => Some(simulate_axles_with(pa, truth_model.axle_ext, &drive)?),
+        None => None,
+    };
+    let mut truth = drive_truth(&drive, axles.as_ref());
+    if cfg.driver.retarder.is_none() {
+        // no retarder fitted: no ERC1 on the bus
+        truth.columns.retain(|(c, _)| c != "retarder_torque");
+        bus.messages
+            .retain(|m| !m.channels.iter().any(|c| c.column == "retarder_torque"));
+    }
     truth_model.sensors.apply_to_truth(&mut truth);
     truth_model.sensors.apply_to_bus(&mut bus);
     if let Some(dr) = cfg.dropouts {
@@ -801,14 +925,53 @@ pub fn synth_drive_on(
         source,
     })?;
     let opts = SynthOptions {
-        start_ns: DRIVE_START_NS,
+        start_ns: log.start_ns.unwrap_or(DRIVE_START_NS),
         seed,
-        drive_id: format!("synth-{}-{}km-seed{}", road.label, length_label, seed),
-        vehicle_id: Some(v.vehicle_id.clone()),
+        drive_id: log
+            .drive_id
+            .clone()
+            .unwrap_or_else(|| format!("synth-{}-{}km-seed{}", road.label, length_label, seed)),
+        vehicle_id: Some(log.vehicle_id.clone().unwrap_or(v.vehicle_id.clone())),
     };
-    let mcap = out_dir.join("drive.mcap");
+    if let Some(spec) = &log.dropouts {
+        apply_dropouts(&mut bus, spec)?;
+    }
+    let fuel: Vec<f64> = drive
+        .engine_speed_rad_s
+        .iter()
+        .zip(&drive.engine_torque_nm)
+        .map(|(&w, &m)| fuel_rate_lph(w, m))
+        .collect();
+    let log_file = out_dir.join(log.format.file_name());
     let parquet = out_dir.join("drive.parquet");
-    let log = write_can_drive(&mcap, &parquet, &bus, &truth, &opts)?;
+    let drive_log = write_drive_log(
+        &log_file,
+        &parquet,
+        &bus,
+        &truth,
+        Some(Series {
+            t_s: &drive.t_s,
+            values: &fuel,
+        }),
+        &opts,
+        log,
+    )?;
+    let truth_file = match truth_every {
+        None => None,
+        Some(every) => {
+            let path = out_dir.join("truth.parquet");
+            let cols = truth_columns(&drive, axles.as_ref(), gnss.as_ref(), opts.start_ns, every);
+            let meta = TruthMeta {
+                drive_id: opts.drive_id.clone(),
+                vehicle_id: opts.vehicle_id.clone(),
+                seed,
+                road: format!("{} ({:.3} km)", road.label, road.length_m / 1000.0),
+                rate_hz: log.truth_rate_hz.unwrap_or_default(),
+            };
+            write_truth(&path, &cols, &meta).map_err(ExportError::from)?;
+            Some(path)
+        }
+    };
     let vehicle = out_dir.join("vehicle.toml");
     std::fs::copy(vehicle_path, &vehicle).map_err(|source| DriveError::Io {
         path: vehicle.clone(),
@@ -828,9 +991,10 @@ pub fn synth_drive_on(
         axles,
         road,
         gnss,
-        log,
-        mcap,
+        log: drive_log,
+        log_file,
         parquet,
+        truth_file,
         vehicle,
         injection,
         truth: truth_model,

@@ -10,6 +10,16 @@
 //! [`DriverConfig::decel_mps2`] (a braking curve with 20 % margin), and the braking curve's own
 //! deceleration `−b` is fed forward.
 //!
+//! # Speed limits along the road
+//! With [`DriverConfig::speed_limits`] (e.g. a VECTO cycle's target speed, see
+//! [`super::road_source`]) the cruise speed becomes `min(v_cruise, v_lim(x))`, where the limit
+//! `v_lim` holds on each step of its grid. Lower limits ahead are anticipated on the same
+//! braking curve as stops: the envelope `v_env` on the grid is `min(v_cruise, v_lim)` lowered
+//! backwards to `v_env,k = min(v_env,k, √(v_env,k+1² + 2 b Δx))` (linear between grid points),
+//! so the truck reaches each lower limit where it starts; where `v_env` is below the limit in
+//! force the driver is on that curve and `−b` is fed forward. Higher limits are taken up at
+//! the comfortable acceleration.
+//!
 //! # Controller
 //! Desired acceleration `a = clamp(a_ff + k_v (v_target − v), −decel, accel)` (`k_v` =
 //! [`DriverConfig::speed_gain_per_s`]). Required wheel force `F = m_eff a + F_road(v, slope)`,
@@ -68,11 +78,36 @@ pub struct DriverConfig {
     pub hold_brake_n: f64,
     /// The truck's driveline retarder; `None`: none fitted.
     pub retarder: Option<RetarderConfig>,
+    /// Speed limits along the road (module doc); `None`: the cruise speed everywhere.
+    pub speed_limits: Option<SpeedLimits>,
+}
+
+/// Speed limits along a drive's travelled distance: `limit_mps[k]` (m/s, finite and > 0)
+/// holds on `[k·step_m, (k+1)·step_m)`, the last one beyond the grid's end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeedLimits {
+    /// Grid step, m (finite and > 0).
+    pub step_m: f64,
+    /// Limit on each step, m/s.
+    pub limit_mps: Vec<f64>,
+}
+
+impl SpeedLimits {
+    /// The limit in force at `x_m` (the first one before the grid).
+    pub fn at(&self, x_m: f64) -> f64 {
+        let n = self.limit_mps.len();
+        let k = (x_m / self.step_m).floor();
+        if k.is_nan() || k < 0.0 {
+            return self.limit_mps[0];
+        }
+        self.limit_mps[(k as usize).min(n - 1)]
+    }
 }
 
 impl Default for DriverConfig {
     /// No speed limit override, a stop every 1 km held 8 s, 0.8 m/s² up, 1.2 m/s² down,
-    /// k_v = 0.5 1/s, ±5 % tip variations, a 30 kN holding brake, the default retarder.
+    /// k_v = 0.5 1/s, ±5 % tip variations, a 30 kN holding brake, the default retarder, no
+    /// speed limits along the road.
     fn default() -> Self {
         Self {
             speed_limit_mps: None,
@@ -84,6 +119,7 @@ impl Default for DriverConfig {
             tip_fraction: 0.05,
             hold_brake_n: 30_000.0,
             retarder: Some(RetarderConfig::default()),
+            speed_limits: None,
         }
     }
 }
@@ -119,6 +155,8 @@ pub struct Driver {
     /// Retarder torque of the previous step, N·m, and that step's time, s.
     retarder_nm: f64,
     last_t_s: Option<f64>,
+    /// Speed envelope on the speed-limit grid, m/s (module doc), if limits are set.
+    envelope: Option<Vec<f64>>,
 }
 
 impl Driver {
@@ -134,6 +172,18 @@ impl Driver {
             }
         }
         stops_m.push(length_m);
+        let envelope = cfg.speed_limits.as_ref().and_then(|l| {
+            let n = l.limit_mps.len();
+            if n == 0 {
+                return None;
+            }
+            let b = 0.8 * cfg.decel_mps2;
+            let mut env: Vec<f64> = l.limit_mps.iter().map(|&v| v.min(cruise_mps)).collect();
+            for k in (0..n - 1).rev() {
+                env[k] = env[k].min((env[k + 1].powi(2) + 2.0 * b * l.step_m).sqrt());
+            }
+            Some(env)
+        });
         Self {
             cfg,
             cruise_mps,
@@ -145,7 +195,25 @@ impl Driver {
             next_tip_s: 0.0,
             retarder_nm: 0.0,
             last_t_s: None,
+            envelope,
         }
+    }
+
+    /// The speed envelope at `x_m` (m/s) and whether it lies below the limit in force there
+    /// (the driver is braking toward a lower limit ahead), if speed limits are set.
+    fn envelope_at(&self, x_m: f64) -> Option<(f64, bool)> {
+        let (env, limits) = (self.envelope.as_ref()?, self.cfg.speed_limits.as_ref()?);
+        let n = env.len();
+        let f = (x_m / limits.step_m).max(0.0);
+        let k = (f.floor() as usize).min(n - 1);
+        let v = if k + 1 < n {
+            let w = f - k as f64;
+            env[k] + w * (env[k + 1] - env[k])
+        } else {
+            env[n - 1]
+        };
+        let cap = limits.at(x_m).min(self.cruise_mps);
+        Some((v.min(cap), v < cap - 1e-9))
     }
 
     /// The planned stop positions, m (the last is the road end).
@@ -259,11 +327,17 @@ impl Driver {
         }
         let b = 0.8 * c.decel_mps2;
         let curve = (2.0 * b * (x_s - x_m).max(0.0)).sqrt();
-        let (target, a_ff) = if curve < self.cruise_mps {
+        let (mut target, mut a_ff) = if curve < self.cruise_mps {
             (curve, -b)
         } else {
             (self.cruise_mps, 0.0)
         };
+        if let Some((v_env, braking)) = self.envelope_at(x_m) {
+            if v_env < target {
+                target = v_env;
+                a_ff = if braking { -b } else { 0.0 };
+            }
+        }
         let a = (a_ff + c.speed_gain_per_s * (target - v_mps)).clamp(-c.decel_mps2, c.accel_mps2);
         let m_eff = p.mass_kg + p.j_w_kg_m2 / p.wheel_radius_m.powi(2);
         let f = m_eff * a + p.road_force(v_mps, slope, 0.0, false);

@@ -11,17 +11,25 @@
 //! on the result; the driver brakes with engine brake, [`retarder`] and service brake in that
 //! order, and [`track`] adds a GNSS track along the road. [`effects`] hides one physical effect
 //! of the diagnosis catalogue in that truth, with its answer kept apart.
+//!
+//! [`log_writer`] chooses how a drive is logged — MCAP with zstd or LZ4 chunks, or the wide
+//! fleet-portal and long J1939 exports of [`export`] — with the drive's ids, start time, logger
+//! jitter and dropouts; [`truth_file`] writes the drive's truth as a canonical table. The
+//! bundled fixture drives (`fixtures/drives/`) are made this way (`fixtures/gen/make_drives.sh`).
 
 pub mod amt;
 pub mod can;
 pub mod drive;
 pub mod driver;
 pub mod effects;
+pub mod export;
+pub mod log_writer;
 pub mod retarder;
 pub mod road_source;
 pub mod track;
+pub mod truth_file;
 
 pub use can::{
-    sample, write_can_drive, write_mcap, CanBus, CanChannel, CanFrame, CanMessage, Dropouts,
-    SynthError, SynthOptions, TorqueReference, Truth,
+    sample, write_can_drive, write_mcap, write_mcap_with, CanBus, CanChannel, CanFrame, CanMessage,
+    Dropouts, McapCompression, SynthError, SynthOptions, TorqueReference, Truth,
 };

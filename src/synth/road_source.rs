@@ -11,9 +11,13 @@
 //!   `m` (distance, elevation) or `1` (slope). Without `elevation` the elevation is the
 //!   trapezoidal integral of the slope from 0 m at the first row.
 //! - **VECTO**: read as `fleetdyn road profile` reads it ([`crate::road::vdri`]): the grade of
-//!   a row holds to the next row and the elevation is its integral; only `<s>` and `<grad>`
-//!   are used. The cycle's target speed `<v>` and stops `<stop>` are *not* used: the driver
-//!   cruises at the given speed limit and stops where [`super::driver::DriverConfig`] says.
+//!   a row holds to the next row and the elevation is its integral. The cycle's target speed
+//!   `<v>` is kept as the road's speed limits ([`DriveRoad::speed_limit_mps`], held from its
+//!   row like the grade; rows with `<v>` ≤ 0 — VECTO's stops — hold the previous positive
+//!   value, leading ones the first), which the driver follows only when asked
+//!   ([`super::drive::DriveConfig::road_speed_limits`]); otherwise it cruises at the given
+//!   speed limit. The cycle's stops `<stop>` are *not* used: the driver stops where
+//!   [`super::driver::DriverConfig`] says.
 //!
 //! # Window and grid
 //! Distances in the file are taken from its first row (0 m there). The window starts at
@@ -24,7 +28,7 @@
 
 use crate::road::profile::ProfileError;
 use crate::road::synth::SyntheticRoad;
-use crate::road::vdri::{cycle_profile, read_vdri, vecto_header, VectoHeader};
+use crate::road::vdri::{cycle_profile, read_vdri, vecto_header, VectoCycle, VectoHeader};
 use crate::schema::drive_log;
 use arrow::array::{Array, AsArray};
 use arrow::compute::cast;
@@ -177,6 +181,9 @@ pub struct DriveRoad {
     pub length_m: f64,
     /// Design speed of the rule set, m/s (files have none).
     pub design_speed_mps: Option<f64>,
+    /// Speed limit on each grid step `[k·step_m, (k+1)·step_m)`, m/s, where the road has
+    /// them (a VECTO cycle's `<v>`); `None` otherwise.
+    pub speed_limit_mps: Option<Vec<f64>>,
 }
 
 impl DriveRoad {
@@ -191,6 +198,7 @@ impl DriveRoad {
             slope: p.slope.clone(),
             length_m: road.length_m,
             design_speed_mps: road.rules.design_speed_km_per_h.map(|k| k / 3.6),
+            speed_limit_mps: None,
         }
     }
 }
@@ -200,6 +208,8 @@ struct FileRoad {
     distance_m: Vec<f64>,
     elevation_m: Vec<f64>,
     slope: Vec<f64>,
+    /// Speed limit held from each point to the next, m/s, if the file has them.
+    speed_mps: Option<Vec<f64>>,
 }
 
 /// Reads the road in `path` and cuts the window `[start_m, start_m + length_m]` (module doc).
@@ -228,16 +238,50 @@ pub fn read_road_file(
             Some(VectoHeader::Distance) | Some(VectoHeader::Time) => {
                 let c = read_vdri(path)?;
                 let p = cycle_profile(&c, ROAD_STEP_M)?;
+                let speed_mps = cycle_speed_limits(&c, &p.distance_m);
                 FileRoad {
                     distance_m: p.distance_m,
                     elevation_m: p.elevation_m,
                     slope: p.slope,
+                    speed_mps,
                 }
             }
             None => return Err(RoadSourceError::UnknownFormat { file }),
         }
     };
     window(&file, &road, start_m, length_m)
+}
+
+/// The cycle's `<v>` at the grid distances `grid_m` (from its first row), held from each row
+/// like the grade (module doc); `None` when no row has a positive `<v>`.
+fn cycle_speed_limits(c: &VectoCycle, grid_m: &[f64]) -> Option<Vec<f64>> {
+    let first = c
+        .target_speed_mps
+        .iter()
+        .copied()
+        .find(|v| v.is_finite() && *v > 0.0)?;
+    let mut held = Vec::with_capacity(c.target_speed_mps.len());
+    let mut last = first;
+    for &v in &c.target_speed_mps {
+        if v.is_finite() && v > 0.0 {
+            last = v;
+        }
+        held.push(last);
+    }
+    let s0 = c.distance_m[0];
+    let mut i = 0;
+    let n = c.distance_m.len();
+    Some(
+        grid_m
+            .iter()
+            .map(|&x| {
+                while i + 1 < n && c.distance_m[i + 1] - s0 <= x {
+                    i += 1;
+                }
+                held[i]
+            })
+            .collect(),
+    )
 }
 
 fn window(
@@ -288,6 +332,7 @@ fn window(
         slope: Vec::with_capacity(n),
         length_m: length,
         design_speed_mps: None,
+        speed_limit_mps: road.speed_mps.as_ref().map(|_| Vec::with_capacity(n)),
     };
     let mut i = 0;
     for k in 0..n {
@@ -301,6 +346,10 @@ fn window(
         out.distance_m.push(x);
         out.elevation_m.push(lerp(&road.elevation_m));
         out.slope.push(lerp(&road.slope));
+        if let (Some(v), Some(o)) = (&road.speed_mps, out.speed_limit_mps.as_mut()) {
+            // held from each point: the later point's once s reaches it
+            o.push(if f >= 1.0 { v[i + 1] } else { v[i] });
+        }
     }
     Ok(out)
 }
@@ -423,6 +472,7 @@ fn read_parquet_road(path: &Path) -> Result<FileRoad, RoadSourceError> {
         distance_m,
         elevation_m,
         slope: slope.clone(),
+        speed_mps: None,
     })
 }
 
@@ -431,11 +481,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn cycle_speeds_hold_from_their_row_and_skip_stops() {
+        let c = VectoCycle {
+            file: "c.vdri".into(),
+            distance_m: vec![100.0, 103.0, 105.0, 108.0],
+            grade: vec![0.0; 4],
+            target_speed_mps: vec![0.0, 20.0, 0.0, 10.0],
+            stop_s: vec![5.0, 0.0, 3.0, 0.0],
+        };
+        let grid: Vec<f64> = (0..=9).map(f64::from).collect();
+        let v = cycle_speed_limits(&c, &grid).unwrap();
+        // leading stop → the first positive speed; the stop at 105 m holds 20 m/s
+        assert_eq!(
+            v,
+            [20.0, 20.0, 20.0, 20.0, 20.0, 20.0, 20.0, 20.0, 10.0, 10.0]
+        );
+        let none = VectoCycle {
+            target_speed_mps: vec![f64::NAN; 4],
+            ..c
+        };
+        assert!(cycle_speed_limits(&none, &grid).is_none());
+    }
+
+    #[test]
     fn window_resamples_onto_a_1_m_grid_from_its_start() {
         let road = FileRoad {
             distance_m: vec![0.0, 10.0, 30.0],
             elevation_m: vec![0.0, 0.1, 0.5],
             slope: vec![0.01, 0.01, 0.02],
+            speed_mps: Some(vec![20.0, 10.0, 15.0]),
         };
         let w = window(Path::new("r.parquet"), &road, 5.0, Some(20.0)).unwrap();
         assert_eq!(w.distance_m.len(), 21);
@@ -443,7 +517,11 @@ mod tests {
         assert!((w.elevation_m[0] - 0.05).abs() < 1e-12);
         assert!((w.slope[15] - 0.015).abs() < 1e-12); // file 20 m: halfway 10..30
         assert!((w.elevation_m[20] - 0.4).abs() < 1e-12); // file 25 m
+                                                          // limits held from each point: file 5..9 m → 20, 10..25 m → 10
+        let v = w.speed_limit_mps.as_ref().unwrap();
+        assert_eq!((v[0], v[4], v[5], v[20]), (20.0, 20.0, 10.0, 10.0));
         let all = window(Path::new("r.parquet"), &road, 0.0, None).unwrap();
+        assert_eq!(all.speed_limit_mps.as_ref().unwrap()[30], 15.0);
         assert_eq!(all.length_m, 30.0);
         assert_eq!(all.distance_m.len(), 31);
         for (start, len) in [

@@ -98,7 +98,7 @@ fn mcap_bad_magic_truncated_and_crc() {
 
 #[test]
 fn committed_mcap_fixture_truncated_and_corrupted() {
-    // the zstd fixture written by the Python mcap writer, cut and bit-flipped
+    // the zstd fixture (fleetdyn synth drive, fixtures/gen/make_drives.sh), cut and bit-flipped
     let bytes = std::fs::read(fixture("fixtures/drives/truck-0001.mcap")).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("cut.mcap");

@@ -82,7 +82,7 @@ fn multi_rate_mcap_aligns_on_the_fastest_rate() {
 
 #[test]
 fn drive_and_vehicle_ids_come_from_the_source_metadata() {
-    // MCAP: the metadata record "fleetdyn.drive" written by the Python generator
+    // MCAP: the metadata record "drive" written by the generator (fixtures/gen/make_drives.sh)
     let ing = ingest_file(&fixture("fixtures/drives/truck-0002-lz4.mcap"), &opts()).unwrap();
     assert_eq!(ing.log.meta.drive_id, "truck-0002");
     assert_eq!(ing.log.meta.vehicle_id.as_deref(), Some("TRK-0002"));

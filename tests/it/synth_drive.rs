@@ -189,7 +189,7 @@ fn city_drive_is_deterministic_and_its_log_ingests_with_bellow_pressures() {
     let d = &ra.drive;
     let vf = fleetdyn::model::vehicle::VehicleFile::load(&fixture(VEHICLE)).unwrap();
     let p_static = vf.axles.as_ref().unwrap().static_state().pressure_pa[1];
-    let pr = &ra.axles.pressure_pa[1];
+    let pr = &ra.axles.as_ref().unwrap().pressure_pa[1];
     let mean_in = |t0: f64, t1: f64| {
         let s: Vec<f64> = d
             .t_s

@@ -146,10 +146,13 @@ fn downhill_uses_engine_brake_and_retarder_before_the_service_brake() {
         .collect();
     let mean = |p: &[f64]| busy.iter().map(|&i| p[i]).sum::<f64>() / busy.len() as f64;
     let (p1, p0) = (
-        mean(&with.axles.pressure_pa[1]),
+        mean(&with.axles.as_ref().unwrap().pressure_pa[1]),
         mean(&axles0.pressure_pa[1]),
     );
-    let (n1, n0) = (mean(&with.axles.normal_n[1]), mean(&axles0.normal_n[1]));
+    let (n1, n0) = (
+        mean(&with.axles.as_ref().unwrap().normal_n[1]),
+        mean(&axles0.normal_n[1]),
+    );
     eprintln!(
         "rear bellow while retarding: {p1:.0} Pa with the aux brake input, {p0:.0} Pa without; rear normal load {n1:.0} N vs {n0:.0} N ({} samples)",
         busy.len()
@@ -213,7 +216,7 @@ fn mcap_with_the_new_channels_ingests_unchanged_within_step_and_noise_of_the_tru
     let r = downhill_drive(dir.path(), &cfg_60(), 5);
     let d = &r.drive;
     let g = r.gnss.as_ref().unwrap();
-    let fr = frames(&r.mcap);
+    let fr = frames(&r.log_file);
     // the bus that wrote it, for the wire → SI conversions ingest applies
     let mut bus = CanBus::j1939_truck(ENGINE_REF_NM);
     let gcfg = GnssConfig::default();
@@ -269,7 +272,7 @@ fn mcap_with_the_new_channels_ingests_unchanged_within_step_and_noise_of_the_tru
     }
     // ingest with the bundled mapping (auto-chosen) maps every field, and gives the very log the
     // drive wrote (made with the bus's own mapping)
-    let ing = ingest_file(&r.mcap, &IngestOptions::default()).unwrap();
+    let ing = ingest_file(&r.log_file, &IngestOptions::default()).unwrap();
     assert_eq!(ing.report.mapping, "j1939-json-mcap");
     assert!(ing.report.ignored.is_empty(), "{:?}", ing.report.ignored);
     same_log(&ing.log, &r.log);
@@ -346,7 +349,7 @@ fn clutch_position_is_0_engaged_and_1_open_through_launches_and_shifts() {
         assert_eq!(d.clutch_position[at(s.t_end_s)], 0.0, "{s:?}");
     }
     // on the wire: 10 Hz, multiples of 0.4 %; 100 % at standstill, 0 % while driving
-    let fr = frames(&r.mcap);
+    let fr = frames(&r.log_file);
     let clutch = &fr["/can/clutch"];
     for w in clutch.windows(2) {
         assert_eq!(w[1].0 - w[0].0, 100_000_000);
@@ -390,7 +393,7 @@ fn gnss_is_1_hz_at_its_resolution_and_its_road_profile_follows_the_true_slope() 
     )
     .unwrap();
     let d = &r.drive;
-    let fr = frames(&r.mcap);
+    let fr = frames(&r.log_file);
     let fixes = &fr["/gnss/fix"];
     let duration = *d.t_s.last().unwrap();
     assert_eq!(fixes.len(), (duration - 0.016).floor() as usize + 1);
@@ -422,7 +425,7 @@ fn gnss_is_1_hz_at_its_resolution_and_its_road_profile_follows_the_true_slope() 
     let prof = dir.path().join("profile.parquet");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
         .args(["road", "profile"])
-        .arg(&r.mcap)
+        .arg(&r.log_file)
         .arg("-o")
         .arg(&prof)
         .output()
