@@ -6,3 +6,4 @@ pub mod compare;
 pub mod contract;
 pub mod extended;
 pub mod prove;
+pub mod setup;

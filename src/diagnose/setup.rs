@@ -1,0 +1,241 @@
+//! Setting up the diagnosis of one recording: which models the recording can drive (the
+//! signals present decide, issue 7 point 1), the nominal parameters, the rows that count, and
+//! the operating condition of every row.
+//!
+//! - Longitudinal/driveline: needs a vehicle `[driveline]` and the columns `vehicle_speed`,
+//!   `engine_speed`, `engine_torque`, `gear`. Rows count while the measured speed is at least
+//!   1 m/s (the model has no creep mode) and the speed sample is real (not a filled gap).
+//! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Every row with a
+//!   real pressure sample counts.
+//! - The slope sensor's resolution is estimated from the recording (`slope_quantization`'s
+//!   nominal value, [`crate::signal::quantization`]); an unquantised slope counts as 0.1 %.
+
+use super::compare::Conditions;
+use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use crate::model::vehicle::VehicleFile;
+use crate::schema::Interpolation;
+use crate::signal::distance::fill_gaps;
+use crate::signal::quantization::estimate_quantization;
+use crate::synth::effects::TruthModel;
+use crate::table::DriveLog;
+
+/// Speed below which longitudinal rows do not count, m/s.
+pub const MIN_SPEED_MPS: f64 = 1.0;
+
+/// Which models apply, and what they need.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The nominal vehicle as a truth model (no effect).
+    pub nominal_truth: TruthModel,
+    /// Gear ratios.
+    pub ratios: Vec<f64>,
+    /// The nominal parameters.
+    pub nominal: Theta,
+    /// Estimated slope-sensor resolution, tan α per step.
+    pub slope_resolution: f64,
+    /// The longitudinal model applies.
+    pub longitudinal: bool,
+    /// Why not, when it does not.
+    pub longitudinal_reason: Option<String>,
+    /// The axle model applies.
+    pub axle: bool,
+    /// Why not, when it does not.
+    pub axle_reason: Option<String>,
+    /// Rows that count for the longitudinal signals.
+    pub long_valid: Vec<bool>,
+    /// Measured bellow pressures front, rear, tag (gaps filled), Pa.
+    pub axle_measured: Option<[Vec<f64>; 3]>,
+    /// Rows with a real pressure sample, per axle.
+    pub axle_valid: Option<[Vec<bool>; 3]>,
+    /// Operating conditions.
+    pub conditions: Conditions,
+}
+
+fn column(log: &DriveLog, name: &str, interp: Interpolation) -> Option<Vec<f64>> {
+    log.signal(name).and_then(|v| fill_gaps(v, interp))
+}
+
+/// Acceleration from the speed by a centred difference over ±`half_s` (m/s²).
+fn acceleration(t: &[f64], v: &[f64], half_s: f64) -> Vec<f64> {
+    let n = t.len();
+    (0..n)
+        .map(|i| {
+            let a = t.partition_point(|&x| x < t[i] - half_s).min(i);
+            let b = (t.partition_point(|&x| x <= t[i] + half_s).max(i + 1) - 1).min(n - 1);
+            if b > a {
+                (v[b] - v[a]) / (t[b] - t[a])
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+impl Setup {
+    /// Sets up the diagnosis of `log` with the nominal `vehicle`.
+    ///
+    /// # Errors
+    /// [`ExtendedError::Missing`] when neither model applies (the message lists why each does
+    /// not).
+    pub fn new(log: &DriveLog, vehicle: &VehicleFile) -> Result<Setup, ExtendedError> {
+        let file = log.meta.source_file.clone();
+        let t: Vec<f64> = log
+            .timestamp_ns
+            .iter()
+            .map(|&x| (x - log.timestamp_ns.first().copied().unwrap_or(0)) as f64 * 1e-9)
+            .collect();
+        let n = log.len();
+        let speed = column(log, "vehicle_speed", Interpolation::Linear);
+        let missing = |cols: &[&str]| -> Vec<String> {
+            cols.iter()
+                .filter(|c| column(log, c, Interpolation::Linear).is_none())
+                .map(|c| c.to_string())
+                .collect()
+        };
+        let long_missing = missing(&["vehicle_speed", "engine_speed", "engine_torque", "gear"]);
+        let longitudinal_reason = if vehicle.driveline.is_none() {
+            Some("the vehicle file has no [driveline] section".to_string())
+        } else if !long_missing.is_empty() {
+            Some(format!("the recording lacks {}", long_missing.join(", ")))
+        } else {
+            None
+        };
+        let pressures = ["front", "rear", "tag"].map(|a| format!("bellow_pressure_{a}"));
+        let axle_missing = missing(&pressures.iter().map(String::as_str).collect::<Vec<_>>());
+        let axle_reason = if vehicle.axles.is_none() {
+            Some("the vehicle file has no [axles] section".to_string())
+        } else if vehicle.driveline.is_none() {
+            Some("the axle model's torque input needs the vehicle's [driveline]".to_string())
+        } else if !axle_missing.is_empty() {
+            Some(format!("the recording lacks {}", axle_missing.join(", ")))
+        } else if speed.is_none() {
+            Some("the recording lacks vehicle_speed".to_string())
+        } else {
+            None
+        };
+        let Some(d) = vehicle.driveline.as_ref() else {
+            return Err(ExtendedError::Missing {
+                file,
+                column: format!(
+                    "a model to diagnose: longitudinal: {}; axle: {}",
+                    longitudinal_reason.unwrap_or_default(),
+                    axle_reason.unwrap_or_default()
+                ),
+            });
+        };
+        if longitudinal_reason.is_some() && axle_reason.is_some() {
+            return Err(ExtendedError::Missing {
+                file,
+                column: format!(
+                    "a model to diagnose: longitudinal: {}; axle: {}",
+                    longitudinal_reason.unwrap_or_default(),
+                    axle_reason.unwrap_or_default()
+                ),
+            });
+        }
+        let speed = speed.unwrap_or_else(|| vec![0.0; n]);
+        let raw_speed = log.signal("vehicle_speed");
+        let long_valid: Vec<bool> = (0..n)
+            .map(|i| {
+                longitudinal_reason.is_none()
+                    && raw_speed.is_some_and(|v| v[i].is_finite())
+                    && speed[i] >= MIN_SPEED_MPS
+            })
+            .collect();
+        let (axle_measured, axle_valid) = if axle_reason.is_none() {
+            let m = pressures
+                .clone()
+                .map(|c| column(log, &c, Interpolation::Linear).expect("checked"));
+            let v = pressures.clone().map(|c| {
+                let raw = log.signal(&c).expect("checked");
+                raw.iter().map(|x| x.is_finite()).collect::<Vec<bool>>()
+            });
+            (Some(m), Some(v))
+        } else {
+            (None, None)
+        };
+        let slope = column(log, "road_slope", Interpolation::Hold).unwrap_or_else(|| vec![0.0; n]);
+        let slope_resolution = estimate_quantization(&slope)
+            .map(|q| q.step)
+            .filter(|q| *q > 0.0 && *q < 0.1)
+            .unwrap_or(0.001);
+        let nominal_truth = TruthModel::nominal(d, vehicle.axles.as_ref());
+        let nominal = Theta::nominal(&nominal_truth, slope_resolution);
+        let mut distance = vec![0.0; n];
+        for i in 1..n {
+            distance[i] = distance[i - 1] + 0.5 * (speed[i] + speed[i - 1]) * (t[i] - t[i - 1]);
+        }
+        let brake =
+            column(log, "brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
+        let retarder =
+            column(log, "retarder_torque", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
+        let clutch =
+            column(log, "clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
+        let conditions = Conditions {
+            distance_m: distance,
+            gear: column(log, "gear", Interpolation::Hold).unwrap_or_else(|| vec![0.0; n]),
+            engine_torque_nm: column(log, "engine_torque", Interpolation::Linear)
+                .unwrap_or_else(|| vec![0.0; n]),
+            accel_mps2: acceleration(&t, &speed, 0.25),
+            speed_mps: speed,
+            slope,
+            // a brake force above 500 N (noise: 0.2 kN σ on the wire) or any retarder torque
+            braking: brake
+                .iter()
+                .zip(&retarder)
+                .map(|(b, r)| b.abs() > 500.0 || *r > 1.0)
+                .collect(),
+            clutch_actuated: clutch.iter().map(|c| *c > 0.05).collect(),
+            t_s: t,
+        };
+        Ok(Setup {
+            nominal_truth,
+            ratios: vehicle.gearbox.ratios.clone(),
+            nominal,
+            slope_resolution,
+            longitudinal: longitudinal_reason.is_none(),
+            longitudinal_reason,
+            axle: axle_reason.is_none(),
+            axle_reason,
+            long_valid,
+            axle_measured,
+            axle_valid,
+            conditions,
+        })
+    }
+
+    /// The longitudinal model of `log`, when it applies.
+    ///
+    /// # Errors
+    /// [`ExtendedError`] when the model cannot be bound.
+    pub fn longitudinal_model<'a>(
+        &'a self,
+        log: &'a DriveLog,
+    ) -> Result<Option<LongitudinalModel<'a>>, ExtendedError> {
+        if !self.longitudinal {
+            return Ok(None);
+        }
+        LongitudinalModel::new(
+            log,
+            &self.nominal_truth,
+            &self.ratios,
+            self.nominal,
+            LongitudinalConfig::default(),
+        )
+        .map(Some)
+    }
+
+    /// The axle model of `log`, when it applies.
+    ///
+    /// # Errors
+    /// [`ExtendedError`] when the model cannot be bound.
+    pub fn axle_model<'a>(
+        &'a self,
+        log: &'a DriveLog,
+    ) -> Result<Option<AxleModel<'a>>, ExtendedError> {
+        if !self.axle {
+            return Ok(None);
+        }
+        AxleModel::new(log, &self.nominal_truth, &self.ratios, self.nominal).map(Some)
+    }
+}
