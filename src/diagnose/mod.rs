@@ -4,3 +4,5 @@
 pub mod catalogue;
 pub mod compare;
 pub mod extended;
+pub mod locate;
+pub mod noise;
