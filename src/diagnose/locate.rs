@@ -42,12 +42,14 @@
 //! engine torque, gear ratio — each in addition to a constant, and for the longitudinal
 //! signals (whose residual integrates a force error from each re-initialisation,
 //! [`LocateConfig::integrated_signals`]) on the shapes integrated from each window start. A
-//! shape is stated when it explains at least [`LocateConfig::min_share`] (10 %) of the
-//! residual energy with an F-test p ≤ α / (number of shapes) on the effective degrees of
-//! freedom. Indicator shapes (torque sign changes, clutch actuated, braking, gear shifts) give
-//! "only …" statements when the residual is significant and practically above the floor inside
-//! them, they cover at most half of the rows, and at least 80 % of the excess energy
-//! `Σ(r² − σ²)` lies inside. Statements are only made for signals with a mismatch.
+//! shape is stated when it adds at least [`LocateConfig::min_share`] (10 %) of the residual
+//! energy to the constant's fit with an F-test p ≤ α / (number of shapes) on the effective
+//! degrees of freedom; its reported share is what shape and constant explain together, and
+//! statements are ranked by it. Indicator shapes (torque sign changes, clutch actuated,
+//! braking, gear shifts) give "only …" statements when the residual is significant and
+//! practically above the floor inside them, they cover at most half of the rows, and at least
+//! 80 % of the excess energy `Σ(r² − σ²)` lies inside (or at least half of it, with the rows
+//! outside within the practical ratio). Statements are only made for signals with a mismatch.
 //!
 //! All quantities SI (s, m, m/s, the signal's unit); grades as tan α (text in %); frequencies in
 //! Hz. Deterministic. Bad input (lengths that differ, bad settings) is a [`LocateError`]; empty
@@ -55,7 +57,7 @@
 
 use super::compare::{Compared, Comparison, Conditions};
 use super::noise::NoiseFloor;
-use super::noise::NoiseFloors;
+use super::noise::{segment_mean_square, NoiseFloors};
 use crate::model::driveline::DrivelineParams;
 use crate::model::resonance::{resonance, Path};
 use crate::schema::Interpolation;
@@ -478,8 +480,9 @@ pub struct Statement {
     pub shape: String,
     /// In words, e.g. "grows with speed² (explains 64 % of the residual energy)".
     pub text: String,
-    /// Share of the residual energy the shape explains (indicators: share of the excess
-    /// energy inside the indicator).
+    /// Share of the residual energy the shape explains together with the constant it is
+    /// fitted with (the shape alone must add at least [`LocateConfig::min_share`]); for
+    /// indicators the share of the excess energy `Σ(r² − σ²)` inside the indicator.
     pub share: f64,
     /// Fitted coefficient: signal unit per shape unit (per shape unit·s for integrated
     /// signals); NaN for indicators.
@@ -1112,13 +1115,14 @@ fn native_nyquist(floor: &NoiseFloor, dt: f64) -> f64 {
         .map_or(grid, |s| (0.5 * s.native_rate_hz).min(grid))
 }
 
-/// Welch PSD of `x` over its `usable` runs with `nperseg`-row segments: (freq, psd, dof).
+/// Welch PSD of `x` over its `usable` runs with `nperseg`-row segments: (freq, psd, dof, power
+/// of the segment means).
 fn psd_over(
     x: &[f64],
     usable: &[bool],
     nperseg: usize,
     dt: f64,
-) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+) -> Option<(Vec<f64>, Vec<f64>, f64, f64)> {
     let pieces: Vec<(&[f64], &[f64])> = runs(usable)
         .into_iter()
         .map(|(a, b)| (&x[a..b], &x[a..b]))
@@ -1133,7 +1137,8 @@ fn psd_over(
         },
     )
     .ok()?;
-    Some((c.freq_hz, c.pxx, c.dof))
+    let dc = segment_mean_square(&pieces.iter().map(|p| p.0).collect::<Vec<_>>(), nperseg);
+    Some((c.freq_hz, c.pxx, c.dof, dc))
 }
 
 fn band_powers(
@@ -1166,9 +1171,16 @@ fn band_powers(
                 ratio: None,
                 p_value: None,
             };
-            if let (true, Some((f, p, dof))) = (observable, &res) {
+            if let (true, Some((f, p, dof, dc))) = (observable, &res) {
+                // the lowest band also holds what is slower than a segment (a constant offset)
+                let (dc_r, dc_n) = if b.lo == 0.0 {
+                    (*dc, null.dc_power)
+                } else {
+                    (0.0, 0.0)
+                };
                 let (pr, k) = band_power(f, p, b.lo, hi);
                 let (pn, _) = band_power(&null.freq_hz, &null.psd, b.lo, hi);
+                let (pr, pn) = (pr + dc_r, pn + dc_n);
                 if k > 0 {
                     out.residual_power = Some(pr);
                     out.null_power = Some(pn);
@@ -1509,15 +1521,19 @@ fn stretch(
         let nperseg = null.nperseg.min(longest);
         let global_var = floor.floor * floor.floor;
         if nperseg >= 8 && global_var > 0.0 {
-            if let Some((f, p, _)) = psd_over(r, &ok, nperseg, dt) {
+            if let Some((f, p, _, dc)) = psd_over(r, &ok, nperseg, dt) {
                 let scale = (e / m) / global_var;
                 let best = bands(cfg, 0.5 / dt)
                     .into_iter()
                     .filter(|b| b.lo < nyq)
                     .filter_map(|b| {
                         let hi = b.hi.min(nyq);
-                        let (pr, k) = band_power(&f, &p, b.lo, hi);
-                        let (pn, _) = band_power(&null.freq_hz, &null.psd, b.lo, hi);
+                        let (mut pr, k) = band_power(&f, &p, b.lo, hi);
+                        let (mut pn, _) = band_power(&null.freq_hz, &null.psd, b.lo, hi);
+                        if b.lo == 0.0 {
+                            pr += dc;
+                            pn += null.dc_power;
+                        }
                         (k > 0 && pn > 0.0).then(|| (pr / (pn * scale), [b.lo, hi]))
                     })
                     .max_by(|a, b| a.0.total_cmp(&b.0));
@@ -1706,10 +1722,14 @@ fn statements(
         let ssr_full = rr - c1 * b1 - c2 * b2;
         let ssr_b = rr - b1 * b1 / a11;
         let gain = (ssr_b - ssr_full).max(0.0);
-        let share = gain / sr2;
+        // gate on what the shape adds to the constant; report (and rank by) what the two
+        // explain together, so that a residual ∝ v² (always positive) ranks v² above the
+        // constant that is part of it
+        let share = (rr - ssr_full).max(0.0) / sr2;
+        let added = gain / sr2;
         let f = gain / (ssr_full.max(0.0) / (n_eff - 2.0)).max(f64::MIN_POSITIVE);
         let p = f_sf(f, 1.0, (n_eff - 2.0).max(1.0));
-        if share >= cfg.min_share && p <= alpha_s {
+        if added >= cfg.min_share && p <= alpha_s {
             out.push(Statement {
                 shape: s.id.into(),
                 text: s.text.into(),

@@ -222,6 +222,9 @@ struct Knot {
     piece: usize,
     /// Event rows behind the knot (1 or 2 for a knot; 3 or more: a channel as fast as the grid).
     rows: usize,
+    /// The value is the recorded one (false: a knot between rows whose lines do not
+    /// intersect inside, given the mean of its rows).
+    exact: bool,
 }
 
 /// The knots of one finite piece `[a, b)` of `x`.
@@ -270,6 +273,9 @@ fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) ->
                         val: x[i] + sl * tau,
                         piece,
                         rows: 2,
+                        // nearly parallel lines amplify rounding: such a value may sit just
+                        // off the quantisation lattice
+                        exact: (sl - sr).abs() >= 0.25 * sl.abs().max(sr.abs()),
                     }
                 } else {
                     Knot {
@@ -277,6 +283,7 @@ fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) ->
                         val: 0.5 * (x[i] + x[i + 1]),
                         piece,
                         rows: 2,
+                        exact: false,
                     }
                 }
             }
@@ -285,6 +292,7 @@ fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) ->
                 val: x[i],
                 piece,
                 rows: size,
+                exact: true,
             },
         };
         knots.push(knot);
@@ -402,6 +410,7 @@ pub fn estimate_sensor_noise_in(
                     val: v,
                     piece: pi,
                     rows: 1,
+                    exact: true,
                 });
             }
         }
@@ -419,6 +428,7 @@ pub fn estimate_sensor_noise_in(
                         val: grid_value(values, a, b, p, kind),
                         piece: pi,
                         rows: 0,
+                        exact: false,
                     });
                 }
             };
@@ -430,6 +440,7 @@ pub fn estimate_sensor_noise_in(
                         val: grid_value(values, a, b, p, kind),
                         piece: pi,
                         rows: 0,
+                        exact: false,
                     });
                     p += period;
                 }
@@ -444,6 +455,7 @@ pub fn estimate_sensor_noise_in(
                     val: grid_value(values, a, b, p, kind),
                     piece: pi,
                     rows: 0,
+                    exact: false,
                 });
                 p -= period;
             }
@@ -464,13 +476,29 @@ pub fn estimate_sensor_noise_in(
                     val: grid_value(values, a, b, p, kind),
                     piece: pi,
                     rows: 0,
+                    exact: false,
                 });
                 p += period;
             }
         }
     }
     let vals: Vec<f64> = native.iter().map(|k| k.val).collect();
-    let q = estimate_quantization(&vals).map(|q| q.step);
+    // the step from the recorded values: not a piece's first and last sample (an interpolated
+    // value at a gap's edge), not filled-in or ill-conditioned knots — one value off the lattice
+    // breaks the smallest-gap step; `robust_step` tolerates a few more
+    let interior: Vec<f64> = (0..native.len())
+        .filter(|&j| {
+            j > 0
+                && j + 1 < native.len()
+                && native[j].exact
+                && native[j - 1].piece == native[j].piece
+                && native[j + 1].piece == native[j].piece
+        })
+        .map(|j| native[j].val)
+        .collect();
+    let q = estimate_quantization(&interior)
+        .map(|q| q.step)
+        .or_else(|| robust_step(&interior));
     // recorded level: running median of the native values over ±0.5 s (same piece)
     let native_rate_hz = 1.0 / (period * dt_s);
     let hw = ((0.5 * native_rate_hz).round() as usize).max(1);
@@ -580,6 +608,58 @@ pub fn estimate_sensor_noise_in(
         run_level,
         native_values: vals,
     })
+}
+
+/// The quantisation step of `v` when a few values are off the lattice (reconstructed knots that
+/// rounding moved): the smallest non-zero difference between consecutive values that makes up
+/// at least 5 % of them, accepted when at least 95 % of the values lie within 2 % of a step of
+/// the lattice through the median value and values repeat (as
+/// [`estimate_quantization`]: at most one distinct value per 2 samples).
+fn robust_step(v: &[f64]) -> Option<f64> {
+    if v.len() < 8 {
+        return None;
+    }
+    let scale = v
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
+    let tol = 1e-9 * scale;
+    let mut d: Vec<f64> = v
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|x| *x > tol)
+        .collect();
+    if d.len() < 8 {
+        return None;
+    }
+    d.sort_by(f64::total_cmp);
+    let need = (d.len() / 20).max(2);
+    let mut q = None;
+    let mut i = 0;
+    while i < d.len() {
+        let mut j = i;
+        while j + 1 < d.len() && d[j + 1] - d[i] <= 0.02 * d[i] {
+            j += 1;
+        }
+        if j - i + 1 >= need {
+            q = Some(d[i..=j].iter().sum::<f64>() / (j - i + 1) as f64);
+            break;
+        }
+        i = j + 1;
+    }
+    let q = q?;
+    let mut sorted = v.to_vec();
+    let v0 = median(&mut sorted);
+    let on = v
+        .iter()
+        .filter(|x| {
+            let k = (*x - v0) / q;
+            (k - k.round()).abs() <= 0.02
+        })
+        .count();
+    let mut distinct = sorted.clone();
+    distinct.dedup_by(|a, b| (*a - *b).abs() <= 0.02 * q);
+    (on * 100 >= 95 * v.len() && distinct.len() * 2 <= v.len()).then_some(q)
 }
 
 /// FNV-1a hash of a name (seeds per column).
@@ -882,6 +962,34 @@ pub struct NullPsd {
     pub dof: f64,
     /// Segment length, rows.
     pub nperseg: usize,
+    /// Power of the segment means, which Welch's per-segment detrend removes: what lies below
+    /// the first bin (slower than a segment), unit² ([`segment_mean_square`]).
+    pub dc_power: f64,
+}
+
+/// Mean over Welch segments (`nperseg` rows, half overlap, as [`csd_pieces`] cuts them) of the
+/// squared segment mean of each piece: the power slower than one segment, which the Welch PSD
+/// leaves out (0 without a full segment).
+pub fn segment_mean_square(pieces: &[&[f64]], nperseg: usize) -> f64 {
+    let step = (nperseg - nperseg / 2).max(1);
+    let (mut s, mut k) = (0.0, 0usize);
+    for x in pieces {
+        if nperseg == 0 || x.len() < nperseg {
+            continue;
+        }
+        let m = (x.len() - nperseg / 2) / step;
+        for j in 0..m {
+            let seg = &x[j * step..j * step + nperseg];
+            let mean = seg.iter().sum::<f64>() / nperseg as f64;
+            s += mean * mean;
+            k += 1;
+        }
+    }
+    if k == 0 {
+        0.0
+    } else {
+        s / k as f64
+    }
 }
 
 /// The noise floor of one compared signal (see the module documentation).
@@ -1102,6 +1210,7 @@ impl NoiseFloor {
             psd: c.pxx,
             dof: c.dof,
             nperseg,
+            dc_power: segment_mean_square(&pieces.iter().map(|p| p.0).collect::<Vec<_>>(), nperseg),
         });
         Ok(NoiseFloor {
             signal: signal.into(),
