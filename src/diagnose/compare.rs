@@ -60,6 +60,76 @@ pub struct Conditions {
     pub clutch_actuated: Vec<bool>,
 }
 
+impl Conditions {
+    /// The operating condition of every row of `log` (gaps filled as the schema's kind says;
+    /// a column the log lacks stays empty): times from the first row; distance the trapezoidal
+    /// integral of the measured speed (negative speeds count 0); acceleration the centred
+    /// difference of the measured speed over ±0.5 s; braking when the service-brake force
+    /// exceeds 1 kN (5× the 0.2 kN noise of a J1939 brake-force channel, which a brake at rest
+    /// never reaches) or the retarder torque 50 N·m (above its 1 %-of-reference step); clutch
+    /// actuated above 5 % of its travel.
+    pub fn from_log(log: &crate::table::DriveLog) -> Conditions {
+        use crate::schema::Interpolation;
+        use crate::signal::distance::fill_gaps;
+        let n = log.len();
+        let col = |c: &str, k: Interpolation| log.signal(c).and_then(|v| fill_gaps(v, k));
+        let t_s: Vec<f64> = log
+            .timestamp_ns
+            .iter()
+            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+            .collect();
+        let speed = col("vehicle_speed", Interpolation::Linear).unwrap_or_default();
+        let mut distance_m = vec![0.0; if speed.is_empty() { 0 } else { n }];
+        for i in 1..distance_m.len() {
+            distance_m[i] = distance_m[i - 1]
+                + 0.5 * (speed[i].max(0.0) + speed[i - 1].max(0.0)) * (t_s[i] - t_s[i - 1]);
+        }
+        let accel_mps2 = if speed.is_empty() {
+            Vec::new()
+        } else {
+            (0..n)
+                .map(|i| {
+                    let a = t_s.partition_point(|&x| x < t_s[i] - 0.5);
+                    let b = t_s
+                        .partition_point(|&x| x <= t_s[i] + 0.5)
+                        .saturating_sub(1);
+                    if b > a {
+                        (speed[b] - speed[a]) / (t_s[b] - t_s[a])
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        };
+        let brake = col("brake_force", Interpolation::Linear);
+        let retarder = col("retarder_torque", Interpolation::Linear);
+        let braking = if brake.is_none() && retarder.is_none() {
+            Vec::new()
+        } else {
+            (0..n)
+                .map(|i| {
+                    brake.as_ref().is_some_and(|b| b[i] > 1000.0)
+                        || retarder.as_ref().is_some_and(|r| r[i] > 50.0)
+                })
+                .collect()
+        };
+        let clutch_actuated = col("clutch_position", Interpolation::Linear)
+            .map(|c| c.iter().map(|x| *x > 0.05).collect())
+            .unwrap_or_default();
+        Conditions {
+            distance_m,
+            gear: col("gear", Interpolation::Hold).unwrap_or_default(),
+            engine_torque_nm: col("engine_torque", Interpolation::Linear).unwrap_or_default(),
+            speed_mps: speed,
+            slope: col("road_slope", Interpolation::Hold).unwrap_or_default(),
+            accel_mps2,
+            braking,
+            clutch_actuated,
+            t_s,
+        }
+    }
+}
+
 /// What the nominal models say about one recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Comparison {

@@ -5,5 +5,7 @@ pub mod catalogue;
 pub mod compare;
 pub mod contract;
 pub mod extended;
+pub mod locate;
+pub mod noise;
 pub mod prove;
 pub mod setup;

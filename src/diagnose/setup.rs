@@ -7,6 +7,7 @@
 //!   1 m/s (the model has no creep mode) and the speed sample is real (not a filled gap).
 //! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Every row with a
 //!   real pressure sample counts.
+//! - Operating conditions: [`Conditions::from_log`].
 //! - The slope sensor's resolution is estimated from the recording (`slope_quantization`'s
 //!   nominal value, [`crate::signal::quantization`]); an unquantised slope counts as 0.1 %.
 
@@ -55,22 +56,6 @@ fn column(log: &DriveLog, name: &str, interp: Interpolation) -> Option<Vec<f64>>
     log.signal(name).and_then(|v| fill_gaps(v, interp))
 }
 
-/// Acceleration from the speed by a centred difference over ±`half_s` (m/s²).
-fn acceleration(t: &[f64], v: &[f64], half_s: f64) -> Vec<f64> {
-    let n = t.len();
-    (0..n)
-        .map(|i| {
-            let a = t.partition_point(|&x| x < t[i] - half_s).min(i);
-            let b = (t.partition_point(|&x| x <= t[i] + half_s).max(i + 1) - 1).min(n - 1);
-            if b > a {
-                (v[b] - v[a]) / (t[b] - t[a])
-            } else {
-                0.0
-            }
-        })
-        .collect()
-}
-
 impl Setup {
     /// Sets up the diagnosis of `log` with the nominal `vehicle`.
     ///
@@ -79,11 +64,6 @@ impl Setup {
     /// not).
     pub fn new(log: &DriveLog, vehicle: &VehicleFile) -> Result<Setup, ExtendedError> {
         let file = log.meta.source_file.clone();
-        let t: Vec<f64> = log
-            .timestamp_ns
-            .iter()
-            .map(|&x| (x - log.timestamp_ns.first().copied().unwrap_or(0)) as f64 * 1e-9)
-            .collect();
         let n = log.len();
         let speed = column(log, "vehicle_speed", Interpolation::Linear);
         let missing = |cols: &[&str]| -> Vec<String> {
@@ -161,33 +141,7 @@ impl Setup {
             .unwrap_or(0.001);
         let nominal_truth = TruthModel::nominal(d, vehicle.axles.as_ref());
         let nominal = Theta::nominal(&nominal_truth, slope_resolution);
-        let mut distance = vec![0.0; n];
-        for i in 1..n {
-            distance[i] = distance[i - 1] + 0.5 * (speed[i] + speed[i - 1]) * (t[i] - t[i - 1]);
-        }
-        let brake =
-            column(log, "brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
-        let retarder =
-            column(log, "retarder_torque", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
-        let clutch =
-            column(log, "clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; n]);
-        let conditions = Conditions {
-            distance_m: distance,
-            gear: column(log, "gear", Interpolation::Hold).unwrap_or_else(|| vec![0.0; n]),
-            engine_torque_nm: column(log, "engine_torque", Interpolation::Linear)
-                .unwrap_or_else(|| vec![0.0; n]),
-            accel_mps2: acceleration(&t, &speed, 0.25),
-            speed_mps: speed,
-            slope,
-            // a brake force above 500 N (noise: 0.2 kN σ on the wire) or any retarder torque
-            braking: brake
-                .iter()
-                .zip(&retarder)
-                .map(|(b, r)| b.abs() > 500.0 || *r > 1.0)
-                .collect(),
-            clutch_actuated: clutch.iter().map(|c| *c > 0.05).collect(),
-            t_s: t,
-        };
+        let conditions = Conditions::from_log(log);
         Ok(Setup {
             nominal_truth,
             ratios: vehicle.gearbox.ratios.clone(),

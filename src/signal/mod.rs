@@ -1,6 +1,6 @@
 //! Signal processing for fleet logs: resampling to distance ([`distance`]), sensor
 //! quantisation ([`quantization`]), Butterworth design in second-order
-//! sections, causal and zero-phase filtering, Welch spectra.
+//! sections, causal and zero-phase filtering, Welch spectra, cross-spectra and coherence.
 //!
 //! The functions mirror scipy.signal (`butter(..., output='sos')`,
 //! `sosfilt`, `sosfilt_zi`, `sosfiltfilt`, `welch`, `sosfreqz`) and are
@@ -33,4 +33,7 @@ pub use filtfilt::{
 };
 pub use sos::{sosfilt, sosfilt_in_place, sosfilt_zi};
 pub use spectrum::{cumulative_power, knee_frequency};
-pub use welch::{chi2_ppf, equivalent_dof, hann_periodic, welch, WelchConfig, WelchPsd};
+pub use welch::{
+    chi2_ppf, csd, csd_pieces, equivalent_dof, hann_periodic, welch, WelchConfig, WelchCsd,
+    WelchPsd,
+};

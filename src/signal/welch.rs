@@ -177,6 +177,154 @@ pub fn welch(x: &[f64], cfg: &WelchConfig) -> Result<WelchPsd, SignalError> {
     })
 }
 
+/// Welch cross-spectral density of two series, with both auto-spectra (for coherence).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WelchCsd {
+    /// Bin frequencies `k·fs/nperseg`, k = 0..=nperseg/2 (unit of `fs_hz`).
+    pub freq_hz: Vec<f64>,
+    /// One-sided PSD of `x`, unit_x²/Hz.
+    pub pxx: Vec<f64>,
+    /// One-sided PSD of `y`, unit_y²/Hz.
+    pub pyy: Vec<f64>,
+    /// One-sided cross-spectral density `E[conj(X)·Y]` (scipy's `csd(x, y)` convention),
+    /// unit_x·unit_y/Hz.
+    pub pxy: Vec<Complex64>,
+    /// Number of averaged segments (over all pieces).
+    pub n_segments: usize,
+    /// Equivalent degrees of freedom of the averaged auto-spectra (P&W eq. (292b) per piece,
+    /// summed over pieces).
+    pub dof: f64,
+    /// Segment length used.
+    pub nperseg: usize,
+    /// Overlap used.
+    pub noverlap: usize,
+}
+
+impl WelchCsd {
+    /// Magnitude-squared coherence `|Pxy|² / (Pxx·Pyy)` per bin, in [0, 1] (0 where either
+    /// auto-spectrum is 0).
+    pub fn coherence(&self) -> Vec<f64> {
+        self.pxy
+            .iter()
+            .zip(self.pxx.iter().zip(&self.pyy))
+            .map(|(c, (a, b))| {
+                let d = a * b;
+                if d > 0.0 {
+                    (power(c) / d).min(1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+}
+
+/// Welch cross-spectral density (= `scipy.signal.csd(x, y, fs, nperseg=..., noverlap=...)`,
+/// periodic Hann window, mean detrend per segment, one-sided density) together with both
+/// auto-spectra. `x` and `y` must have the same length. If `len < nperseg`, `nperseg = len`.
+///
+/// Errors: as [`welch`], plus [`SignalError::InvalidSegment`] for unequal lengths.
+pub fn csd(x: &[f64], y: &[f64], cfg: &WelchConfig) -> Result<WelchCsd, SignalError> {
+    let nperseg = cfg.nperseg.unwrap_or(256).min(x.len());
+    let cfg = WelchConfig {
+        nperseg: Some(nperseg),
+        ..*cfg
+    };
+    csd_pieces(&[(x, y)], &cfg)
+}
+
+/// [`csd`] averaged over the segments of several pieces of one recording (e.g. the stretches
+/// between gaps): every piece is cut into segments of `nperseg` samples with the configured
+/// overlap, pieces shorter than a segment are skipped, and all segments are averaged alike.
+/// Unlike [`csd`], `nperseg` is not shortened to a piece (segments keep one frequency grid).
+///
+/// Errors: [`SignalError::NonFinite`] (index within its piece),
+/// [`SignalError::InvalidSegment`] (no piece as long as a segment, unequal piece lengths,
+/// `nperseg = 0`, `noverlap ≥ nperseg`), [`SignalError::InvalidSampleRate`].
+pub fn csd_pieces(pieces: &[(&[f64], &[f64])], cfg: &WelchConfig) -> Result<WelchCsd, SignalError> {
+    if !(cfg.fs_hz.is_finite() && cfg.fs_hz > 0.0) {
+        return Err(SignalError::InvalidSampleRate { fs_hz: cfg.fs_hz });
+    }
+    let nperseg = cfg.nperseg.unwrap_or(256);
+    let noverlap = cfg.noverlap.unwrap_or(nperseg / 2);
+    let longest = pieces.iter().map(|p| p.0.len()).max().unwrap_or(0);
+    let bad = |len| SignalError::InvalidSegment {
+        nperseg,
+        noverlap,
+        len,
+    };
+    if nperseg == 0 || noverlap >= nperseg || longest < nperseg {
+        return Err(bad(longest));
+    }
+    for (x, y) in pieces {
+        if x.len() != y.len() {
+            return Err(bad(y.len()));
+        }
+        check_finite(x)?;
+        check_finite(y)?;
+    }
+    let step = nperseg - noverlap;
+    let win = hann_periodic(nperseg);
+    let win_ss: f64 = win.iter().map(|w| w * w).sum();
+    let scale = 1.0 / (cfg.fs_hz * win_ss);
+    let nfreq = nperseg / 2 + 1;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(nperseg);
+    let mut buf = fft.make_input_vec();
+    let mut sx = fft.make_output_vec();
+    let mut sy = fft.make_output_vec();
+    let mut scratch = fft.make_scratch_vec();
+    let mut axx = vec![0.0; nfreq];
+    let mut ayy = vec![0.0; nfreq];
+    let mut axy = vec![Complex64::new(0.0, 0.0); nfreq];
+    let (mut n_segments, mut dof) = (0usize, 0.0);
+    let mut transform = |seg: &[f64], out: &mut Vec<Complex64>| {
+        let mean = seg.iter().sum::<f64>() / nperseg as f64;
+        for ((b, &v), &w) in buf.iter_mut().zip(seg).zip(&win) {
+            *b = w * (v - mean);
+        }
+        fft.process_with_scratch(&mut buf, out, &mut scratch)
+            .expect("buffer sizes come from the plan");
+    };
+    for (x, y) in pieces {
+        if x.len() < nperseg {
+            continue;
+        }
+        let k = (x.len() - noverlap) / step;
+        for s in 0..k {
+            transform(&x[s * step..s * step + nperseg], &mut sx);
+            transform(&y[s * step..s * step + nperseg], &mut sy);
+            for f in 0..nfreq {
+                axx[f] += power(&sx[f]) * scale;
+                ayy[f] += power(&sy[f]) * scale;
+                axy[f] += sx[f].conj() * sy[f] * scale;
+            }
+        }
+        n_segments += k;
+        dof += equivalent_dof(&win, step, k);
+    }
+    let last_doubled = if nperseg % 2 == 1 { nfreq } else { nfreq - 1 };
+    let nseg_f = n_segments as f64;
+    let factor = |k: usize| {
+        if k >= 1 && k < last_doubled {
+            2.0 / nseg_f
+        } else {
+            1.0 / nseg_f
+        }
+    };
+    let val = cfg.fs_hz / nperseg as f64;
+    Ok(WelchCsd {
+        freq_hz: (0..nfreq).map(|k| k as f64 * val).collect(),
+        pxx: axx.iter().enumerate().map(|(k, a)| a * factor(k)).collect(),
+        pyy: ayy.iter().enumerate().map(|(k, a)| a * factor(k)).collect(),
+        pxy: axy.iter().enumerate().map(|(k, a)| a * factor(k)).collect(),
+        n_segments,
+        dof,
+        nperseg,
+        noverlap,
+    })
+}
+
 fn power(c: &Complex64) -> f64 {
     c.re * c.re + c.im * c.im
 }
@@ -304,6 +452,46 @@ mod tests {
         // len < nperseg -> nperseg = len, noverlap = len/2 (scipy).
         let r = welch(&x, &WelchConfig::default()).unwrap();
         assert_eq!((r.nperseg, r.noverlap, r.n_segments), (100, 50, 1));
+    }
+
+    #[test]
+    fn csd_of_a_series_with_itself_is_its_welch_psd() {
+        let x: Vec<f64> = (0..3000)
+            .map(|i| ((i * 7919) % 1000) as f64 / 1000.0 + (i as f64 * 0.05).sin())
+            .collect();
+        let cfg = WelchConfig {
+            fs_hz: 50.0,
+            nperseg: Some(256),
+            ..WelchConfig::default()
+        };
+        let w = welch(&x, &cfg).unwrap();
+        let c = csd(&x, &x, &cfg).unwrap();
+        assert_eq!(c.n_segments, w.n_segments);
+        for k in 0..w.psd.len() {
+            assert!((c.pxx[k] - w.psd[k]).abs() <= 1e-12 * w.psd[k].max(1e-300));
+            assert!((c.pxy[k].re - w.psd[k]).abs() <= 1e-12 * w.psd[k].max(1e-300));
+            assert!(c.pxy[k].im.abs() <= 1e-12 * w.psd[k].max(1e-300));
+        }
+        assert!(c
+            .coherence()
+            .iter()
+            .all(|&g| (g - 1.0).abs() < 1e-9 || g == 0.0));
+        // y = 2·x delayed by one sample: coherence 1, phase −2πf·dt (conj(X)·Y convention)
+        let y: Vec<f64> = (0..3000)
+            .map(|i| if i == 0 { 0.0 } else { 2.0 * x[i - 1] })
+            .collect();
+        let c = csd(&x, &y, &cfg).unwrap();
+        let k = 40; // 40·50/256 = 7.8 Hz
+        let phase = c.pxy[k].arg();
+        let want = -std::f64::consts::TAU * c.freq_hz[k] / 50.0;
+        assert!((phase - want).abs() < 0.05, "{phase} vs {want}");
+        assert!(c.coherence()[k] > 0.95);
+        // pieces: two halves give twice the segments of one half
+        let h = csd_pieces(&[(&x[..1500], &y[..1500]), (&x[1500..], &y[1500..])], &cfg).unwrap();
+        let one = csd_pieces(&[(&x[..1500], &y[..1500])], &cfg).unwrap();
+        assert_eq!(h.n_segments, 2 * one.n_segments);
+        assert!(csd_pieces(&[(&x[..100], &y[..100])], &cfg).is_err());
+        assert!(csd_pieces(&[(&x[..1000], &y[..900])], &cfg).is_err());
     }
 
     #[test]

@@ -11,6 +11,7 @@ mod axle_validate;
 mod batch_pipeline;
 mod common;
 mod diagnose_extended;
+mod diagnose_locate;
 mod driveline_fast;
 mod driveline_hybrid;
 mod driveline_linear;

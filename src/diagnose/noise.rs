@@ -1,0 +1,1761 @@
+//! The noise floor of every compared signal (diagnosis.md step 2, "estimate the noise floor"):
+//! the residual `measured − simulated` that a *correct* model would still leave on this
+//! recording, so that [`super::locate`] can tell a mismatch from noise.
+//!
+//! # Two parts
+//! 1. **Measurement noise of the recorded output**, estimated blind from the recording
+//!    ([`estimate_sensor_noise`]). CAN signals arrive at their own rate (10–50 Hz) and ingest
+//!    puts them on the log's uniform grid by linear interpolation (continuous columns) or
+//!    zero-order hold (state-like columns, `schemas/drive-log.toml`). Estimating noise on the
+//!    grid would see interpolated, hence smoothed and correlated, values; so the native samples
+//!    are recovered first:
+//!    - *linear* columns: the knots are the rows where the second difference is non-zero (a
+//!      line through the grid rows bends only at a knot). A knot on a row shows as one such row;
+//!      a knot between rows `i` and `i+1` as two, and its time and value are recovered exactly
+//!      as the intersection of the lines through rows `i−1, i` and `i+1, i+2`;
+//!    - *held* columns: the native samples start at the rows where the value changes;
+//!    - the native period `P` (rows) is the mean of the spacings between consecutive knots that
+//!      are at most 1.5× their 10th percentile (spacings of 2P, 3P… are knots the data could not
+//!      show: equal neighbouring values); gaps between knots longer than 1.5 P are filled with
+//!      evenly spaced native samples read off the grid. When more than half of the rows are
+//!      knots, or fewer than 8 knots exist, every row counts as a native sample (the channel is
+//!      as fast as the grid, or it never changes);
+//!    - the noise σ is a robust spread of the native second differences,
+//!      `σ = 1.4826·MAD(Δ²y)/√6` (`Var Δ²n = 6σ²` for white noise; the MAD ignores the sparse
+//!      large values of real signal curvature, gear shifts, braking onsets). Samples at a
+//!      physical bound (a brake at rest, whose sensor clamps its noise) are left out
+//!      ([`estimate_sensor_noise_in`]);
+//!    - quantisation step `q`: [`estimate_quantization`] on the recorded native values (not the
+//!      reconstructed ones), else a tolerant variant (the commonest small difference, 95 % of
+//!      the values on its lattice);
+//!    - coarse steps (the MAD-σ below `q`): the second differences take the discrete values
+//!      0, ±q, ±2q of flicker and their MAD jumps between 0 and q. The flicker rate φ — the
+//!      share of native samples off their recorded level (below) — gives the noise instead:
+//!      for a true value spread evenly within a step `φ = 2σ/(q√(2π))`, so
+//!      `σ_w = √(π/2)·q·φ` (while φ < 0.25; beyond, the noise dithers the rounding and the RMS
+//!      of the second differences up to 2q is used, `σ_w² = σ² − q²/12`). Otherwise
+//!      `σ_w² = max(0, σ² − q²/12)` (the second differences saw the rounding of dithered
+//!      samples as noise);
+//!    - the persistent part of the quantisation error is uniform in `±h`,
+//!      `h = (q/2)·exp(−2π²σ_w²/q²)`: without noise (`σ_w = 0`) the true value is anywhere
+//!      within `±q/2` of the recorded one and stays there, while Gaussian noise dithers the
+//!      rounding and the remaining bias `E[Q(s+n)] − s` has the amplitude of the first Fourier
+//!      coefficient of the rounding error, damped by the noise's characteristic function
+//!      `exp(−2π²σ²/q²)`. It is held constant over each run of equal *recorded level* — the
+//!      running median of the native values over ±0.5 s, so that dither flicker does not cut
+//!      the runs;
+//!    - rest states: a run whose level is within one step (or σ_w) of a physical bound, and
+//!      samples in it within `3σ_w + q` of the bound, are the actuator at rest (brake, retarder,
+//!      clutch off). A copy sets them to the bound (no persistent error): the recording of a
+//!      brake at rest is clamped noise, |N(0, 0.2 kN)| rounded to 0.1 kN on the synthetic bus,
+//!      +85 N on average, and a copy at rest differs from the recording as the recording differs
+//!      from the truth. Measured on a clean 2 km city drive: that bias alone moves the simulated
+//!      speed by 0.043 m/s RMS, the copies at rest by 0.036 m/s.
+//! 2. **Input uncertainty propagated through the model** ([`noise_floors`]). The recorded inputs
+//!    (engine torque in whole % of the reference torque, slope in whole %, brake force, clutch,
+//!    speeds used as initial states …) carry the same kind of errors. Each of `copies`
+//!    deterministic Monte-Carlo copies of the log perturbs *every* sensed column — inputs and
+//!    outputs alike — by a draw from its estimated sensor error ([`SensorNoise::draw`]: white
+//!    noise at the native samples, interpolated or held onto the grid like the recording, plus
+//!    the persistent quantisation error), keeps it inside the column's physical range
+//!    ([`PerturbedColumn`], e.g. a brake force is never negative, exactly like the sensor), and
+//!    runs the models on it. The copy's residual minus the recording's residual,
+//!    `e_c = r_c − r`, is one draw of the residual a correct model leaves (a parametric
+//!    bootstrap: `r_c − r` has the statistics of `r − r_true` when the error model is right and
+//!    the errors are small). Perturbing an output column both as a measurement and as an
+//!    initial state in the same copy keeps their correlation (at a window's re-initialisation
+//!    the residual is 0 whatever the noise).
+//!
+//! # What the floor carries
+//! [`NoiseFloor`]: the per-row null variance `mean_c e_c²` (unit²), the autocorrelation of the
+//! normalised null (for the effective degrees of freedom of a sum of squared residuals over a
+//! window, [`NoiseFloor::effective_dof`]), the null's Welch PSD (for band powers), and the split
+//! into measurement and input parts (RMS). The scalar floor (diagnosis.json `noise_floor`) is the
+//! RMS of the null over the rows that count.
+//!
+//! # Assumptions
+//! - the sensor error is stationary over the drive and independent between channels and of the
+//!   true signal (the CAN generator's own model; real sensors may have level-dependent noise);
+//! - native samples are regular (CAN messages have fixed rates); dropouts are gaps (NaN);
+//! - the model is smooth enough in its inputs that errors of the recorded size act like the
+//!   recording's own (parametric bootstrap);
+//! - what is *not* in the floor: a model-structure difference that a correct-parameter model
+//!   still has on this recording path (e.g. drive-shaft torque reconstructed from engine torque
+//!   and speed while the clutch slips). On clean synthetic drives that part is measured by the
+//!   tests (tests/it/diagnose_locate.rs) and reported, not hidden.
+//!
+//! Units: every σ, floor and RMS is in the signal's SI unit; variances in unit²; times in s.
+//! Deterministic: every random stream is seeded from [`NoiseConfig::seed`], the copy and the
+//! column name.
+
+use super::compare::{compare_at, Compared};
+use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use crate::road::rng::{splitmix64, Xoshiro256StarStar};
+use crate::schema::{drive_log, Interpolation};
+use crate::signal::distance::fill_gaps;
+use crate::signal::quantization::estimate_quantization;
+use crate::signal::{csd_pieces, WelchConfig};
+use crate::synth::effects::TruthModel;
+use crate::table::DriveLog;
+use rayon::prelude::*;
+use realfft::RealFftPlanner;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use thiserror::Error;
+
+/// Why a noise floor cannot be estimated.
+#[derive(Debug, Error)]
+pub enum NoiseError {
+    /// A series without any finite value, or no rows at all.
+    #[error("{what}: no finite value")]
+    Empty {
+        /// The series.
+        what: String,
+    },
+    /// Series of different lengths.
+    #[error("{what}: {got} values, expected {expected}")]
+    Length {
+        /// The series.
+        what: String,
+        /// Expected length.
+        expected: usize,
+        /// Length given.
+        got: usize,
+    },
+    /// A setting outside its domain.
+    #[error("{parameter} = {value} must be {requirement}")]
+    BadConfig {
+        /// Setting, with unit.
+        parameter: &'static str,
+        /// Value given.
+        value: f64,
+        /// What it must be.
+        requirement: &'static str,
+    },
+    /// The models could not be run on the recording or a perturbed copy.
+    #[error(transparent)]
+    Model(#[from] ExtendedError),
+}
+
+/// How a channel was put on the log's grid (the schema's interpolation kind).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SampleKind {
+    /// Linear between native samples.
+    Linear,
+    /// Each native sample held until the next (zero-order hold).
+    Hold,
+}
+
+impl SampleKind {
+    /// The kind of a canonical column (`Linear` for unknown columns).
+    pub fn of_column(name: &str) -> SampleKind {
+        match drive_log().column(name).map(|c| c.interpolation) {
+            Some(Interpolation::Hold) => SampleKind::Hold,
+            _ => SampleKind::Linear,
+        }
+    }
+}
+
+/// The blind estimate of one channel's sensor error (see the module documentation, part 1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorNoise {
+    /// Column.
+    pub column: String,
+    /// SI unit of the column.
+    pub unit: String,
+    /// How the channel sits on the grid.
+    pub kind: SampleKind,
+    /// Grid step of the log, s.
+    pub grid_dt_s: f64,
+    /// Estimated native rate, Hz.
+    pub native_rate_hz: f64,
+    /// Native samples recovered (knots plus filled-in ones).
+    pub n_native: usize,
+    /// Robust spread of the native second differences / √6 (includes dithered quantisation),
+    /// unit.
+    pub sigma_raw: f64,
+    /// Quantisation step found on the native values, unit (`None`: not quantised).
+    pub quantization_step: Option<f64>,
+    /// White part of the error, `√max(0, σ_raw² − q²/12)`, unit.
+    pub sigma_white: f64,
+    /// Half-width of the persistent quantisation error, unit.
+    pub persistent_half_width: f64,
+    /// Native sample positions, rows (fractional).
+    #[serde(skip)]
+    positions: Vec<f64>,
+    /// Run index (persistent error) of every native sample.
+    #[serde(skip)]
+    run: Vec<usize>,
+    /// Recorded level of every run.
+    #[serde(skip)]
+    run_level: Vec<f64>,
+    /// Recorded value of every native sample.
+    #[serde(skip)]
+    native_values: Vec<f64>,
+}
+
+/// Minimum knots needed to estimate a native period.
+const MIN_KNOTS: usize = 8;
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Runs `[a, b)` of consecutive finite values.
+fn finite_runs(x: &[f64]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < x.len() {
+        if !x[i].is_finite() {
+            i += 1;
+            continue;
+        }
+        let a = i;
+        while i < x.len() && x[i].is_finite() {
+            i += 1;
+        }
+        out.push((a, i));
+    }
+    out
+}
+
+/// A knot found on the grid: position (rows, fractional) and value.
+#[derive(Debug, Clone, Copy)]
+struct Knot {
+    pos: f64,
+    val: f64,
+    piece: usize,
+    /// Event rows behind the knot (1 or 2 for a knot; 3 or more: a channel as fast as the grid).
+    rows: usize,
+    /// The value is the recorded one (false: a knot between rows whose lines do not
+    /// intersect inside, given the mean of its rows).
+    exact: bool,
+}
+
+/// The knots of one finite piece `[a, b)` of `x`.
+fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) -> Vec<Knot> {
+    let scale = x[a..b].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
+    let mut ev: Vec<usize> = Vec::new();
+    match kind {
+        SampleKind::Linear => {
+            for i in a + 1..b.saturating_sub(1) {
+                if (x[i + 1] - 2.0 * x[i] + x[i - 1]).abs() > tol {
+                    ev.push(i);
+                }
+            }
+        }
+        SampleKind::Hold => {
+            for i in a + 1..b {
+                if (x[i] - x[i - 1]).abs() > tol {
+                    ev.push(i);
+                }
+            }
+        }
+    }
+    // clusters of adjacent event rows
+    let mut knots = Vec::new();
+    let mut k = 0;
+    while k < ev.len() {
+        let mut e = k;
+        while e + 1 < ev.len() && ev[e + 1] == ev[e] + 1 {
+            e += 1;
+        }
+        let i = ev[k];
+        let size = e - k + 1;
+        let knot = match (kind, size) {
+            (SampleKind::Linear, 2) if i > a && i + 2 < b => {
+                let sl = x[i] - x[i - 1];
+                let sr = x[i + 2] - x[i + 1];
+                let tau = if sl != sr {
+                    (x[i + 1] - x[i] - sr) / (sl - sr)
+                } else {
+                    f64::NAN
+                };
+                if (0.0..=1.0).contains(&tau) {
+                    Knot {
+                        pos: i as f64 + tau,
+                        val: x[i] + sl * tau,
+                        piece,
+                        rows: 2,
+                        // nearly parallel lines amplify rounding: such a value may sit just
+                        // off the quantisation lattice
+                        exact: (sl - sr).abs() >= 0.25 * sl.abs().max(sr.abs()),
+                    }
+                } else {
+                    Knot {
+                        pos: i as f64 + 0.5,
+                        val: 0.5 * (x[i] + x[i + 1]),
+                        piece,
+                        rows: 2,
+                        exact: false,
+                    }
+                }
+            }
+            _ => Knot {
+                pos: i as f64,
+                val: x[i],
+                piece,
+                rows: size,
+                exact: true,
+            },
+        };
+        knots.push(knot);
+        k = e + 1;
+    }
+    knots
+}
+
+/// Value of `x` (finite piece `[a, b)`) at fractional row `p`, as the grid shows it.
+fn grid_value(x: &[f64], a: usize, b: usize, p: f64, kind: SampleKind) -> f64 {
+    let p = p.clamp(a as f64, (b - 1) as f64);
+    match kind {
+        SampleKind::Hold => x[(p.ceil() as usize).min(b - 1)],
+        SampleKind::Linear => {
+            let i = p.floor() as usize;
+            if i + 1 >= b {
+                return x[b - 1];
+            }
+            let w = p - i as f64;
+            x[i] + w * (x[i + 1] - x[i])
+        }
+    }
+}
+
+/// Estimates the sensor error of one channel on the log's grid (see the module documentation,
+/// part 1). `values` are on the grid with step `dt_s` (s), NaN in gaps.
+///
+/// # Errors
+/// [`NoiseError::Empty`] without a finite value; [`NoiseError::BadConfig`] for a bad `dt_s`.
+pub fn estimate_sensor_noise(
+    column: &str,
+    unit: &str,
+    values: &[f64],
+    dt_s: f64,
+    kind: SampleKind,
+) -> Result<SensorNoise, NoiseError> {
+    estimate_sensor_noise_in(
+        column,
+        unit,
+        values,
+        dt_s,
+        kind,
+        (f64::NEG_INFINITY, f64::INFINITY),
+    )
+}
+
+/// [`estimate_sensor_noise`] of a column whose physical range is `range` (min, max): native
+/// samples at a bound (an actuator at rest, a sensor clamping its noise) are left out of the
+/// noise statistics, which would otherwise see the clamped noise as smaller than it is.
+///
+/// # Errors
+/// As [`estimate_sensor_noise`].
+pub fn estimate_sensor_noise_in(
+    column: &str,
+    unit: &str,
+    values: &[f64],
+    dt_s: f64,
+    kind: SampleKind,
+    range: (f64, f64),
+) -> Result<SensorNoise, NoiseError> {
+    if !(dt_s.is_finite() && dt_s > 0.0) {
+        return Err(NoiseError::BadConfig {
+            parameter: "grid step dt_s",
+            value: dt_s,
+            requirement: "finite and > 0",
+        });
+    }
+    let pieces = finite_runs(values);
+    if pieces.is_empty() {
+        return Err(NoiseError::Empty {
+            what: column.into(),
+        });
+    }
+    let n_finite: usize = pieces.iter().map(|(a, b)| b - a).sum();
+    let mut knots: Vec<Knot> = Vec::new();
+    for (pi, &(a, b)) in pieces.iter().enumerate() {
+        knots.extend(piece_knots(values, a, b, kind, pi));
+    }
+    // native period, rows
+    let mut spacings: Vec<f64> = knots
+        .windows(2)
+        .filter(|w| w[0].piece == w[1].piece)
+        .map(|w| w[1].pos - w[0].pos)
+        .collect();
+    let n_events: usize = knots.iter().map(|k| k.rows).sum();
+    let wide = knots.iter().filter(|k| k.rows >= 3).count();
+    let every_row = n_events * 2 > n_finite
+        || wide * 10 > knots.len()
+        || knots.len() < MIN_KNOTS
+        || spacings.is_empty();
+    let period = if every_row {
+        1.0
+    } else {
+        spacings.sort_by(f64::total_cmp);
+        let p10 = spacings[spacings.len() / 10];
+        let near: Vec<f64> = spacings
+            .iter()
+            .copied()
+            .filter(|s| *s <= 1.5 * p10)
+            .collect();
+        let p = near.iter().sum::<f64>() / near.len() as f64;
+        if p < 1.5 {
+            1.0
+        } else {
+            p
+        }
+    };
+    // native samples: every row, or the knots with the missing ones filled in
+    let mut native: Vec<Knot> = Vec::new();
+    if period == 1.0 {
+        for (pi, &(a, b)) in pieces.iter().enumerate() {
+            for (i, &v) in values.iter().enumerate().take(b).skip(a) {
+                native.push(Knot {
+                    pos: i as f64,
+                    val: v,
+                    piece: pi,
+                    rows: 1,
+                    exact: true,
+                });
+            }
+        }
+    } else {
+        for (pi, &(a, b)) in pieces.iter().enumerate() {
+            let ks: Vec<Knot> = knots.iter().copied().filter(|k| k.piece == pi).collect();
+            let push_fill = |native: &mut Vec<Knot>, from: f64, to: f64| {
+                // evenly spaced samples strictly between `from` and `to`
+                let gap = to - from;
+                let m = (gap / period).round() as usize;
+                for j in 1..m {
+                    let p = from + gap * j as f64 / m as f64;
+                    native.push(Knot {
+                        pos: p,
+                        val: grid_value(values, a, b, p, kind),
+                        piece: pi,
+                        rows: 0,
+                        exact: false,
+                    });
+                }
+            };
+            if ks.is_empty() {
+                let mut p = a as f64;
+                while p <= (b - 1) as f64 {
+                    native.push(Knot {
+                        pos: p,
+                        val: grid_value(values, a, b, p, kind),
+                        piece: pi,
+                        rows: 0,
+                        exact: false,
+                    });
+                    p += period;
+                }
+                continue;
+            }
+            // before the first knot
+            let mut head = Vec::new();
+            let mut p = ks[0].pos - period;
+            while p >= a as f64 {
+                head.push(Knot {
+                    pos: p,
+                    val: grid_value(values, a, b, p, kind),
+                    piece: pi,
+                    rows: 0,
+                    exact: false,
+                });
+                p -= period;
+            }
+            head.reverse();
+            native.extend(head);
+            for (j, k) in ks.iter().enumerate() {
+                native.push(*k);
+                if let Some(next) = ks.get(j + 1) {
+                    if next.pos - k.pos > 1.5 * period {
+                        push_fill(&mut native, k.pos, next.pos);
+                    }
+                }
+            }
+            let mut p = ks[ks.len() - 1].pos + period;
+            while p <= (b - 1) as f64 {
+                native.push(Knot {
+                    pos: p,
+                    val: grid_value(values, a, b, p, kind),
+                    piece: pi,
+                    rows: 0,
+                    exact: false,
+                });
+                p += period;
+            }
+        }
+    }
+    let vals: Vec<f64> = native.iter().map(|k| k.val).collect();
+    // the step from the recorded values: not a piece's first and last sample (an interpolated
+    // value at a gap's edge), not filled-in or ill-conditioned knots — one value off the lattice
+    // breaks the smallest-gap step; `robust_step` tolerates a few more
+    let interior: Vec<f64> = (0..native.len())
+        .filter(|&j| {
+            j > 0
+                && j + 1 < native.len()
+                && native[j].exact
+                && native[j - 1].piece == native[j].piece
+                && native[j + 1].piece == native[j].piece
+        })
+        .map(|j| native[j].val)
+        .collect();
+    let q = estimate_quantization(&interior)
+        .map(|q| q.step)
+        .or_else(|| robust_step(&interior));
+    // recorded level: running median of the native values over ±0.5 s (same piece)
+    let native_rate_hz = 1.0 / (period * dt_s);
+    let hw = ((0.5 * native_rate_hz).round() as usize).max(1);
+    let level: Vec<f64> = (0..native.len())
+        .map(|j| {
+            let lo = j.saturating_sub(hw);
+            let hi = (j + hw + 1).min(native.len());
+            let mut w: Vec<f64> = native[lo..hi]
+                .iter()
+                .filter(|k| k.piece == native[j].piece)
+                .map(|k| k.val)
+                .collect();
+            median(&mut w)
+        })
+        .collect();
+    let inside = |v: f64| v > range.0 && v < range.1;
+    let mut d2: Vec<f64> = native
+        .windows(3)
+        .filter(|w| w[0].piece == w[2].piece && w.iter().all(|k| inside(k.val)))
+        .map(|w| w[2].val - 2.0 * w[1].val + w[0].val)
+        .collect();
+    let sigma_mad = if d2.is_empty() {
+        0.0
+    } else {
+        let m = median(&mut d2.clone());
+        let mut dev: Vec<f64> = d2.iter_mut().map(|d| (*d - m).abs()).collect();
+        1.4826 * median(&mut dev) / 6f64.sqrt()
+    };
+    let (sigma_raw, sigma_white) = match q {
+        // coarse steps (noise below a step): the second differences take the discrete values
+        // 0, ±q, ±2q of flicker and their MAD jumps between 0 and q. The flicker rate φ (share
+        // of native samples off their recorded level) gives σ instead: for truth spread evenly
+        // within a step, φ = 2σ/(q√(2π)), so σ = √(π/2)·q·φ (valid while φ is small; at
+        // φ ≥ 0.25 the noise dithers and the RMS of the small second differences is used)
+        Some(q) if sigma_mad < q => {
+            let (mut off, mut cnt) = (0usize, 0usize);
+            for (k, l) in native.iter().zip(&level) {
+                if inside(k.val) {
+                    cnt += 1;
+                    if (k.val - l).abs() > 1e-6 * q {
+                        off += 1;
+                    }
+                }
+            }
+            let phi = if cnt == 0 {
+                0.0
+            } else {
+                off as f64 / cnt as f64
+            };
+            if phi < 0.25 {
+                let s = (std::f64::consts::PI / 2.0).sqrt() * q * phi;
+                (s, s)
+            } else {
+                let small: Vec<f64> = d2
+                    .iter()
+                    .copied()
+                    .filter(|d| d.abs() <= 2.0 * q * (1.0 + 1e-6))
+                    .collect();
+                let raw = if small.is_empty() {
+                    0.0
+                } else {
+                    (small.iter().map(|d| d * d).sum::<f64>() / small.len() as f64 / 6.0).sqrt()
+                };
+                (raw, (raw * raw - q * q / 12.0).max(0.0).sqrt())
+            }
+        }
+        Some(q) => (
+            sigma_mad,
+            (sigma_mad.powi(2) - q * q / 12.0).max(0.0).sqrt(),
+        ),
+        None => (sigma_mad, sigma_mad),
+    };
+    let half = q.map_or(0.0, |q| {
+        let damp = (-2.0 * std::f64::consts::PI.powi(2) * sigma_white.powi(2) / (q * q)).exp();
+        0.5 * q * damp
+    });
+    // runs of equal recorded level
+    let mut run = Vec::with_capacity(native.len());
+    let mut run_level = Vec::new();
+    let mut last: Option<(usize, f64)> = None;
+    let mut id = 0usize;
+    for (k, &l) in native.iter().zip(&level) {
+        match last {
+            Some((piece, lv)) if piece == k.piece && lv == l => {}
+            Some(_) => {
+                id += 1;
+                run_level.push(l);
+            }
+            None => run_level.push(l),
+        }
+        last = Some((k.piece, l));
+        run.push(id);
+    }
+    Ok(SensorNoise {
+        column: column.into(),
+        unit: unit.into(),
+        kind,
+        grid_dt_s: dt_s,
+        native_rate_hz,
+        n_native: native.len(),
+        sigma_raw,
+        quantization_step: q,
+        sigma_white,
+        persistent_half_width: half,
+        positions: native.iter().map(|k| k.pos).collect(),
+        run,
+        run_level,
+        native_values: vals,
+    })
+}
+
+/// The quantisation step of `v` when a few values are off the lattice (reconstructed knots that
+/// rounding moved): the smallest non-zero difference between consecutive values that makes up
+/// at least 5 % of them, accepted when at least 95 % of the values lie within 2 % of a step of
+/// the lattice through the median value and values repeat (as
+/// [`estimate_quantization`]: at most one distinct value per 2 samples).
+fn robust_step(v: &[f64]) -> Option<f64> {
+    if v.len() < 8 {
+        return None;
+    }
+    let scale = v
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
+    let tol = 1e-9 * scale;
+    let mut d: Vec<f64> = v
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|x| *x > tol)
+        .collect();
+    if d.len() < 8 {
+        return None;
+    }
+    d.sort_by(f64::total_cmp);
+    let need = (d.len() / 20).max(2);
+    let mut q = None;
+    let mut i = 0;
+    while i < d.len() {
+        let mut j = i;
+        while j + 1 < d.len() && d[j + 1] - d[i] <= 0.02 * d[i] {
+            j += 1;
+        }
+        if j - i + 1 >= need {
+            q = Some(d[i..=j].iter().sum::<f64>() / (j - i + 1) as f64);
+            break;
+        }
+        i = j + 1;
+    }
+    let q = q?;
+    let mut sorted = v.to_vec();
+    let v0 = median(&mut sorted);
+    let on = v
+        .iter()
+        .filter(|x| {
+            let k = (*x - v0) / q;
+            (k - k.round()).abs() <= 0.02
+        })
+        .count();
+    let mut distinct = sorted.clone();
+    distinct.dedup_by(|a, b| (*a - *b).abs() <= 0.02 * q);
+    (on * 100 >= 95 * v.len() && distinct.len() * 2 <= v.len()).then_some(q)
+}
+
+/// FNV-1a hash of a name (seeds per column).
+fn fnv1a64(name: &str) -> u64 {
+    let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+    for b in name.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01B3);
+    }
+    h
+}
+
+/// The random stream of `column` in copy `copy` of a run seeded with `seed`.
+pub fn stream(seed: u64, copy: u64, column: &str) -> Xoshiro256StarStar {
+    let mut s = seed ^ fnv1a64(column);
+    let a = splitmix64(&mut s);
+    let mut c = copy.wrapping_add(0x5EED);
+    Xoshiro256StarStar::seed_from_u64(a ^ splitmix64(&mut c))
+}
+
+impl SensorNoise {
+    /// A sensor error model given directly (white σ, quantisation step, native rate), e.g. for
+    /// tests or a channel whose data sheet is known: native samples every `period_rows` rows of
+    /// an `n_rows` grid, runs of the persistent error every `run_rows` rows.
+    ///
+    /// # Errors
+    /// [`NoiseError::BadConfig`] for non-finite or non-positive steps and negative σ.
+    #[allow(clippy::too_many_arguments)]
+    pub fn given(
+        column: &str,
+        unit: &str,
+        kind: SampleKind,
+        n_rows: usize,
+        dt_s: f64,
+        period_rows: usize,
+        sigma_white: f64,
+        quantization_step: Option<f64>,
+    ) -> Result<SensorNoise, NoiseError> {
+        let bad = |parameter, value| NoiseError::BadConfig {
+            parameter,
+            value,
+            requirement: "finite and > 0 (σ ≥ 0)",
+        };
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(bad("dt_s", dt_s));
+        }
+        if period_rows == 0 {
+            return Err(bad("period_rows", 0.0));
+        }
+        if !(sigma_white.is_finite() && sigma_white >= 0.0) {
+            return Err(bad("sigma_white", sigma_white));
+        }
+        if let Some(q) = quantization_step {
+            if !(q.is_finite() && q > 0.0) {
+                return Err(bad("quantization_step", q));
+            }
+        }
+        let positions: Vec<f64> = (0..n_rows).step_by(period_rows).map(|i| i as f64).collect();
+        let half = quantization_step.map_or(0.0, |q| {
+            0.5 * q * (-2.0 * std::f64::consts::PI.powi(2) * sigma_white.powi(2) / (q * q)).exp()
+        });
+        let rate = 1.0 / (period_rows as f64 * dt_s);
+        let hw = ((0.5 * rate).round() as usize).max(1);
+        let run: Vec<usize> = (0..positions.len()).map(|j| j / (2 * hw + 1)).collect();
+        let run_level = vec![f64::NAN; run.last().map_or(0, |r| r + 1)];
+        Ok(SensorNoise {
+            column: column.into(),
+            unit: unit.into(),
+            kind,
+            grid_dt_s: dt_s,
+            native_rate_hz: rate,
+            n_native: positions.len(),
+            sigma_raw: (sigma_white.powi(2) + quantization_step.map_or(0.0, |q| q * q / 12.0))
+                .sqrt(),
+            quantization_step,
+            sigma_white,
+            persistent_half_width: half,
+            native_values: vec![f64::NAN; positions.len()],
+            positions,
+            run,
+            run_level,
+        })
+    }
+
+    /// One draw of the sensor error on an `n_rows` grid: `σ_w·N(0,1)` per native sample plus
+    /// `U(−h, h)` per run of equal recorded level, interpolated or held onto the rows like the
+    /// recording. Rows before the first native sample take its value, after the last the last's.
+    /// Without native samples (a series never estimated) every row draws its own.
+    pub fn draw(&self, n_rows: usize, rng: &mut Xoshiro256StarStar) -> Vec<f64> {
+        self.draw_in(n_rows, rng, f64::NEG_INFINITY, f64::INFINITY)
+            .0
+    }
+
+    /// [`SensorNoise::draw`] for a column whose physical range is `[lo, hi]`, with the rows at
+    /// rest: a run whose recorded level lies at a bound (a brake, retarder or clutch that is off,
+    /// a vehicle standing) gets no persistent error, and its rows are returned with that bound —
+    /// [`perturbed_log`] sets them to it. The reading at rest is noise about the actuator's rest
+    /// state, which a sensor clamping at the bound shows as a one-sided offset (the recorded
+    /// brake force of a synthetic drive is |N(0, 200 N)| rounded to 0.1 kN while the brake is
+    /// off, +85 N on average); a copy at the rest state differs from the recording by that
+    /// offset, as the recording differs from the truth.
+    pub fn draw_in(
+        &self,
+        n_rows: usize,
+        rng: &mut Xoshiro256StarStar,
+        lo: f64,
+        hi: f64,
+    ) -> (Vec<f64>, Vec<Option<f64>>) {
+        if self.positions.is_empty() {
+            return (
+                (0..n_rows)
+                    .map(|_| self.sigma_white * rng.standard_normal())
+                    .collect(),
+                vec![None; n_rows],
+            );
+        }
+        let n_runs = self.run.last().map_or(0, |r| r + 1);
+        let white: Vec<f64> = (0..self.positions.len())
+            .map(|_| self.sigma_white * rng.standard_normal())
+            .collect();
+        let h = self.persistent_half_width;
+        // a run is at a bound when its recorded level is within one step (or σ_w) of it: the
+        // running median of clamped noise sits at the bound or one step off it
+        let step = self.quantization_step.unwrap_or(0.0).max(self.sigma_white);
+        let bound: Vec<Option<f64>> = (0..n_runs)
+            .map(|r| {
+                let level = self.run_level.get(r).copied().unwrap_or(f64::NAN);
+                if level <= lo + step {
+                    Some(lo)
+                } else if level >= hi - step {
+                    Some(hi)
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let pers: Vec<f64> = (0..n_runs)
+            .map(|r| {
+                let u = if h > 0.0 { rng.uniform(-h, h) } else { 0.0 };
+                if bound[r].is_some() {
+                    0.0
+                } else {
+                    u
+                }
+            })
+            .collect();
+        let d: Vec<f64> = white
+            .iter()
+            .zip(&self.run)
+            .map(|(w, r)| w + pers[*r])
+            .collect();
+        // at rest: in a run at a bound and itself within the noise of it (3σ_w + q), so that the
+        // first samples of an actuation, whose running median is still the rest level, stay
+        let near = 3.0 * self.sigma_white + self.quantization_step.unwrap_or(0.0);
+        let rest: Vec<Option<f64>> = self
+            .run
+            .iter()
+            .zip(&self.native_values)
+            .map(|(r, v)| bound[*r].filter(|b| (v - b).abs() <= near))
+            .collect();
+        let p = &self.positions;
+        let mut out = vec![0.0; n_rows];
+        let mut at = vec![None; n_rows];
+        let mut j = 0usize;
+        for i in 0..n_rows {
+            let x = i as f64;
+            while j + 1 < p.len() && p[j + 1] <= x {
+                j += 1;
+            }
+            (out[i], at[i]) = if x < p[0] {
+                (d[0], rest[0])
+            } else if j + 1 >= p.len() {
+                (d[p.len() - 1], rest[p.len() - 1])
+            } else {
+                match self.kind {
+                    SampleKind::Hold => (d[j], rest[j]),
+                    SampleKind::Linear => {
+                        let w = (x - p[j]) / (p[j + 1] - p[j]);
+                        let r = if rest[j] == rest[j + 1] {
+                            rest[j]
+                        } else {
+                            None
+                        };
+                        (d[j] + w * (d[j + 1] - d[j]), r)
+                    }
+                }
+            };
+        }
+        (out, at)
+    }
+}
+
+/// A column perturbed in the Monte-Carlo copies, with its physical range (the perturbed value
+/// is clamped into it, as the sensor clamps its own readings).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PerturbedColumn {
+    /// Canonical column.
+    pub column: String,
+    /// Smallest physical value, SI (`None`: unbounded).
+    pub min: Option<f64>,
+    /// Largest physical value, SI (`None`: unbounded).
+    pub max: Option<f64>,
+}
+
+impl PerturbedColumn {
+    fn new(column: &str, min: Option<f64>, max: Option<f64>) -> Self {
+        Self {
+            column: column.into(),
+            min,
+            max,
+        }
+    }
+}
+
+/// Settings of the noise-floor estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseConfig {
+    /// Monte-Carlo copies. The window test of [`super::locate`] compares a window's residual
+    /// with the copies' mean in the same window, an F test with `copies·ν` denominator degrees
+    /// of freedom, so more copies sharpen the test; 12 keep the floor's own sampling error in a
+    /// 10 s window near 20 % (ν ≈ 3 in the most correlated signal) at about 12 model runs.
+    pub copies: usize,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Columns perturbed (those present in the log). Gear is never perturbed: it is an exact
+    /// integer state.
+    pub columns: Vec<PerturbedColumn>,
+    /// Half-width of the moving average that smooths the per-row null variance for normalising
+    /// the null before its autocorrelation is taken, s.
+    pub smoothing_s: f64,
+    /// Longest lag of the null autocorrelation kept, s (covers the longitudinal model's 20 s
+    /// re-initialisation windows).
+    pub max_lag_s: f64,
+    /// Welch segment of the null PSD, s (0.1 Hz resolution at 10 s).
+    pub psd_segment_s: f64,
+}
+
+impl Default for NoiseConfig {
+    /// 12 copies, seed 7, the driveline and axle inputs and outputs with their physical ranges
+    /// (brake force, retarder torque, speeds and pressures ≥ 0, clutch 0…1), 1 s smoothing,
+    /// 30 s of lags, 10 s PSD segments.
+    fn default() -> Self {
+        let z = Some(0.0);
+        Self {
+            copies: 12,
+            seed: 7,
+            columns: vec![
+                PerturbedColumn::new("vehicle_speed", z, None),
+                PerturbedColumn::new("engine_speed", z, None),
+                PerturbedColumn::new("engine_torque", None, None),
+                PerturbedColumn::new("road_slope", None, None),
+                PerturbedColumn::new("clutch_position", z, Some(1.0)),
+                PerturbedColumn::new("brake_force", z, None),
+                PerturbedColumn::new("retarder_torque", z, None),
+                PerturbedColumn::new("longitudinal_acceleration", None, None),
+                PerturbedColumn::new("bellow_pressure_front", z, None),
+                PerturbedColumn::new("bellow_pressure_rear", z, None),
+                PerturbedColumn::new("bellow_pressure_tag", z, None),
+            ],
+            smoothing_s: 1.0,
+            max_lag_s: 30.0,
+            psd_segment_s: 10.0,
+        }
+    }
+}
+
+impl NoiseConfig {
+    fn validate(&self) -> Result<(), NoiseError> {
+        let bad = |parameter, value: f64, requirement| {
+            Err(NoiseError::BadConfig {
+                parameter,
+                value,
+                requirement,
+            })
+        };
+        if self.copies < 2 {
+            return bad("copies", self.copies as f64, "at least 2");
+        }
+        for (p, v) in [
+            ("smoothing_s", self.smoothing_s),
+            ("max_lag_s", self.max_lag_s),
+            ("psd_segment_s", self.psd_segment_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(p, v, "finite and > 0");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The null PSD of a floor (mean over the copies).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NullPsd {
+    /// Bin frequencies, Hz.
+    pub freq_hz: Vec<f64>,
+    /// One-sided PSD, unit²/Hz.
+    pub psd: Vec<f64>,
+    /// Equivalent degrees of freedom per bin (all copies' segments).
+    pub dof: f64,
+    /// Segment length, rows.
+    pub nperseg: usize,
+    /// Power of the segment means, which Welch's per-segment detrend removes: what lies below
+    /// the first bin (slower than a segment), unit² ([`segment_mean_square`]).
+    pub dc_power: f64,
+}
+
+/// Mean over Welch segments (`nperseg` rows, half overlap, as [`csd_pieces`] cuts them) of the
+/// squared segment mean of each piece: the power slower than one segment, which the Welch PSD
+/// leaves out (0 without a full segment).
+pub fn segment_mean_square(pieces: &[&[f64]], nperseg: usize) -> f64 {
+    let step = (nperseg - nperseg / 2).max(1);
+    let (mut s, mut k) = (0.0, 0usize);
+    for x in pieces {
+        if nperseg == 0 || x.len() < nperseg {
+            continue;
+        }
+        let m = (x.len() - nperseg / 2) / step;
+        for j in 0..m {
+            let seg = &x[j * step..j * step + nperseg];
+            let mean = seg.iter().sum::<f64>() / nperseg as f64;
+            s += mean * mean;
+            k += 1;
+        }
+    }
+    if k == 0 {
+        0.0
+    } else {
+        s / k as f64
+    }
+}
+
+/// The noise floor of one compared signal (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseFloor {
+    /// Compared signal.
+    pub signal: String,
+    /// SI unit.
+    pub unit: String,
+    /// RMS of the null residual over the rows that count, unit (diagnosis.json `noise_floor`).
+    pub floor: f64,
+    /// RMS of the part from the output's own measurement error, unit (`None` when the copies
+    /// were given whole).
+    pub measurement_rms: Option<f64>,
+    /// RMS of the part propagated from the inputs, unit (`None` when given whole).
+    pub input_rms: Option<f64>,
+    /// Number of copies behind the estimate.
+    pub copies: usize,
+    /// Grid step, s.
+    pub dt_s: f64,
+    /// Squared-correlation time of the null, `dt·Σ_k ρ(k)²` over |k| ≤ the kept lags, s: a long
+    /// window holds about `T / τ` degrees of freedom.
+    pub correlation_time_s: f64,
+    /// The output's own sensor estimate, when it is a recorded column.
+    pub sensor: Option<SensorNoise>,
+    /// Per-row null variance `mean_c e_c²`, unit² (NaN where the row does not count).
+    #[serde(skip)]
+    pub null_variance: Vec<f64>,
+    /// Autocorrelation of the normalised null, lags 0.. (rows); `ρ(0) = 1`.
+    #[serde(skip)]
+    pub autocorrelation: Vec<f64>,
+    /// Null PSD (`None` when no valid stretch is as long as a segment).
+    #[serde(skip)]
+    pub null_psd: Option<NullPsd>,
+}
+
+/// Moving average of the finite entries of `x` over ±`hw` rows (NaN where none).
+fn moving_mean(x: &[f64], hw: usize) -> Vec<f64> {
+    let n = x.len();
+    let mut cs = vec![0.0; n + 1];
+    let mut cn = vec![0usize; n + 1];
+    for i in 0..n {
+        let f = x[i].is_finite();
+        cs[i + 1] = cs[i] + if f { x[i] } else { 0.0 };
+        cn[i + 1] = cn[i] + usize::from(f);
+    }
+    (0..n)
+        .map(|i| {
+            let a = i.saturating_sub(hw);
+            let b = (i + hw + 1).min(n);
+            let c = cn[b] - cn[a];
+            if c == 0 {
+                f64::NAN
+            } else {
+                (cs[b] - cs[a]) / c as f64
+            }
+        })
+        .collect()
+}
+
+/// Σ_t x(t)·x(t+k) for k = 0..=max_lag, by FFT.
+fn autocov_sums(x: &[f64], max_lag: usize) -> Vec<f64> {
+    let n = x.len();
+    if n == 0 {
+        return vec![0.0; max_lag + 1];
+    }
+    let m = (2 * n).next_power_of_two();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(m);
+    let inv = planner.plan_fft_inverse(m);
+    let mut buf = fwd.make_input_vec();
+    buf[..n].copy_from_slice(x);
+    let mut spec = fwd.make_output_vec();
+    fwd.process(&mut buf, &mut spec).expect("plan sizes");
+    for c in spec.iter_mut() {
+        *c = num_complex::Complex64::new(c.norm_sqr(), 0.0);
+    }
+    let mut out = inv.make_output_vec();
+    inv.process(&mut spec, &mut out).expect("plan sizes");
+    (0..=max_lag)
+        .map(|k| if k < n { out[k] / m as f64 } else { 0.0 })
+        .collect()
+}
+
+impl NoiseFloor {
+    /// The floor of `signal` from null copies `e_c` (each as long as `valid`; rows that do not
+    /// count, or where a copy is not finite, are left out).
+    ///
+    /// # Errors
+    /// [`NoiseError::BadConfig`] for fewer than 2 copies or a bad step or setting;
+    /// [`NoiseError::Length`] for copies of the wrong length.
+    pub fn from_null_copies(
+        signal: &str,
+        unit: &str,
+        dt_s: f64,
+        copies: &[Vec<f64>],
+        valid: &[bool],
+        cfg: &NoiseConfig,
+    ) -> Result<NoiseFloor, NoiseError> {
+        cfg.validate()?;
+        if copies.len() < 2 {
+            return Err(NoiseError::BadConfig {
+                parameter: "copies",
+                value: copies.len() as f64,
+                requirement: "at least 2",
+            });
+        }
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(NoiseError::BadConfig {
+                parameter: "dt_s",
+                value: dt_s,
+                requirement: "finite and > 0",
+            });
+        }
+        let n = valid.len();
+        for c in copies {
+            if c.len() != n {
+                return Err(NoiseError::Length {
+                    what: format!("null copy of {signal}"),
+                    expected: n,
+                    got: c.len(),
+                });
+            }
+        }
+        let k = copies.len() as f64;
+        let usable: Vec<bool> = (0..n)
+            .map(|i| valid[i] && copies.iter().all(|c| c[i].is_finite()))
+            .collect();
+        let null_variance: Vec<f64> = (0..n)
+            .map(|i| {
+                if usable[i] {
+                    copies.iter().map(|c| c[i] * c[i]).sum::<f64>() / k
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect();
+        let n_use = usable.iter().filter(|u| **u).count();
+        let floor = if n_use == 0 {
+            f64::NAN
+        } else {
+            (null_variance.iter().filter(|v| v.is_finite()).sum::<f64>() / n_use as f64).sqrt()
+        };
+        // autocorrelation of the normalised null, pooled over copies
+        let hw = ((cfg.smoothing_s / dt_s).round() as usize).max(1);
+        let smooth = moving_mean(&null_variance, hw);
+        let max_lag = ((cfg.max_lag_s / dt_s).round() as usize).min(n.saturating_sub(1));
+        let mask: Vec<f64> = (0..n)
+            .map(|i| {
+                if usable[i] && smooth[i] > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let pairs = autocov_sums(&mask, max_lag);
+        let mut acc = vec![0.0; max_lag + 1];
+        for c in copies {
+            let z: Vec<f64> = (0..n)
+                .map(|i| {
+                    if mask[i] > 0.0 {
+                        c[i] / smooth[i].sqrt()
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            for (a, s) in acc.iter_mut().zip(autocov_sums(&z, max_lag)) {
+                *a += s;
+            }
+        }
+        let mut autocorrelation = Vec::with_capacity(max_lag + 1);
+        if pairs.first().copied().unwrap_or(0.0) > 0.5 {
+            let r0 = acc[0] / pairs[0];
+            for lag in 0..=max_lag {
+                // keep lags with at least 10 % of the rows paired (the rest is too noisy)
+                if pairs[lag] < 0.1 * pairs[0] || r0 <= 0.0 {
+                    break;
+                }
+                autocorrelation.push((acc[lag] / pairs[lag] / r0).clamp(-1.0, 1.0));
+            }
+        }
+        if autocorrelation.is_empty() {
+            autocorrelation.push(1.0);
+        }
+        let correlation_time_s =
+            dt_s * (1.0 + 2.0 * autocorrelation[1..].iter().map(|r| r * r).sum::<f64>());
+        // null PSD over every copy's usable stretches
+        let nperseg = ((cfg.psd_segment_s / dt_s).round() as usize).max(8);
+        let mut pieces: Vec<(&[f64], &[f64])> = Vec::new();
+        for c in copies {
+            let mut i = 0;
+            while i < n {
+                if !usable[i] {
+                    i += 1;
+                    continue;
+                }
+                let a = i;
+                while i < n && usable[i] {
+                    i += 1;
+                }
+                pieces.push((&c[a..i], &c[a..i]));
+            }
+        }
+        let null_psd = csd_pieces(
+            &pieces,
+            &WelchConfig {
+                fs_hz: 1.0 / dt_s,
+                nperseg: Some(nperseg),
+                noverlap: None,
+                confidence: 0.95,
+            },
+        )
+        .ok()
+        .map(|c| NullPsd {
+            freq_hz: c.freq_hz,
+            psd: c.pxx,
+            dof: c.dof,
+            nperseg,
+            dc_power: segment_mean_square(&pieces.iter().map(|p| p.0).collect::<Vec<_>>(), nperseg),
+        });
+        Ok(NoiseFloor {
+            signal: signal.into(),
+            unit: unit.into(),
+            floor,
+            measurement_rms: None,
+            input_rms: None,
+            copies: copies.len(),
+            dt_s,
+            correlation_time_s,
+            sensor: None,
+            null_variance,
+            autocorrelation,
+            null_psd,
+        })
+    }
+
+    /// A floor made of the output's measurement error alone (no model, no inputs): `copies`
+    /// draws of `sensor` on the rows of `valid`. For residuals whose model is exact, e.g.
+    /// synthetic tests, or signals no input feeds.
+    ///
+    /// # Errors
+    /// As [`NoiseFloor::from_null_copies`].
+    pub fn measurement_only(
+        signal: &str,
+        sensor: &SensorNoise,
+        valid: &[bool],
+        cfg: &NoiseConfig,
+    ) -> Result<NoiseFloor, NoiseError> {
+        cfg.validate()?;
+        let copies: Vec<Vec<f64>> = (0..cfg.copies as u64)
+            .map(|c| sensor.draw(valid.len(), &mut stream(cfg.seed, c, &sensor.column)))
+            .collect();
+        let mut f = NoiseFloor::from_null_copies(
+            signal,
+            &sensor.unit,
+            sensor.grid_dt_s,
+            &copies,
+            valid,
+            cfg,
+        )?;
+        f.measurement_rms = Some(f.floor);
+        f.input_rms = Some(0.0);
+        f.sensor = Some(sensor.clone());
+        Ok(f)
+    }
+
+    /// `Σ_{|k|<N} (1 − |k|/N)·ρ(k)²` for a contiguous stretch of `n` rows (lags beyond those kept
+    /// count 0).
+    pub fn squared_correlation_sum(&self, n: usize) -> f64 {
+        let nf = n as f64;
+        let mut s = 1.0;
+        for (k, r) in self.autocorrelation.iter().enumerate().skip(1) {
+            if k >= n {
+                break;
+            }
+            s += 2.0 * (1.0 - k as f64 / nf) * r * r;
+        }
+        s
+    }
+
+    /// Effective degrees of freedom of `Σ r²` over `rows` (sorted row indices where the floor
+    /// counts): for each contiguous run, Satterthwaite's `ν = (Σσ²)² / (Σσ⁴ · S_N)` with the
+    /// null's per-row variance σ² and the squared-correlation sum `S_N`; runs add up (they are
+    /// treated as independent). At least 1 when any row counts, 0 otherwise.
+    pub fn effective_dof(&self, rows: &[usize]) -> f64 {
+        let mut total = 0.0;
+        let mut i = 0;
+        while i < rows.len() {
+            let mut j = i;
+            while j + 1 < rows.len() && rows[j + 1] == rows[j] + 1 {
+                j += 1;
+            }
+            let (mut s1, mut s2) = (0.0, 0.0);
+            for &r in &rows[i..=j] {
+                let v = self.null_variance.get(r).copied().unwrap_or(f64::NAN);
+                if v.is_finite() {
+                    s1 += v;
+                    s2 += v * v;
+                }
+            }
+            if s2 > 0.0 {
+                total += s1 * s1 / (s2 * self.squared_correlation_sum(j - i + 1));
+            }
+            i = j + 1;
+        }
+        if rows.is_empty() || total == 0.0 {
+            total
+        } else {
+            total.max(1.0)
+        }
+    }
+}
+
+/// The floors of every compared signal, with the sensor estimates behind them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseFloors {
+    /// One per compared signal.
+    pub floors: Vec<NoiseFloor>,
+    /// Sensor estimates of every perturbed column.
+    pub sensors: Vec<SensorNoise>,
+    /// Copies.
+    pub copies: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl NoiseFloors {
+    /// The floor of `signal`.
+    pub fn get(&self, signal: &str) -> Option<&NoiseFloor> {
+        self.floors.iter().find(|f| f.signal == signal)
+    }
+
+    /// `{"<signal>": floor}` of diagnosis.json, unit of each signal.
+    pub fn summary(&self) -> BTreeMap<String, f64> {
+        self.floors
+            .iter()
+            .map(|f| (f.signal.clone(), f.floor))
+            .collect()
+    }
+}
+
+/// The models a recording drives and how they are compared (the compare step's settings).
+#[derive(Debug, Clone)]
+pub struct ModelSet<'a> {
+    /// The nominal vehicle.
+    pub truth: &'a TruthModel,
+    /// Gear ratios.
+    pub ratios: &'a [f64],
+    /// Nominal parameters.
+    pub nominal: Theta,
+    /// Longitudinal model settings (`None`: not run).
+    pub longitudinal: Option<LongitudinalConfig>,
+    /// Run the axle model.
+    pub axle: bool,
+}
+
+const PRESSURES: [&str; 3] = [
+    "bellow_pressure_front",
+    "bellow_pressure_rear",
+    "bellow_pressure_tag",
+];
+
+fn has(log: &DriveLog, c: &str) -> bool {
+    log.signal(c)
+        .is_some_and(|v| v.iter().any(|x| x.is_finite()))
+}
+
+impl<'a> ModelSet<'a> {
+    /// The models `log` can drive: longitudinal with vehicle and engine speed, engine torque
+    /// and gear; axle with the three bellow pressures and a vehicle with axles.
+    pub fn for_log(
+        log: &DriveLog,
+        truth: &'a TruthModel,
+        ratios: &'a [f64],
+        nominal: Theta,
+    ) -> ModelSet<'a> {
+        let long = ["vehicle_speed", "engine_speed", "engine_torque", "gear"]
+            .iter()
+            .all(|c| has(log, c));
+        let axle = truth.axles.is_some() && PRESSURES.iter().all(|c| has(log, c));
+        ModelSet {
+            truth,
+            ratios,
+            nominal,
+            longitudinal: long.then(LongitudinalConfig::default),
+            axle,
+        }
+    }
+
+    /// The compared signals of `log` at `theta` ([`compare_at`]). Rows that count: the
+    /// recorded value is a real sample (not a filled gap); for the longitudinal signals also
+    /// vehicle speed at least [`LongitudinalConfig::min_speed_mps`] and engine speed recorded.
+    ///
+    /// # Errors
+    /// [`NoiseError::Model`] when a model cannot be built or run.
+    pub fn compared(&self, log: &DriveLog, theta: &Theta) -> Result<Vec<Compared>, NoiseError> {
+        let n = log.len();
+        let long = match self.longitudinal {
+            Some(cfg) => Some(LongitudinalModel::new(
+                log,
+                self.truth,
+                self.ratios,
+                self.nominal,
+                cfg,
+            )?),
+            None => None,
+        };
+        let long_valid: Vec<bool> = match (&self.longitudinal, log.signal("vehicle_speed")) {
+            (Some(cfg), Some(v)) => {
+                let w = log.signal("engine_speed");
+                (0..n)
+                    .map(|i| {
+                        v[i].is_finite()
+                            && v[i] >= cfg.min_speed_mps
+                            && w.is_some_and(|w| w[i].is_finite())
+                    })
+                    .collect()
+            }
+            _ => vec![false; n],
+        };
+        let axle = if self.axle {
+            Some(AxleModel::new(log, self.truth, self.ratios, self.nominal)?)
+        } else {
+            None
+        };
+        let (mut meas, mut valid): (Vec<Vec<f64>>, Vec<Vec<bool>>) = (Vec::new(), Vec::new());
+        if self.axle {
+            for c in PRESSURES {
+                let raw = log.signal(c).unwrap_or(&[]);
+                valid.push(raw.iter().map(|x| x.is_finite()).collect());
+                meas.push(fill_gaps(raw, Interpolation::Linear).unwrap_or_else(|| raw.to_vec()));
+            }
+        }
+        let am: Option<[Vec<f64>; 3]> = meas.try_into().ok();
+        let av: Option<[Vec<bool>; 3]> = valid.try_into().ok();
+        Ok(compare_at(
+            long.as_ref(),
+            axle.as_ref(),
+            theta,
+            &long_valid,
+            am.as_ref(),
+            av.as_ref(),
+        )?)
+    }
+}
+
+/// Grid step of a log, s (median of the row intervals).
+///
+/// # Errors
+/// [`NoiseError::Empty`] for fewer than 2 rows; [`NoiseError::BadConfig`] for a non-increasing
+/// time axis.
+pub fn grid_step_s(log: &DriveLog) -> Result<f64, NoiseError> {
+    if log.len() < 2 {
+        return Err(NoiseError::Empty {
+            what: "time axis (fewer than 2 rows)".into(),
+        });
+    }
+    let mut d: Vec<f64> = log
+        .timestamp_ns
+        .windows(2)
+        .map(|w| (w[1] - w[0]) as f64 * 1e-9)
+        .collect();
+    let dt = median(&mut d);
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(NoiseError::BadConfig {
+            parameter: "grid step, s",
+            value: dt,
+            requirement: "finite and > 0 (increasing timestamps)",
+        });
+    }
+    Ok(dt)
+}
+
+/// The sensor estimates of every column of `cfg` present in `log` with a finite value.
+///
+/// # Errors
+/// As [`grid_step_s`].
+pub fn sensor_estimates(log: &DriveLog, cfg: &NoiseConfig) -> Result<Vec<SensorNoise>, NoiseError> {
+    let dt = grid_step_s(log)?;
+    let mut out = Vec::new();
+    for c in &cfg.columns {
+        let Some(s) = log.signals.iter().find(|s| s.name == c.column) else {
+            continue;
+        };
+        let range = (
+            c.min.unwrap_or(f64::NEG_INFINITY),
+            c.max.unwrap_or(f64::INFINITY),
+        );
+        match estimate_sensor_noise_in(
+            &s.name,
+            &s.unit,
+            &s.values,
+            dt,
+            SampleKind::of_column(&s.name),
+            range,
+        ) {
+            Ok(e) => out.push(e),
+            Err(NoiseError::Empty { .. }) => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(out)
+}
+
+/// Copy `copy` of `log` with every sensed column perturbed by a draw of its sensor error,
+/// clamped into its physical range, rows at rest set to the rest state
+/// ([`SensorNoise::draw_in`]; NaN stays NaN). Returns the log and the perturbation of
+/// each column (for the measurement / input split).
+pub fn perturbed_log(
+    log: &DriveLog,
+    sensors: &[SensorNoise],
+    cfg: &NoiseConfig,
+    copy: u64,
+) -> (DriveLog, Vec<(String, Vec<f64>)>) {
+    let mut out = log.clone();
+    let mut deltas = Vec::new();
+    for s in sensors {
+        let Some(col) = out.signals.iter_mut().find(|c| c.name == s.column) else {
+            continue;
+        };
+        let range = cfg.columns.iter().find(|c| c.column == s.column);
+        let (lo, hi) = (
+            range.and_then(|r| r.min).unwrap_or(f64::NEG_INFINITY),
+            range.and_then(|r| r.max).unwrap_or(f64::INFINITY),
+        );
+        let (d, rest) = s.draw_in(
+            col.values.len(),
+            &mut stream(cfg.seed, copy, &s.column),
+            lo,
+            hi,
+        );
+        let mut applied = vec![0.0; d.len()];
+        for (i, v) in col.values.iter_mut().enumerate() {
+            if v.is_finite() {
+                let nv = rest[i].unwrap_or_else(|| (*v + d[i]).clamp(lo, hi));
+                applied[i] = nv - *v;
+                *v = nv;
+            }
+        }
+        deltas.push((s.column.clone(), applied));
+    }
+    (out, deltas)
+}
+
+/// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
+/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (in
+/// parallel, results in copy order, so the outcome does not depend on the thread count).
+///
+/// # Errors
+/// [`NoiseError`] from the settings, the sensor estimates or `residuals`.
+pub fn noise_floors_with<F>(
+    log: &DriveLog,
+    cfg: &NoiseConfig,
+    residuals: F,
+) -> Result<NoiseFloors, NoiseError>
+where
+    F: Fn(&DriveLog) -> Result<Vec<Compared>, NoiseError> + Sync,
+{
+    cfg.validate()?;
+    let dt = grid_step_s(log)?;
+    let sensors = sensor_estimates(log, cfg)?;
+    let base = residuals(log)?;
+    type Run = (Vec<Compared>, Vec<(String, Vec<f64>)>);
+    let runs: Vec<Run> = (0..cfg.copies as u64)
+        .into_par_iter()
+        .map(|c| {
+            let (plog, deltas) = perturbed_log(log, &sensors, cfg, c);
+            residuals(&plog).map(|r| (r, deltas))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut floors = Vec::new();
+    for b in &base {
+        let r0 = b.residual();
+        let n = r0.len();
+        let mut copies = Vec::with_capacity(runs.len());
+        let mut meas = Vec::with_capacity(runs.len());
+        for (rs, deltas) in &runs {
+            let Some(c) = rs.iter().find(|c| c.name == b.name) else {
+                continue;
+            };
+            let rc = c.residual();
+            if rc.len() != n {
+                return Err(NoiseError::Length {
+                    what: format!("residual of {} in a perturbed copy", b.name),
+                    expected: n,
+                    got: rc.len(),
+                });
+            }
+            copies.push((0..n).map(|i| rc[i] - r0[i]).collect::<Vec<f64>>());
+            meas.push(
+                deltas
+                    .iter()
+                    .find(|d| d.0 == b.name)
+                    .map_or_else(|| vec![0.0; n], |d| d.1.clone()),
+            );
+        }
+        let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, &copies, &b.valid, cfg)?;
+        // measurement / input split (RMS over the rows that count)
+        let (mut sm, mut si, mut cnt) = (0.0, 0.0, 0usize);
+        for (c, m) in copies.iter().zip(&meas) {
+            for i in 0..n {
+                if f.null_variance[i].is_finite() {
+                    sm += m[i] * m[i];
+                    si += (c[i] - m[i]).powi(2);
+                    cnt += 1;
+                }
+            }
+        }
+        if cnt > 0 {
+            f.measurement_rms = Some((sm / cnt as f64).sqrt());
+            f.input_rms = Some((si / cnt as f64).sqrt());
+        }
+        f.sensor = sensors.iter().find(|s| s.column == b.name).cloned();
+        floors.push(f);
+    }
+    Ok(NoiseFloors {
+        floors,
+        sensors,
+        copies: cfg.copies,
+        seed: cfg.seed,
+    })
+}
+
+/// [`noise_floors_with`] for the extended models of `models` at parameters `theta`
+/// ([`ModelSet::compared`]).
+///
+/// # Errors
+/// As [`noise_floors_with`].
+pub fn noise_floors(
+    log: &DriveLog,
+    models: &ModelSet<'_>,
+    theta: &Theta,
+    cfg: &NoiseConfig,
+) -> Result<NoiseFloors, NoiseError> {
+    noise_floors_with(log, cfg, |l| models.compared(l, theta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10 Hz channel with noise σ on a 50 Hz grid (linear), its knots at phase 0.3 rows.
+    fn linear_10hz(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+        let mut rng = Xoshiro256StarStar::seed_from_u64(seed);
+        let knots: Vec<(f64, f64)> = (0..n / 5 + 2)
+            .map(|k| {
+                let p = 0.3 + 5.0 * k as f64;
+                (p, 10.0 + (p * 0.002).sin() + sigma * rng.standard_normal())
+            })
+            .collect();
+        (0..n)
+            .map(|i| {
+                let x = i as f64;
+                let k = knots.partition_point(|kn| kn.0 <= x);
+                if k == 0 {
+                    return knots[0].1;
+                }
+                let (a, b) = (knots[k - 1], knots[k]);
+                a.1 + (x - a.0) / (b.0 - a.0) * (b.1 - a.1)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn native_rate_and_sigma_of_an_interpolated_channel() {
+        let x = linear_10hz(20_000, 0.05, 1);
+        let s =
+            estimate_sensor_noise("vehicle_speed", "m/s", &x, 0.02, SampleKind::Linear).unwrap();
+        assert!((s.native_rate_hz - 10.0).abs() < 0.05, "{s:?}");
+        assert!((s.sigma_raw / 0.05 - 1.0).abs() < 0.08, "{}", s.sigma_raw);
+        assert_eq!(s.quantization_step, None);
+    }
+
+    #[test]
+    fn held_quantised_channel_without_noise_gets_the_persistent_half_step() {
+        // slope 10 Hz held on a 50 Hz grid, whole percent, no noise
+        let x: Vec<f64> = (0..20_000)
+            .map(|i| {
+                let k = i / 5;
+                ((0.03 * (k as f64 * 0.003).sin()) * 100.0).round() / 100.0
+            })
+            .collect();
+        let s = estimate_sensor_noise("road_slope", "1", &x, 0.02, SampleKind::Hold).unwrap();
+        assert_eq!(s.quantization_step.map(|q| (q * 1e4).round()), Some(100.0));
+        assert!(s.sigma_white < 0.002, "{s:?}");
+        assert!(s.persistent_half_width > 0.004, "{s:?}");
+    }
+
+    #[test]
+    fn draw_has_the_estimated_spread() {
+        let s = SensorNoise::given("x", "1", SampleKind::Hold, 10_000, 0.02, 5, 0.2, None).unwrap();
+        let d = s.draw(10_000, &mut stream(1, 0, "x"));
+        let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+        assert!((rms / 0.2 - 1.0).abs() < 0.1, "{rms}");
+        // held: constant over each 5-row native interval
+        assert_eq!(d[0], d[4]);
+        assert_ne!(d[4], d[5]);
+    }
+
+    #[test]
+    fn empty_and_bad_inputs_are_errors() {
+        assert!(matches!(
+            estimate_sensor_noise("x", "1", &[], 0.02, SampleKind::Linear),
+            Err(NoiseError::Empty { .. })
+        ));
+        assert!(matches!(
+            estimate_sensor_noise("x", "1", &[f64::NAN; 10], 0.02, SampleKind::Linear),
+            Err(NoiseError::Empty { .. })
+        ));
+        assert!(estimate_sensor_noise("x", "1", &[1.0; 10], f64::NAN, SampleKind::Linear).is_err());
+        // constant series: zero noise, no error
+        let s = estimate_sensor_noise("x", "1", &[1.0; 50], 0.02, SampleKind::Linear).unwrap();
+        assert_eq!(s.sigma_raw, 0.0);
+        let v = vec![true; 10];
+        assert!(NoiseFloor::from_null_copies(
+            "x",
+            "1",
+            0.02,
+            &[vec![0.0; 10]],
+            &v,
+            &NoiseConfig::default()
+        )
+        .is_err());
+        assert!(NoiseFloor::from_null_copies(
+            "x",
+            "1",
+            0.02,
+            &[vec![0.0; 10], vec![0.0; 9]],
+            &v,
+            &NoiseConfig::default()
+        )
+        .is_err());
+    }
+
+    #[test]
+    fn white_null_has_about_one_dof_per_row() {
+        let cfg = NoiseConfig::default();
+        let n = 5000;
+        let copies: Vec<Vec<f64>> = (0..12)
+            .map(|c| {
+                let mut r = stream(3, c, "w");
+                (0..n).map(|_| r.standard_normal()).collect()
+            })
+            .collect();
+        let f =
+            NoiseFloor::from_null_copies("w", "1", 0.02, &copies, &vec![true; n], &cfg).unwrap();
+        assert!((f.floor - 1.0).abs() < 0.02, "{}", f.floor);
+        let rows: Vec<usize> = (0..500).collect();
+        let nu = f.effective_dof(&rows);
+        assert!(nu > 400.0 && nu <= 500.0, "{nu}");
+    }
+}
