@@ -182,14 +182,29 @@ pub struct DistanceColumn {
     pub kv: HashMap<String, String>,
 }
 
-/// Reads `distance` and `column` from a Parquet file: both numeric without gaps, `distance` a
-/// uniform increasing grid (each step within 10⁻⁶ of the mean step, relative — the grid is
-/// written as `k·step`, so only rounding separates the steps) in m, `column` a slope (unit `1`).
-/// A missing `unit` metadata entry is taken as the expected SI unit.
+/// Numeric columns read from a Parquet file, as f64 (nulls as NaN).
+#[derive(Debug, Clone)]
+pub struct NumericColumns {
+    /// Names in the order read: the required ones, then the optional ones present.
+    pub names: Vec<String>,
+    /// Values per column.
+    pub values: Vec<Vec<f64>>,
+    /// The file's key–value metadata.
+    pub kv: HashMap<String, String>,
+}
+
+/// Reads the `required` columns and those of `optional` that exist, each `(name, unit)`: a
+/// column must be numeric, and a `unit` field-metadata entry, where present, must be the one
+/// given (a missing entry is taken as that unit). Only these columns are decoded.
 ///
 /// # Errors
-/// [`RoadFileError`].
-pub fn read_distance_column(path: &Path, column: &str) -> Result<DistanceColumn, RoadFileError> {
+/// [`RoadFileError::Io`], [`RoadFileError::Parquet`], [`RoadFileError::NoColumn`] (a required
+/// column), [`RoadFileError::WrongType`], [`RoadFileError::WrongUnit`].
+pub fn read_numeric_columns(
+    path: &Path,
+    required: &[(&str, &'static str)],
+    optional: &[(&str, &'static str)],
+) -> Result<NumericColumns, RoadFileError> {
     let file = path.to_path_buf();
     let f = std::fs::File::open(path).map_err(|source| RoadFileError::Io {
         file: file.clone(),
@@ -212,8 +227,18 @@ pub fn read_distance_column(path: &Path, column: &str) -> Result<DistanceColumn,
         .unwrap_or_default();
     let schema = builder.schema().clone();
     let names: Vec<String> = schema.fields().iter().map(|f| f.name().clone()).collect();
+    let wanted: Vec<(&str, &'static str)> = required
+        .iter()
+        .copied()
+        .chain(
+            optional
+                .iter()
+                .copied()
+                .filter(|(n, _)| names.iter().any(|x| x == n)),
+        )
+        .collect();
     let mut roots = Vec::new();
-    for (name, unit) in [("distance", "m"), (column, "1")] {
+    for &(name, unit) in &wanted {
         let Some(i) = names.iter().position(|n| n == name) else {
             return Err(RoadFileError::NoColumn {
                 file,
@@ -241,12 +266,12 @@ pub fn read_distance_column(path: &Path, column: &str) -> Result<DistanceColumn,
         }
         roots.push(i);
     }
-    let mask = ProjectionMask::roots(builder.parquet_schema(), roots.clone());
+    let mask = ProjectionMask::roots(builder.parquet_schema(), roots);
     let reader = builder.with_projection(mask).build().map_err(pq)?;
-    let (mut dist, mut vals) = (Vec::new(), Vec::new());
+    let mut values: Vec<Vec<f64>> = vec![Vec::new(); wanted.len()];
     for batch in reader {
         let batch = batch.map_err(|e| pq(parquet::errors::ParquetError::General(e.to_string())))?;
-        for (name, out) in [("distance", &mut dist), (column, &mut vals)] {
+        for (&(name, _), out) in wanted.iter().zip(values.iter_mut()) {
             let arr = batch
                 .column_by_name(name)
                 .expect("projected column is in the batch");
@@ -255,6 +280,26 @@ pub fn read_distance_column(path: &Path, column: &str) -> Result<DistanceColumn,
             out.extend((0..v.len()).map(|i| if v.is_null(i) { f64::NAN } else { v.value(i) }));
         }
     }
+    Ok(NumericColumns {
+        names: wanted.iter().map(|(n, _)| n.to_string()).collect(),
+        values,
+        kv,
+    })
+}
+
+/// Reads `distance` and `column` from a Parquet file: both numeric without gaps, `distance` a
+/// uniform increasing grid (each step within 10⁻⁶ of the mean step, relative — the grid is
+/// written as `k·step`, so only rounding separates the steps) in m, `column` a slope (unit `1`).
+/// A missing `unit` metadata entry is taken as the expected SI unit.
+///
+/// # Errors
+/// [`RoadFileError`].
+pub fn read_distance_column(path: &Path, column: &str) -> Result<DistanceColumn, RoadFileError> {
+    let file = path.to_path_buf();
+    let mut cols = read_numeric_columns(path, &[("distance", "m"), (column, "1")], &[])?;
+    let kv = std::mem::take(&mut cols.kv);
+    let vals = cols.values.pop().expect("two columns asked");
+    let dist = cols.values.pop().expect("two columns asked");
     for (name, v) in [("distance", &dist), (column, &vals)] {
         if let Some(row) = v.iter().position(|x| !x.is_finite()) {
             return Err(RoadFileError::Missing {

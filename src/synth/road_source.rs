@@ -27,14 +27,10 @@
 //! 0 of the drive is `start_m` of the file.
 
 use crate::road::profile::ProfileError;
+use crate::road::road_table::{read_numeric_columns, RoadFileError};
 use crate::road::synth::SyntheticRoad;
 use crate::road::vdri::{cycle_profile, read_vdri, vecto_header, VectoCycle, VectoHeader};
 use crate::schema::drive_log;
-use arrow::array::{Array, AsArray};
-use arrow::compute::cast;
-use arrow::datatypes::{DataType, Float64Type};
-use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-use parquet::arrow::ProjectionMask;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -141,6 +137,49 @@ pub enum RoadSourceError {
         /// What it must be.
         requirement: &'static str,
     },
+    /// Another road-table problem (from [`read_numeric_columns`]).
+    #[error(transparent)]
+    Table(RoadFileError),
+}
+
+impl From<RoadFileError> for RoadSourceError {
+    /// The column reader's errors under this enum's own variants (same messages).
+    fn from(e: RoadFileError) -> Self {
+        match e {
+            RoadFileError::Io { file, source } => RoadSourceError::Io { file, source },
+            RoadFileError::Parquet { file, source } => RoadSourceError::Parquet { file, source },
+            RoadFileError::NoColumn {
+                file,
+                column,
+                available,
+            } => RoadSourceError::NoColumn {
+                file,
+                column,
+                available,
+            },
+            RoadFileError::WrongType {
+                file,
+                column,
+                dtype,
+            } => RoadSourceError::WrongType {
+                file,
+                column,
+                dtype,
+            },
+            RoadFileError::WrongUnit {
+                file,
+                column,
+                unit,
+                expected,
+            } => RoadSourceError::WrongUnit {
+                file,
+                column,
+                unit,
+                expected,
+            },
+            other => RoadSourceError::Table(other),
+        }
+    }
 }
 
 /// Where a drive's road comes from.
@@ -356,64 +395,12 @@ fn window(
 
 fn read_parquet_road(path: &Path) -> Result<FileRoad, RoadSourceError> {
     let file = path.to_path_buf();
-    let f = std::fs::File::open(path).map_err(|source| RoadSourceError::Io {
-        file: file.clone(),
-        source,
-    })?;
-    let pq = |source| RoadSourceError::Parquet {
-        file: file.clone(),
-        source,
-    };
-    let builder = ParquetRecordBatchReaderBuilder::try_new(f).map_err(pq)?;
-    let schema = builder.schema().clone();
-    let names: Vec<String> = schema.fields().iter().map(|f| f.name().clone()).collect();
-    let mut wanted: Vec<(&str, &'static str)> = vec![("distance", "m"), ("slope", "1")];
-    if names.iter().any(|n| n == "elevation") {
-        wanted.push(("elevation", "m"));
-    }
-    let mut roots = Vec::new();
-    for &(name, unit) in &wanted {
-        let Some(i) = names.iter().position(|n| n == name) else {
-            return Err(RoadSourceError::NoColumn {
-                file,
-                column: name.into(),
-                available: names.join(", "),
-            });
-        };
-        let field = schema.field(i);
-        if !field.data_type().is_numeric() {
-            return Err(RoadSourceError::WrongType {
-                file,
-                column: name.into(),
-                dtype: field.data_type().to_string(),
-            });
-        }
-        if let Some(u) = field.metadata().get("unit") {
-            if u != unit {
-                return Err(RoadSourceError::WrongUnit {
-                    file,
-                    column: name.into(),
-                    unit: u.clone(),
-                    expected: unit,
-                });
-            }
-        }
-        roots.push(i);
-    }
-    let mask = ProjectionMask::roots(builder.parquet_schema(), roots);
-    let reader = builder.with_projection(mask).build().map_err(pq)?;
-    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); wanted.len()];
-    for batch in reader {
-        let batch = batch.map_err(|e| pq(parquet::errors::ParquetError::General(e.to_string())))?;
-        for (&(name, _), out) in wanted.iter().zip(cols.iter_mut()) {
-            let arr = batch
-                .column_by_name(name)
-                .expect("projected column is in the batch");
-            let v = cast(arr, &DataType::Float64).expect("numeric casts to f64");
-            let v = v.as_primitive::<Float64Type>();
-            out.extend((0..v.len()).map(|i| if v.is_null(i) { f64::NAN } else { v.value(i) }));
-        }
-    }
+    let read = read_numeric_columns(
+        path,
+        &[("distance", "m"), ("slope", "1")],
+        &[("elevation", "m")],
+    )?;
+    let cols = &read.values;
     let bad = |column: &str, row: usize, value: f64, problem| RoadSourceError::BadValue {
         file: file.clone(),
         column: column.into(),
@@ -425,7 +412,7 @@ fn read_parquet_road(path: &Path) -> Result<FileRoad, RoadSourceError> {
         .column("road_slope")
         .and_then(|c| c.valid_max)
         .unwrap_or(0.3);
-    for (&(name, _), v) in wanted.iter().zip(&cols) {
+    for (name, v) in read.names.iter().zip(cols) {
         if let Some(row) = v.iter().position(|x| !x.is_finite()) {
             return Err(bad(name, row, v[row], "is missing or not finite"));
         }
