@@ -3,4 +3,7 @@
 
 pub mod catalogue;
 pub mod compare;
+pub mod explain;
 pub mod extended;
+pub mod fit;
+pub mod problem;
