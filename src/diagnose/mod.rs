@@ -4,8 +4,11 @@
 pub mod catalogue;
 pub mod compare;
 pub mod contract;
+pub mod explain;
 pub mod extended;
+pub mod fit;
 pub mod locate;
 pub mod noise;
+pub mod problem;
 pub mod prove;
 pub mod setup;

@@ -10,6 +10,7 @@ mod axle_static_table;
 mod axle_validate;
 mod batch_pipeline;
 mod common;
+mod diagnose_explain;
 mod diagnose_extended;
 mod diagnose_locate;
 mod driveline_fast;

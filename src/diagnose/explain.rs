@@ -1,0 +1,844 @@
+//! Step 3 of the diagnosis, explain (diagnosis.md): which catalogue effect the nominal model
+//! left out, fitted, scored on held-out data, accepted only by a rule fixed in advance — or
+//! nothing.
+//!
+//! # Method
+//! 1. **Split** the recording in time: alternating train / held-out blocks of whole 20 s
+//!    windows ([`super::problem`] says why this and not "the last 30 %").
+//! 2. **Screen** every applicable effect by a finite difference of the extended model with a
+//!    physically sized step and a least-squares fit of the train residual on its sensitivity,
+//!    alone and jointly ([`super::fit`]); candidates are those whose single-effect fit removes
+//!    more than [`super::fit::SCREEN_MIN_REDUCTION`] (10 %) of the weighted train SSE, ranked,
+//!    at most [`super::fit::MAX_FULL_FITS`] (6).
+//! 3. **Fit** each candidate's parameter on the train part by Levenberg–Marquardt on the
+//!    re-simulated extended model (mode-aware: the hybrid simulation switches clutch modes and
+//!    gears itself), within its physical domain, in parallel across candidates; 95 % interval
+//!    by profile likelihood with an effective number of independent samples
+//!    ([`super::fit`]).
+//! 4. **Accept** by [`AcceptanceRule::FIXED`] (below), **isolate** (ambiguity sets), and
+//!    **repeat** greedily on the remaining residual with the accepted parameter fixed, until no
+//!    candidate passes or [`MAX_FINDINGS`] (3) are accepted.
+//!
+//! # Which signals
+//! An effect is fitted on the outputs of every model it changes: its own model, and for the
+//! longitudinal effects that also reach the axle model's inputs (mass, the slope and torque
+//! sensor effects) the bellow pressures as well — found from the screen's probe (outputs that
+//! change), not assumed. The cost is the mean over those models of each model's weighted mean
+//! square; within a model every signal counts alike (weights `σ_c`: step 2's noise floor when
+//! given, else the signal's train RMS residual at the round's parameters; [`super::problem`]).
+//!
+//! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
+//! advance holds")
+//! A fitted candidate is accepted only when all three hold:
+//! 1. **held-out error falls**: the held-out weighted RMSE of the signals of the effect's own
+//!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters;
+//! 2. **whiteness improves**: the held-out residual's non-white power
+//!    ([`super::problem::whiteness`]: the Ljung–Box statistic per sample `Q/n` of the
+//!    non-centred autocorrelation at lags 0.1…2 s, times the residual's weighted mean square)
+//!    is lower after the fit than before;
+//! 3. **the interval excludes "no effect"**: the 95 % profile-likelihood interval of the
+//!    parameter does not contain the round's value (the nominal, "no effect") — tested first
+//!    as the likelihood-ratio statistic `N_eff ln(J_before/J_after)` against the interval's
+//!    threshold ([`super::fit::deviance_threshold`]: χ²₁(0.95) = 3.84, or t²_{B−1}(0.975) when
+//!    the between-block sample count binds), then with the interval itself.
+//!
+//! Why 25 %: a catalogue effect at fleet magnitudes that the recorded signals can see removes
+//! most of the mismatch it causes (with its truth value the extended model reproduces the
+//! drive to the clean drive's floor, `tests/it/diagnose_extended.rs`), whereas a wrong effect
+//! fitted to a clean drive's remaining mismatch (the whole-percent slope sensor's drift and
+//! bias, sensor noise) gains little on held-out blocks. Measured on 16 clean drives before the
+//! rule was fixed (city-se 5 km and highway-se 10 km, seeds 1–8, the test suite's
+//! `explain_table`): the largest held-out gains of fitted candidates were 0.38 (one highway
+//! drive), 0.21, 0.18, 0.14 and below 0.13 on the others; 25 % lies above all but the first.
+//! That one drive's mismatch is a real constant force of about 0.1 % of m·g — the partly
+//! dithered whole-percent slope sensor's mean quantisation error on that road — which no
+//! held-out test can tell from a 0.07° mounting angle or 18 % less rolling resistance: a
+//! known false positive, reported, not tuned away.
+//!
+//! Why the non-white power and not `Q/n` alone: `Q/n` is normalised, and rises whenever a fit
+//! removes a fast structured error and leaves a smaller but slower one (measured on
+//! `signal_delay` drives: `Q/n` 0.37 → 0.62 while the held-out RMSE fell 57 %); the non-white
+//! power falls when less of the residual is structure, and stays 0 for white noise of any
+//! level.
+//!
+//! # Ranking and isolability
+//! Passing candidates are ranked by the held-out mean square they explain summed over every
+//! model in use (`Σ_m 1 − MS_after/MS_before`), so effects fitted on different signal sets
+//! compete on the same data. The best is reported; other passing candidates that explain at
+//! least [`AMBIGUITY_GAIN_RATIO`] (90 %) as much and whose fitted correction (simulated
+//! outputs after minus before, weighted, over all valid rows of every model) correlates with
+//! the best's by at least [`AMBIGUITY_MIN_CORRELATION`] (0.9) in absolute value are listed in
+//! `ambiguous_with` instead of being guessed between — with the recorded signals they explain
+//! the data alike — and are not tried again in later rounds.
+//!
+//! # Verdict
+//! [`verdict`] combines the findings with step 2's significance test.
+
+use super::catalogue::{Domain, Effect};
+use super::extended::Theta;
+use super::fit::{
+    applicable, deviance_threshold, fit_effect, fit_spec, profile_interval, screen, Eval,
+    Evaluator, Screen, ScreenEntry, CHI2_1_95, MAX_FULL_FITS,
+};
+use super::problem::{metrics, ExplainError, Part, Problem, Split, Whiteness};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// Least relative fall of the held-out weighted RMSE for acceptance (module documentation).
+pub const MIN_HELDOUT_GAIN: f64 = 0.25;
+/// Ambiguity: held-out gain at least this fraction of the best's.
+pub const AMBIGUITY_GAIN_RATIO: f64 = 0.9;
+/// Ambiguity: |correlation| of the fitted corrections at least this.
+pub const AMBIGUITY_MIN_CORRELATION: f64 = 0.9;
+/// Most findings (greedy rounds that accept).
+pub const MAX_FINDINGS: usize = 3;
+
+/// The acceptance rule (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AcceptanceRule {
+    /// Least relative fall of the held-out weighted RMSE.
+    pub min_heldout_gain: f64,
+    /// The held-out whiteness statistic must fall.
+    pub whiteness_must_improve: bool,
+    /// Deviance threshold of the interval and the likelihood-ratio test when the residual's
+    /// autocorrelation sets the effective sample count (χ²₁, 95 %); when the between-block
+    /// count binds, `t²_{B−1}(0.975)` ([`super::fit::deviance_threshold`]).
+    pub chi2_threshold: f64,
+}
+
+impl AcceptanceRule {
+    /// The rule fixed in advance.
+    pub const FIXED: AcceptanceRule = AcceptanceRule {
+        min_heldout_gain: MIN_HELDOUT_GAIN,
+        whiteness_must_improve: true,
+        chi2_threshold: CHI2_1_95,
+    };
+}
+
+/// Settings of the explain step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplainConfig {
+    /// Noise floor per signal (step 2), signal unit: the weights `σ_c`. Signals without one are
+    /// weighted by their train RMS residual.
+    pub noise_floor: Option<BTreeMap<String, f64>>,
+    /// Most findings (greedy rounds), at most [`MAX_FINDINGS`] by default.
+    pub max_findings: usize,
+}
+
+impl Default for ExplainConfig {
+    /// No noise floor, [`MAX_FINDINGS`].
+    fn default() -> Self {
+        Self {
+            noise_floor: None,
+            max_findings: MAX_FINDINGS,
+        }
+    }
+}
+
+/// Weighted RMSE of one model's signals before and after a fit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ModelScore {
+    /// Model.
+    pub domain: Domain,
+    /// Weighted train RMSE before.
+    pub train_before: f64,
+    /// Weighted train RMSE after.
+    pub train_after: f64,
+    /// Weighted held-out RMSE before.
+    pub heldout_before: f64,
+    /// Weighted held-out RMSE after.
+    pub heldout_after: f64,
+}
+
+/// One fully fitted candidate of a round, with the acceptance tests.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateFit {
+    /// Catalogue id.
+    pub effect: &'static str,
+    /// The model the effect extends.
+    pub domain: Domain,
+    /// Parameter value before (the round's).
+    pub start: f64,
+    /// Fitted value.
+    pub value: f64,
+    /// Weighted RMSE per model whose outputs the effect changes (fitted on all of them).
+    pub models: Vec<ModelScore>,
+    /// Relative fall of the held-out weighted RMSE of the effect's own model (rule 1).
+    pub heldout_gain: f64,
+    /// Held-out weighted mean square explained, summed over every model in use
+    /// (`Σ_m 1 − MS_after/MS_before`): the ranking of candidates.
+    pub explained: f64,
+    /// Held-out whiteness before / after.
+    pub whiteness_before: Whiteness,
+    /// See `whiteness_before`.
+    pub whiteness_after: Whiteness,
+    /// Effective independent train samples (the smaller of the two counts).
+    pub n_eff: f64,
+    /// Effective samples from the residual's autocorrelation time.
+    pub n_eff_autocorrelation: f64,
+    /// Train blocks (clusters of the between-block count).
+    pub train_blocks: usize,
+    /// Deviance threshold of the interval and the likelihood-ratio test.
+    pub deviance_threshold: f64,
+    /// Likelihood-ratio statistic of the round's value, `N_eff ln(J_before/J_after)`.
+    pub deviance_at_start: f64,
+    /// Simulations of the fit.
+    pub evaluations: usize,
+    /// Rule 1 holds.
+    pub passes_heldout: bool,
+    /// Rule 2 holds.
+    pub passes_whiteness: bool,
+    /// Rule 3 (likelihood-ratio form) holds.
+    pub passes_interval: bool,
+    #[serde(skip)]
+    eval: Option<Eval>,
+    #[serde(skip)]
+    curvature: f64,
+    #[serde(skip)]
+    active: Vec<bool>,
+}
+
+impl CandidateFit {
+    /// All three rules hold.
+    pub fn passes(&self) -> bool {
+        self.passes_heldout && self.passes_whiteness && self.passes_interval
+    }
+}
+
+/// One greedy round.
+#[derive(Debug, Clone, Serialize)]
+pub struct Round {
+    /// The screen.
+    pub screen: Screen,
+    /// Fully fitted candidates, in screen order.
+    pub fits: Vec<CandidateFit>,
+    /// The accepted effect, if any.
+    pub accepted: Option<&'static str>,
+}
+
+/// A fitted parameter (diagnosis.md output contract).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ParameterEstimate {
+    /// Value.
+    pub value: f64,
+    /// 95 % interval, lower end.
+    pub ci_low: f64,
+    /// 95 % interval, upper end.
+    pub ci_high: f64,
+    /// SI unit.
+    pub unit: &'static str,
+}
+
+/// Before/after error of one signal (diagnosis.md output contract: RMSE).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SignalFit {
+    /// Train RMSE before.
+    pub train_before: f64,
+    /// Train RMSE after.
+    pub train_after: f64,
+    /// Held-out RMSE before.
+    pub heldout_before: f64,
+    /// Held-out RMSE after.
+    pub heldout_after: f64,
+    /// `"rmse"`.
+    pub metric: &'static str,
+}
+
+/// Train and held-out values of one metric before and after.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BeforeAfter {
+    /// Train, before.
+    pub train_before: f64,
+    /// Train, after.
+    pub train_after: f64,
+    /// Held-out, before.
+    pub heldout_before: f64,
+    /// Held-out, after.
+    pub heldout_after: f64,
+}
+
+/// RMSE, MAE and fit % of one signal before and after (diagnosis.md "Show").
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SignalMetrics {
+    /// SI unit of RMSE and MAE.
+    pub unit: &'static str,
+    /// Root-mean-square error.
+    pub rmse: BeforeAfter,
+    /// Mean absolute error.
+    pub mae: BeforeAfter,
+    /// Fit %, `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)`.
+    pub fit_percent: BeforeAfter,
+}
+
+/// What the acceptance rule saw for a finding.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evidence {
+    /// Greedy round (0 first).
+    pub round: usize,
+    /// Model.
+    pub domain: Domain,
+    /// The parameter's nominal value.
+    pub nominal: f64,
+    /// The parameter's value before the round.
+    pub start: f64,
+    /// Weighted RMSE per model the effect changes.
+    pub models: Vec<ModelScore>,
+    /// Relative fall of the held-out weighted RMSE of the effect's own model.
+    pub heldout_gain: f64,
+    /// Held-out weighted mean square explained, summed over the models.
+    pub explained: f64,
+    /// Held-out whiteness before / after.
+    pub whiteness_before: Whiteness,
+    /// See `whiteness_before`.
+    pub whiteness_after: Whiteness,
+    /// Effective independent train samples of the interval.
+    pub n_eff: f64,
+    /// Deviance threshold of the interval.
+    pub deviance_threshold: f64,
+    /// Likelihood-ratio statistic of the value before.
+    pub deviance_at_start: f64,
+    /// Correlation of each ambiguous effect's correction with this one's.
+    pub ambiguity_correlation: BTreeMap<String, f64>,
+    /// Simulations of the fit and interval.
+    pub evaluations: usize,
+}
+
+/// One explained effect (diagnosis.md output contract: `effect`, `ambiguous_with`,
+/// `sentence`, `parameters`, `fit`; `metrics` and `evidence` add MAE, fit % and the
+/// acceptance statistics).
+#[derive(Debug, Clone, Serialize)]
+pub struct Finding {
+    /// Catalogue id.
+    pub effect: &'static str,
+    /// Effects explaining the data alike (not isolable with the recorded signals).
+    pub ambiguous_with: Vec<&'static str>,
+    /// One plain sentence with the parameter and its unit.
+    pub sentence: String,
+    /// Fitted parameter by catalogue name.
+    pub parameters: BTreeMap<String, ParameterEstimate>,
+    /// Before/after RMSE per signal the finding changes.
+    pub fit: BTreeMap<String, SignalFit>,
+    /// RMSE, MAE and fit % per signal the finding changes.
+    pub metrics: BTreeMap<String, SignalMetrics>,
+    /// Acceptance statistics.
+    pub evidence: Evidence,
+}
+
+/// The explain step's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct Explanation {
+    /// The split used.
+    pub split: Split,
+    /// Models compared.
+    pub domains: Vec<Domain>,
+    /// Why a model was left out.
+    pub left_out: Vec<String>,
+    /// The acceptance rule.
+    pub rule: AcceptanceRule,
+    /// Greedy rounds (screens, fits, acceptance).
+    pub rounds: Vec<Round>,
+    /// Accepted findings, in acceptance order.
+    pub findings: Vec<Finding>,
+    /// Final parameters (nominal with the findings' values).
+    #[serde(skip)]
+    pub theta: Theta,
+}
+
+/// Diagnosis verdict (diagnosis.md output contract).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// At least one finding accepted.
+    Explained,
+    /// The mismatch is significant and nothing in the catalogue passes.
+    Unexplained,
+    /// Nothing significant, nothing accepted.
+    NoSignificantMismatch,
+}
+
+/// The verdict from the findings and step 2's `significant_mismatch`: any accepted finding →
+/// `explained` (the acceptance rule is a significance test of its own, on held-out data, and
+/// may see a small spread-out effect a per-window test does not); otherwise `unexplained` when
+/// the mismatch is significant, else `no_significant_mismatch`.
+pub fn verdict(findings: &[Finding], significant_mismatch: bool) -> Verdict {
+    if !findings.is_empty() {
+        Verdict::Explained
+    } else if significant_mismatch {
+        Verdict::Unexplained
+    } else {
+        Verdict::NoSignificantMismatch
+    }
+}
+
+fn row_dt(problem: &Problem<'_>) -> f64 {
+    let t = problem.times();
+    if t.len() > 1 {
+        (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+    } else {
+        1.0
+    }
+}
+
+/// Explains `problem` (module documentation).
+///
+/// # Errors
+/// [`ExplainError`] when a model fails at the round's parameters (a candidate's failure only
+/// removes that candidate) or the configuration is out of its domain.
+pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation, ExplainError> {
+    use rayon::prelude::*;
+    if cfg.max_findings > 16 {
+        return Err(ExplainError::BadConfig {
+            parameter: "max_findings",
+            value: cfg.max_findings as f64,
+            requirement: "at most the catalogue's 16 effects",
+        });
+    }
+    let mut theta = *problem.nominal();
+    let nominal = *problem.nominal();
+    let dt_s = row_dt(problem);
+    let mut excluded: Vec<Effect> = Vec::new();
+    let mut rounds = Vec::new();
+    let mut findings: Vec<Finding> = Vec::new();
+    let domains = problem.domains();
+    let mut probes: BTreeMap<Effect, Arc<super::fit::Probe>> = BTreeMap::new();
+    // outputs of every model at the round's parameters
+    let mut bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+        .nominal_outputs()
+        .iter()
+        .map(|y| Arc::new(y.clone()))
+        .collect();
+    for round in 0..cfg.max_findings {
+        let ev = Evaluator::new(problem, theta, &bases, cfg.noise_floor.as_ref(), dt_s);
+        let base = ev.eval_outputs(f64::NAN, bases.clone());
+        let effects: Vec<Effect> = Effect::ALL
+            .into_iter()
+            .filter(|e| !excluded.contains(e) && applicable(problem, *e))
+            .collect();
+        let scr = screen(&ev, &base, &effects, &mut probes);
+        // candidates ranked by the share of every model's train SSE they remove
+        let mut cands: Vec<usize> = (0..scr.entries.len())
+            .filter(|&k| scr.entries[k].candidate)
+            .collect();
+        cands.sort_by(|&a, &b| {
+            scr.entries[b]
+                .overall_reduction
+                .total_cmp(&scr.entries[a].overall_reduction)
+        });
+        cands.truncate(MAX_FULL_FITS);
+        let fits: Vec<CandidateFit> = cands
+            .par_iter()
+            .map(|&k| candidate_fit(&ev, &base, &scr.entries[k], theta))
+            .collect();
+        // passing, most explained first (ties: screen rank)
+        let mut passing: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].passes()).collect();
+        passing.sort_by(|&a, &b| fits[b].explained.total_cmp(&fits[a].explained));
+        let mut accepted = None;
+        for &i in &passing {
+            let f = &fits[i];
+            let e = Effect::from_id(f.effect).expect("catalogue id");
+            let best = f.eval.as_ref().expect("fits keep their simulation");
+            let ci = profile_interval(
+                &ev,
+                e,
+                &f.active,
+                &base,
+                best,
+                f.curvature,
+                f.n_eff,
+                f.deviance_threshold,
+            );
+            let switch = fit_spec(e, nominal.get(e), None).switch;
+            if !switch && ci.lo <= f.start && f.start <= ci.hi {
+                continue; // the interval contradicts the likelihood-ratio test: not accepted
+            }
+            accepted = Some((i, ci));
+            break;
+        }
+        let Some((i, ci)) = accepted else {
+            rounds.push(Round {
+                screen: scr,
+                fits,
+                accepted: None,
+            });
+            break;
+        };
+        let f = &fits[i];
+        let e = Effect::from_id(f.effect).expect("catalogue id");
+        let best = f.eval.as_ref().expect("fits keep their simulation");
+        let mut ambiguous = Vec::new();
+        let mut corr = BTreeMap::new();
+        for &j in &passing {
+            if j == i || fits[j].explained < AMBIGUITY_GAIN_RATIO * f.explained {
+                continue;
+            }
+            let other = &fits[j];
+            let c = ev.correction_correlation(
+                &base,
+                best,
+                other.eval.as_ref().expect("fits keep their simulation"),
+            );
+            if c.abs() >= AMBIGUITY_MIN_CORRELATION {
+                ambiguous.push(other.effect);
+                corr.insert(other.effect.to_string(), c);
+            }
+        }
+        // accept: new parameters; the fit's simulation holds every model's new outputs
+        let before = std::mem::replace(&mut bases, best.outputs.clone());
+        theta.set(e, f.value);
+        let (fit, met) = signal_fits(problem, &domains, &before, &bases);
+        let evidence = Evidence {
+            round,
+            domain: f.domain,
+            nominal: nominal.get(e),
+            start: f.start,
+            models: f.models.clone(),
+            heldout_gain: f.heldout_gain,
+            explained: f.explained,
+            whiteness_before: f.whiteness_before,
+            whiteness_after: f.whiteness_after,
+            n_eff: f.n_eff,
+            deviance_threshold: f.deviance_threshold,
+            deviance_at_start: f.deviance_at_start,
+            ambiguity_correlation: corr,
+            evaluations: f.evaluations + ci.evaluations,
+        };
+        let est = ParameterEstimate {
+            value: f.value,
+            ci_low: ci.lo,
+            ci_high: ci.hi,
+            unit: e.unit(),
+        };
+        let sentence = sentence(e, nominal.get(e), &est, &met, &ambiguous);
+        let mut parameters = BTreeMap::new();
+        parameters.insert(e.parameter().to_string(), est);
+        excluded.push(e);
+        for a in &ambiguous {
+            excluded.push(Effect::from_id(a).expect("catalogue id"));
+        }
+        findings.push(Finding {
+            effect: e.id(),
+            ambiguous_with: ambiguous,
+            sentence,
+            parameters,
+            fit,
+            metrics: met,
+            evidence,
+        });
+        rounds.push(Round {
+            screen: scr,
+            fits,
+            accepted: Some(e.id()),
+        });
+    }
+    Ok(Explanation {
+        split: problem.split().clone(),
+        domains,
+        left_out: problem.left_out().to_vec(),
+        rule: AcceptanceRule::FIXED,
+        rounds,
+        findings,
+        theta,
+    })
+}
+
+/// Full fit of one screened candidate and its acceptance tests.
+fn candidate_fit(
+    ev: &Evaluator<'_, '_>,
+    base: &Eval,
+    en: &ScreenEntry,
+    theta: Theta,
+) -> CandidateFit {
+    let e = Effect::from_id(en.effect).expect("screen ids are catalogue ids");
+    let active = en.active();
+    let mut base_v = base.clone();
+    base_v.value = theta.get(e);
+    let fr = fit_effect(ev, e, &base_v, en);
+    let best = fr.best;
+    let n_acf = ev.n_eff(&best, active);
+    let (n_eff, threshold) = deviance_threshold(n_acf, fr.cluster);
+    let (wb, wa) = (ev.whiteness(base, active), ev.whiteness(&best, active));
+    let (jb, ja) = (
+        ev.cost(base, active, Part::Train),
+        ev.cost(&best, active, Part::Train),
+    );
+    let dev = n_eff.max(1.0) * (jb / ja).ln();
+    let own = ev
+        .model(e.domain())
+        .expect("applicable effects have their model");
+    let gain = 1.0 - (best.heldout[own] / base.heldout[own]).sqrt();
+    let explained: f64 = (0..ev.models.len())
+        .map(|m| 1.0 - best.heldout[m] / base.heldout[m])
+        .sum();
+    let models = (0..ev.models.len())
+        .filter(|&m| active[m])
+        .map(|m| ModelScore {
+            domain: ev.models[m].domain,
+            train_before: base.train[m].sqrt(),
+            train_after: best.train[m].sqrt(),
+            heldout_before: base.heldout[m].sqrt(),
+            heldout_after: best.heldout[m].sqrt(),
+        })
+        .collect();
+    let rule = AcceptanceRule::FIXED;
+    CandidateFit {
+        effect: e.id(),
+        domain: e.domain(),
+        start: theta.get(e),
+        value: best.value,
+        models,
+        heldout_gain: gain,
+        explained,
+        whiteness_before: wb,
+        whiteness_after: wa,
+        n_eff,
+        n_eff_autocorrelation: n_acf,
+        train_blocks: fr.cluster.map_or(0, |c| c.1),
+        deviance_threshold: threshold,
+        deviance_at_start: dev,
+        evaluations: fr.evaluations,
+        passes_heldout: gain >= rule.min_heldout_gain,
+        passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
+        passes_interval: dev > threshold,
+        eval: Some(best),
+        curvature: fr.curvature,
+        active: active.to_vec(),
+    }
+}
+
+/// Per-signal fits of the signals whose simulation changed from `before` to `after`.
+fn signal_fits(
+    problem: &Problem<'_>,
+    domains: &[Domain],
+    before: &[Arc<Vec<Vec<f64>>>],
+    after: &[Arc<Vec<Vec<f64>>>],
+) -> (BTreeMap<String, SignalFit>, BTreeMap<String, SignalMetrics>) {
+    let mut fit = BTreeMap::new();
+    let mut met = BTreeMap::new();
+    for (k, d) in domains.iter().enumerate() {
+        for (slot, &c) in problem.channel_indices(*d).iter().enumerate() {
+            let (yb, ya) = (&before[k][slot], &after[k][slot]);
+            if yb == ya {
+                continue;
+            }
+            let ch = &problem.channels()[c];
+            let [tb, ta, hb, ha] = [
+                metrics(ch, yb, Part::Train),
+                metrics(ch, ya, Part::Train),
+                metrics(ch, yb, Part::Heldout),
+                metrics(ch, ya, Part::Heldout),
+            ];
+            let ba = |f: fn(&super::problem::Metrics) -> f64| BeforeAfter {
+                train_before: f(&tb),
+                train_after: f(&ta),
+                heldout_before: f(&hb),
+                heldout_after: f(&ha),
+            };
+            fit.insert(
+                ch.name.clone(),
+                SignalFit {
+                    train_before: tb.rmse,
+                    train_after: ta.rmse,
+                    heldout_before: hb.rmse,
+                    heldout_after: ha.rmse,
+                    metric: "rmse",
+                },
+            );
+            met.insert(
+                ch.name.clone(),
+                SignalMetrics {
+                    unit: ch.unit,
+                    rmse: ba(|m| m.rmse),
+                    mae: ba(|m| m.mae),
+                    fit_percent: ba(|m| m.fit_percent),
+                },
+            );
+        }
+    }
+    (fit, met)
+}
+
+fn signal_words(name: &str) -> &str {
+    match name {
+        "vehicle_speed" => "speed",
+        "engine_speed" => "engine speed",
+        "bellow_pressure_front" => "front bellow pressure",
+        "bellow_pressure_rear" => "rear bellow pressure",
+        "bellow_pressure_tag" => "tag bellow pressure",
+        other => other,
+    }
+}
+
+/// `x` with three significant figures (no exponent between 1e-4 and 1e6).
+fn num(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{x:.2e}");
+    }
+    let decimals = (2 - mag).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+/// The plain sentence of a finding: what is wrong by how much, its fingerprint, and the
+/// held-out RMSE of the signal it improves most.
+fn sentence(
+    e: Effect,
+    nominal: f64,
+    est: &ParameterEstimate,
+    met: &BTreeMap<String, SignalMetrics>,
+    ambiguous: &[&'static str],
+) -> String {
+    use Effect::*;
+    let v = est.value;
+    let unit = if e.unit() == "1" {
+        String::new()
+    } else {
+        format!(" {}", e.unit())
+    };
+    let ci = format!(
+        "{} = {}{unit} (95 % CI {} to {}{unit})",
+        e.parameter(),
+        num(v),
+        num(est.ci_low),
+        num(est.ci_high)
+    );
+    let pct = if nominal != 0.0 {
+        100.0 * (v / nominal - 1.0)
+    } else {
+        0.0
+    };
+    let more = |hi: &'static str, lo: &'static str| if pct >= 0.0 { hi } else { lo };
+    let head = match e {
+        AeroDrag => format!(
+            "aerodynamic drag is {:.0} % {} than the vehicle file says, {ci}: residual force grows with v²",
+            pct.abs(),
+            more("higher", "lower")
+        ),
+        RollingResistance => format!(
+            "rolling resistance is {:.0} % {} than the vehicle file says, {ci}: residual force is constant plus ∝ v, with load",
+            pct.abs(),
+            more("higher", "lower")
+        ),
+        VehicleMass => format!(
+            "the vehicle is {:.0} kg ({:.0} %) {} than the vehicle file says, {ci}: residual force ∝ a + g·sin α",
+            (v - nominal).abs(),
+            pct.abs(),
+            more("heavier", "lighter")
+        ),
+        GradeOffset => format!(
+            "the slope sensor reads {:.2}° too {} (mounting angle), {ci}: residual force ∝ m·g, constant along the road",
+            v.abs().to_degrees(),
+            if v >= 0.0 { "nose-up" } else { "nose-down" }
+        ),
+        SlopeQuantization => format!(
+            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: the quantised slope excites shuffle the recording lacks; its spatially filtered slope fits better",
+            100.0 * v,
+            100.0 * nominal
+        ),
+        SignalDelay => format!(
+            "the engine-torque channel lags the driveline by {:.2} s, {ci}: input–residual cross-correlation peaks at a non-zero lag",
+            v
+        ),
+        DrivelineBacklash => format!(
+            "the driveline has {:.1}° of lash, {ci}: mismatch concentrated at torque sign changes",
+            v.to_degrees()
+        ),
+        DrivelineCompliance => format!(
+            "the drive shaft is {:.0} % {} than the vehicle file says, {ci}: shuffle frequency and decay mismatch",
+            pct.abs(),
+            more("stiffer", "softer")
+        ),
+        EngineTorqueOffset => format!(
+            "the reported engine torque is {:.0} N·m {} the delivered torque, {ci}: residual force ∝ gear ratio, constant in torque",
+            v.abs(),
+            if v >= 0.0 { "above" } else { "below" }
+        ),
+        ClutchSlip => format!(
+            "the clutch transmits at most {:.0} N·m, {:.0} % {} than the vehicle file says, {ci}: engine speed mismatch while the clutch is actuated",
+            v,
+            pct.abs(),
+            more("more", "less")
+        ),
+        BogieTorqueReaction => format!(
+            "a fraction {:.2} of the driven axle's torque reacts through the trailing arms, {ci}: driven-axle pressure residual ∝ axle torque, mirrored in braking",
+            v
+        ),
+        LoadTransferHeight => format!(
+            "the centre of gravity is {:.2} m {} than the vehicle file says, {ci}: pressure residual ∝ longitudinal acceleration",
+            (v - nominal).abs(),
+            if v >= nominal { "higher" } else { "lower" }
+        ),
+        AirSpringNonlinearity => format!(
+            "the air springs are progressive, {ci}: pressure residual ∝ travel², asymmetric"
+        ),
+        CgPosition => format!(
+            "the static centre of gravity sits {:.2} m {} of where the vehicle file puts it, {ci}: constant pressure offset front vs rear and tag, opposite signs",
+            v.abs(),
+            if v >= 0.0 { "rearwards" } else { "forwards" }
+        ),
+        TyreStiffness => format!(
+            "the tyres are {:.0} % {} than the vehicle file says, {ci}: axle-hop band phase and amplitude mismatch",
+            pct.abs(),
+            more("stiffer", "softer")
+        ),
+        GradeLoadTransfer => format!(
+            "the gravity component on grades acts {:.2} m {} the centre of gravity, {ci}: pressure residual ∝ sin α",
+            v.abs(),
+            if v >= 0.0 { "above" } else { "below" }
+        ),
+    };
+    // the signal of the effect's own model improved most (relative held-out RMSE)
+    let own = |name: &str| (e.domain() == Domain::Axle) == name.starts_with("bellow_pressure");
+    let best = met
+        .iter()
+        .filter(|(name, m)| own(name) && m.rmse.heldout_before > 0.0)
+        .max_by(|a, b| {
+            let ga = 1.0 - a.1.rmse.heldout_after / a.1.rmse.heldout_before;
+            let gb = 1.0 - b.1.rmse.heldout_after / b.1.rmse.heldout_before;
+            ga.total_cmp(&gb)
+        });
+    let mut s = head;
+    if let Some((name, m)) = best {
+        s.push_str(&format!(
+            "; held-out {} RMSE {} → {} {}",
+            signal_words(name),
+            num(m.rmse.heldout_before),
+            num(m.rmse.heldout_after),
+            m.unit
+        ));
+    }
+    if !ambiguous.is_empty() {
+        s.push_str(&format!(
+            " (not isolable from {} with the recorded signals)",
+            ambiguous.join(", ")
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_have_three_significant_figures() {
+        assert_eq!(num(0.007548), "0.00755");
+        assert_eq!(num(21737.52), "21738");
+        assert_eq!(num(-94.47), "-94.5");
+        assert_eq!(num(1.5777), "1.58");
+        assert_eq!(num(2.5e-6), "2.50e-6");
+    }
+
+    #[test]
+    fn verdict_combines_findings_and_significance() {
+        assert_eq!(verdict(&[], false), Verdict::NoSignificantMismatch);
+        assert_eq!(verdict(&[], true), Verdict::Unexplained);
+        assert_eq!(
+            serde_json::to_string(&Verdict::NoSignificantMismatch).unwrap(),
+            "\"no_significant_mismatch\""
+        );
+    }
+}

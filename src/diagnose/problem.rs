@@ -1,0 +1,775 @@
+//! The explain step's view of one recording (diagnosis.md step 3): which outputs are compared,
+//! the train / held-out split, the per-signal weights, the extended models' simulations on
+//! those outputs, and the residual statistics the acceptance rule uses (weighted RMSE, MAE,
+//! fit %, whiteness, effective number of independent samples).
+//!
+//! # Compared outputs (channels)
+//! - longitudinal model ([`LongitudinalModel`], 20 s windows re-initialised from the measured
+//!   state): `vehicle_speed` (m/s) and `engine_speed` (rad/s), on rows where the sample is a real
+//!   one (not a filled gap) and the measured speed is at least the model's minimum (1 m/s);
+//! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
+//!   (Pa), on rows with a real sample.
+//!
+//! A model is used when the recording has its outputs and inputs; which ones were used is
+//! reported ([`Problem::domains`]).
+//!
+//! # Train / held-out split: alternating blocks in time
+//! The drive is cut into contiguous blocks of whole longitudinal windows (block length
+//! [`Split::block_s`], a multiple of the 20 s re-initialisation window), and the blocks alternate
+//! train, held-out, train, …. Why this and not "the last 30 %": both parts must see similar
+//! conditions, and a drive's end is often a different road (a city approach after a highway, a
+//! final stop), whereas alternating blocks give both parts samples from every stretch of the
+//! drive — climbs and descents, speeds, gears, stops. Why blocks and not samples: residuals are
+//! autocorrelated over seconds (the longitudinal model drifts within a window, the axle model's
+//! pressures follow the driving), so a random-sample split would score the fit on samples it
+//! has effectively seen. Block boundaries fall on window boundaries, so a longitudinal window
+//! (one independent simulation from the measured state) lies wholly in one part. Blocks are one
+//! window long for drives shorter than 16 windows (5 min 20 s) and grow with the drive to keep
+//! about [`TARGET_BLOCKS`] (8) of them, up to [`MAX_BLOCK_WINDOWS`] windows (5 min) each: a
+//! 9-minute drive gets 60 s blocks, a one-hour drive 12 blocks of 5 min. Long blocks also keep
+//! a road stretch's own bias (the slope sensor's quantisation error over a long grade) from
+//! appearing in both parts; the fit's interval accounts for it through the between-block
+//! sample count ([`super::fit`]).
+//!
+//! # Weights
+//! Every signal counts alike: the weighted mean square of a set of channels is the mean over the
+//! channels of `MSE_c / σ_c²`, with `σ_c` the noise floor of the channel when one is given
+//! (step 2, locate) and otherwise the channel's train RMS residual at the current parameters.
+//! The weighted RMSE is its square root. RMSE, MAE and fit % per signal are unweighted, in the
+//! signal's SI unit ([`metrics`]).
+
+use super::catalogue::Domain;
+use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use crate::signal::quantization::estimate_quantization;
+use crate::synth::effects::TruthModel;
+use crate::table::DriveLog;
+use realfft::RealFftPlanner;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use thiserror::Error;
+
+/// Why the explain step cannot run on a recording.
+#[derive(Debug, Error)]
+pub enum ExplainError {
+    /// An extended model could not be built or run at the nominal or current parameters.
+    #[error(transparent)]
+    Extended(#[from] ExtendedError),
+    /// Neither model can be driven by the recording.
+    #[error("{file}: no model can be compared: {reasons}")]
+    NoModel {
+        /// Source file.
+        file: String,
+        /// Why each model was left out.
+        reasons: String,
+    },
+    /// Too few valid samples in the train or held-out part of a compared signal.
+    #[error("{file}: {signal}: {train} train and {heldout} held-out valid samples; at least {min} each are needed")]
+    TooShort {
+        /// Source file.
+        file: String,
+        /// Signal.
+        signal: String,
+        /// Valid train samples.
+        train: usize,
+        /// Valid held-out samples.
+        heldout: usize,
+        /// Required in each part.
+        min: usize,
+    },
+    /// A configuration value outside its domain.
+    #[error("explain configuration: {parameter} = {value} must be {requirement}")]
+    BadConfig {
+        /// Parameter.
+        parameter: &'static str,
+        /// Value given.
+        value: f64,
+        /// What it must be.
+        requirement: &'static str,
+    },
+}
+
+/// Longest block of the split, in longitudinal windows (15 × 20 s = 5 min).
+pub const MAX_BLOCK_WINDOWS: usize = 15;
+/// Blocks the split aims at (half train, half held-out).
+pub const TARGET_BLOCKS: usize = 8;
+/// Fewest valid samples a compared signal needs in each part.
+pub const MIN_SAMPLES_PER_PART: usize = 100;
+
+/// The time split of a recording.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Split {
+    /// Method, in words.
+    pub method: String,
+    /// Block length, s.
+    pub block_s: f64,
+    /// Number of blocks (train and held-out together).
+    pub blocks: usize,
+    /// Duration in the train part, s.
+    pub train_s: f64,
+    /// Duration in the held-out part, s.
+    pub heldout_s: f64,
+    /// Per row: in the held-out part.
+    #[serde(skip)]
+    pub heldout: Vec<bool>,
+    /// Per row: block index (0 first; even blocks train, odd held-out).
+    #[serde(skip)]
+    pub block: Vec<usize>,
+}
+
+impl Split {
+    /// Alternating blocks of `block_windows` windows of `window_s` over the times `t_s` (s from
+    /// the first row); `None` chooses the block length as the module documentation says.
+    pub fn alternating(t_s: &[f64], window_s: f64, block_windows: Option<usize>) -> Split {
+        let dur = t_s.last().copied().unwrap_or(0.0);
+        let n_windows = (dur / window_s).ceil().max(1.0) as usize;
+        let k = block_windows
+            .unwrap_or((n_windows / TARGET_BLOCKS).clamp(1, MAX_BLOCK_WINDOWS))
+            .max(1);
+        let block_s = k as f64 * window_s;
+        let block: Vec<usize> = t_s
+            .iter()
+            .map(|&t| (t / block_s).floor().max(0.0) as usize)
+            .collect();
+        let heldout: Vec<bool> = block.iter().map(|b| b % 2 == 1).collect();
+        let dt = if t_s.len() > 1 {
+            dur / (t_s.len() - 1) as f64
+        } else {
+            0.0
+        };
+        let n_held = heldout.iter().filter(|h| **h).count();
+        Split {
+            method: format!(
+                "alternating blocks of {k} × {window_s} s windows (train, held-out, train, …)"
+            ),
+            block_s,
+            blocks: (dur / block_s).ceil().max(1.0) as usize,
+            train_s: (t_s.len() - n_held) as f64 * dt,
+            heldout_s: n_held as f64 * dt,
+            heldout,
+            block,
+        }
+    }
+}
+
+/// One compared output.
+#[derive(Debug, Clone)]
+pub struct Channel {
+    /// Canonical column.
+    pub name: String,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Model whose output it is.
+    pub domain: Domain,
+    /// Measured values (gaps filled; see `valid`).
+    pub measured: Vec<f64>,
+    /// Rows that count.
+    pub valid: Vec<bool>,
+    /// Valid train rows.
+    pub train_idx: Vec<usize>,
+    /// Valid held-out rows.
+    pub held_idx: Vec<usize>,
+}
+
+/// Which part of the split.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    /// Training blocks.
+    Train,
+    /// Held-out blocks.
+    Heldout,
+}
+
+impl Channel {
+    /// The valid rows of `part`.
+    pub fn rows(&self, part: Part) -> &[usize] {
+        match part {
+            Part::Train => &self.train_idx,
+            Part::Heldout => &self.held_idx,
+        }
+    }
+}
+
+/// A recording bound to the extended models, split and ready to be explained.
+#[derive(Debug)]
+pub struct Problem<'a> {
+    long: Option<LongitudinalModel<'a>>,
+    axle: Option<AxleModel<'a>>,
+    log: &'a DriveLog,
+    nominal: Theta,
+    channels: Vec<Channel>,
+    split: Split,
+    t_s: Vec<f64>,
+    slope_step: Option<f64>,
+    left_out: Vec<String>,
+    nominal_outputs: Vec<Vec<Vec<f64>>>,
+}
+
+fn long_channel_names() -> [(&'static str, &'static str); 2] {
+    [("vehicle_speed", "m/s"), ("engine_speed", "rad/s")]
+}
+
+/// Bellow pressure columns front, rear, tag.
+pub const PRESSURES: [&str; 3] = [
+    "bellow_pressure_front",
+    "bellow_pressure_rear",
+    "bellow_pressure_tag",
+];
+
+impl<'a> Problem<'a> {
+    /// Binds `log` to the nominal vehicle (`nominal_truth`, gear `ratios`, nominal parameters
+    /// `nominal` from [`Theta::nominal`]) and splits it ([`Split::alternating`] with
+    /// `block_windows`). Each model is used when a nominal simulation of it succeeds on the
+    /// recording; a model the recording cannot drive (missing columns, vehicle without axles) is
+    /// left out and named in [`Problem::left_out`].
+    ///
+    /// # Errors
+    /// [`ExplainError::NoModel`] when neither model can run; [`ExplainError::TooShort`] when a
+    /// compared signal has fewer than [`MIN_SAMPLES_PER_PART`] valid samples in a part.
+    pub fn new(
+        log: &'a DriveLog,
+        nominal_truth: &'a TruthModel,
+        ratios: &'a [f64],
+        nominal: Theta,
+        long_cfg: LongitudinalConfig,
+        block_windows: Option<usize>,
+    ) -> Result<Self, ExplainError> {
+        let file = log.meta.source_file.clone();
+        if !(long_cfg.window_s.is_finite() && long_cfg.window_s > 0.0) {
+            return Err(ExplainError::BadConfig {
+                parameter: "window_s",
+                value: long_cfg.window_s,
+                requirement: "> 0",
+            });
+        }
+        if log.len() < 2 {
+            return Err(ExplainError::NoModel {
+                file,
+                reasons: format!("{} rows", log.len()),
+            });
+        }
+        let t_s: Vec<f64> = log
+            .timestamp_ns
+            .iter()
+            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+            .collect();
+        let split = Split::alternating(&t_s, long_cfg.window_s, block_windows);
+        let mut left_out = Vec::new();
+        let (long, axle) = rayon::join(
+            || {
+                LongitudinalModel::new(log, nominal_truth, ratios, nominal, long_cfg).and_then(
+                    |m| {
+                        m.simulate(&nominal)
+                            .map(|o| (m, vec![o.vehicle_speed, o.engine_speed]))
+                    },
+                )
+            },
+            || {
+                AxleModel::new(log, nominal_truth, ratios, nominal)
+                    .and_then(|m| m.simulate(&nominal).map(|p| (m, Vec::from(p))))
+            },
+        );
+        let mut nominal_outputs = Vec::new();
+        let long = match long {
+            Ok((m, y)) => {
+                nominal_outputs.push(y);
+                Some(m)
+            }
+            Err(e @ (ExtendedError::Missing { .. } | ExtendedError::Recorded(_))) => {
+                left_out.push(format!("longitudinal: {e}"));
+                None
+            }
+            Err(e) => return Err(e.into()),
+        };
+        let axle = match axle {
+            Ok((m, y)) => {
+                nominal_outputs.push(y);
+                Some(m)
+            }
+            Err(e @ (ExtendedError::Missing { .. } | ExtendedError::Recorded(_))) => {
+                left_out.push(format!("axle: {e}"));
+                None
+            }
+            Err(e) => return Err(e.into()),
+        };
+        if long.is_none() && axle.is_none() {
+            return Err(ExplainError::NoModel {
+                file,
+                reasons: left_out.join("; "),
+            });
+        }
+        let mut channels = Vec::new();
+        let mk = |name: &str,
+                  unit: &'static str,
+                  domain: Domain,
+                  measured: Vec<f64>,
+                  valid: Vec<bool>| {
+            let (mut train_idx, mut held_idx) = (Vec::new(), Vec::new());
+            for (i, v) in valid.iter().enumerate() {
+                if *v {
+                    if split.heldout[i] {
+                        held_idx.push(i);
+                    } else {
+                        train_idx.push(i);
+                    }
+                }
+            }
+            Channel {
+                name: name.into(),
+                unit,
+                domain,
+                measured,
+                valid,
+                train_idx,
+                held_idx,
+            }
+        };
+        if let Some(m) = &long {
+            let moving: Vec<bool> = m
+                .measured_speed()
+                .iter()
+                .map(|v| *v >= long_cfg.min_speed_mps)
+                .collect();
+            for ((name, unit), meas) in long_channel_names()
+                .into_iter()
+                .zip([m.measured_speed(), m.measured_engine_speed()])
+            {
+                let raw = log.signal(name).unwrap_or(&[]);
+                let valid: Vec<bool> = (0..log.len())
+                    .map(|i| moving[i] && raw.get(i).is_some_and(|x| x.is_finite()))
+                    .collect();
+                channels.push(mk(name, unit, Domain::Longitudinal, meas.to_vec(), valid));
+            }
+        }
+        if axle.is_some() {
+            for name in PRESSURES {
+                let raw = log.signal(name).unwrap_or(&[]);
+                let meas =
+                    crate::signal::distance::fill_gaps(raw, crate::schema::Interpolation::Linear)
+                        .unwrap_or_else(|| vec![f64::NAN; log.len()]);
+                let valid: Vec<bool> = (0..log.len())
+                    .map(|i| raw.get(i).is_some_and(|x| x.is_finite()))
+                    .collect();
+                channels.push(mk(name, "Pa", Domain::Axle, meas, valid));
+            }
+        }
+        for c in &channels {
+            if c.train_idx.len() < MIN_SAMPLES_PER_PART || c.held_idx.len() < MIN_SAMPLES_PER_PART {
+                return Err(ExplainError::TooShort {
+                    file,
+                    signal: c.name.clone(),
+                    train: c.train_idx.len(),
+                    heldout: c.held_idx.len(),
+                    min: MIN_SAMPLES_PER_PART,
+                });
+            }
+        }
+        let slope_step = log
+            .signal("road_slope")
+            .and_then(estimate_quantization)
+            .map(|q| q.step);
+        Ok(Self {
+            long,
+            axle,
+            log,
+            nominal,
+            channels,
+            split,
+            t_s,
+            slope_step,
+            left_out,
+            nominal_outputs,
+        })
+    }
+
+    /// Outputs of every model in use at the nominal parameters ([`Problem::domains`] order).
+    pub fn nominal_outputs(&self) -> &[Vec<Vec<f64>>] {
+        &self.nominal_outputs
+    }
+
+    /// The recording.
+    pub fn log(&self) -> &DriveLog {
+        self.log
+    }
+
+    /// Nominal parameters.
+    pub fn nominal(&self) -> &Theta {
+        &self.nominal
+    }
+
+    /// Compared outputs (longitudinal first, then axle).
+    pub fn channels(&self) -> &[Channel] {
+        &self.channels
+    }
+
+    /// The split.
+    pub fn split(&self) -> &Split {
+        &self.split
+    }
+
+    /// Row times, s from the first row.
+    pub fn times(&self) -> &[f64] {
+        &self.t_s
+    }
+
+    /// Models in use.
+    pub fn domains(&self) -> Vec<Domain> {
+        let mut d = Vec::new();
+        if self.long.is_some() {
+            d.push(Domain::Longitudinal);
+        }
+        if self.axle.is_some() {
+            d.push(Domain::Axle);
+        }
+        d
+    }
+
+    /// Why a model was left out (empty when both are used).
+    pub fn left_out(&self) -> &[String] {
+        &self.left_out
+    }
+
+    /// Step of the recorded slope's quantisation lattice (tan α), when it has one.
+    pub fn slope_step(&self) -> Option<f64> {
+        self.slope_step
+    }
+
+    /// Indices (into [`Problem::channels`]) of `domain`'s outputs.
+    pub fn channel_indices(&self, domain: Domain) -> Vec<usize> {
+        (0..self.channels.len())
+            .filter(|&i| self.channels[i].domain == domain)
+            .collect()
+    }
+
+    /// Simulates `domain`'s model at `theta`: its outputs in [`Problem::channel_indices`]
+    /// order (empty for a model not in use).
+    ///
+    /// # Errors
+    /// [`ExtendedError`] from the model.
+    pub fn simulate(&self, domain: Domain, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
+        match domain {
+            Domain::Longitudinal => match &self.long {
+                Some(m) => {
+                    let o = m.simulate(theta)?;
+                    Ok(vec![o.vehicle_speed, o.engine_speed])
+                }
+                None => Ok(Vec::new()),
+            },
+            Domain::Axle => match &self.axle {
+                Some(m) => Ok(m.simulate(theta)?.into()),
+                None => Ok(Vec::new()),
+            },
+        }
+    }
+
+    /// Per-channel weights `σ_c` of `domain`'s channels (module documentation): the noise floor
+    /// where `noise_floor` has a finite positive value for the channel, else its train RMS
+    /// residual against `outputs` (1 when that is 0).
+    pub fn sigmas(
+        &self,
+        domain: Domain,
+        outputs: &[Vec<f64>],
+        noise_floor: Option<&BTreeMap<String, f64>>,
+    ) -> Vec<f64> {
+        self.channel_indices(domain)
+            .iter()
+            .zip(outputs)
+            .map(|(&c, y)| {
+                let ch = &self.channels[c];
+                match noise_floor.and_then(|m| m.get(&ch.name)) {
+                    Some(&s) if s.is_finite() && s > 0.0 => s,
+                    _ => {
+                        let r = metrics(ch, y, Part::Train).rmse;
+                        if r.is_finite() && r > 0.0 {
+                            r
+                        } else {
+                            1.0
+                        }
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// RMSE, MAE and fit % of one channel on one part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Metrics {
+    /// Root-mean-square error.
+    pub rmse: f64,
+    /// Mean absolute error.
+    pub mae: f64,
+    /// `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)` (diagnosis.md).
+    pub fit_percent: f64,
+}
+
+/// [`Metrics`] of `sim` against the channel's measurement on `part`.
+pub fn metrics(ch: &Channel, sim: &[f64], part: Part) -> Metrics {
+    let rows = ch.rows(part);
+    let n = rows.len().max(1) as f64;
+    let mean = rows.iter().map(|&i| ch.measured[i]).sum::<f64>() / n;
+    let (mut se, mut ae, mut ss) = (0.0, 0.0, 0.0);
+    for &i in rows {
+        let e = ch.measured[i] - sim[i];
+        se += e * e;
+        ae += e.abs();
+        ss += (ch.measured[i] - mean).powi(2);
+    }
+    Metrics {
+        rmse: (se / n).sqrt(),
+        mae: ae / n,
+        fit_percent: if ss > 0.0 {
+            100.0 * (1.0 - (se / ss).sqrt())
+        } else {
+            f64::NAN
+        },
+    }
+}
+
+/// Weighted mean square (module documentation) of `outputs` (one per channel of `chans`) with
+/// weights `sigmas`, on `part`.
+pub fn weighted_ms(
+    channels: &[Channel],
+    chans: &[usize],
+    sigmas: &[f64],
+    outputs: &[Vec<f64>],
+    part: Part,
+) -> f64 {
+    let mut j = 0.0;
+    for ((&c, s), y) in chans.iter().zip(sigmas).zip(outputs) {
+        let ch = &channels[c];
+        let rows = ch.rows(part);
+        let se: f64 = rows.iter().map(|&i| (ch.measured[i] - y[i]).powi(2)).sum();
+        j += se / (rows.len().max(1) as f64 * s * s);
+    }
+    j / chans.len().max(1) as f64
+}
+
+/// Contiguous runs of `rows` (sorted row indices): consecutive indices belong to one run.
+fn runs(rows: &[usize]) -> Vec<&[usize]> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for k in 1..=rows.len() {
+        if k == rows.len() || rows[k] != rows[k - 1] + 1 {
+            if k > start {
+                out.push(&rows[start..k]);
+            }
+            start = k;
+        }
+    }
+    out
+}
+
+/// Lags (s) of the whiteness statistic: 0.1 s to 2 s in 0.1 s steps — from the driveline's
+/// shuffle band (a few Hz) to the seconds over which a missing force drifts the speed.
+pub const WHITENESS_LAG_STEP_S: f64 = 0.1;
+/// Number of lags of the whiteness statistic.
+pub const WHITENESS_LAGS: usize = 20;
+
+/// Whiteness of a residual (see [`whiteness`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Whiteness {
+    /// Mean over channels of the Ljung–Box statistic per sample, `Q/n`: the mean squared
+    /// non-centred autocorrelation at the lags; 0 for white noise, 1 for a constant.
+    pub q_per_n: f64,
+    /// Non-white (autocorrelated) power: mean over channels of `Q/n` times the channel's
+    /// weighted mean square `MS_c / σ_c²`. White noise of any level scores 0.
+    pub nonwhite_power: f64,
+}
+
+/// Whiteness of `outputs`' residual on `part` over the channels `chans` (weights `sigmas`).
+///
+/// For each channel, the squared *non-centred* autocorrelation `ρ(k) = Σ r_i r_{i+k} / Σ r_i²`
+/// (pairs within contiguous valid runs) at the lags `k·0.1 s`, k = 1…20 — from the driveline's
+/// shuffle band (a few Hz) to the seconds over which a missing force drifts the speed — is
+/// averaged: the Ljung–Box statistic per sample `Q/n` on a 10 Hz lag grid; a bias counts as
+/// non-white (the model's residual should be zero-mean noise). The acceptance rule compares the
+/// non-white power, `Q/n` scaled by the residual's weighted mean square: the normalised `Q/n`
+/// alone rises whenever a fit removes a fast structured error and leaves a smaller but slower
+/// one (the whole-percent slope sensor's drift), although less of the residual is structure.
+pub fn whiteness(
+    channels: &[Channel],
+    chans: &[usize],
+    sigmas: &[f64],
+    outputs: &[Vec<f64>],
+    part: Part,
+    dt_s: f64,
+) -> Whiteness {
+    let step = ((WHITENESS_LAG_STEP_S / dt_s.max(1e-9)).round() as usize).max(1);
+    let (mut qn, mut pw) = (0.0, 0.0);
+    for ((&c, y), sg) in chans.iter().zip(outputs).zip(sigmas) {
+        let ch = &channels[c];
+        let rows = ch.rows(part);
+        let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - y[i]).collect();
+        let e0: f64 = r.iter().map(|x| x * x).sum();
+        if e0 <= 0.0 {
+            continue;
+        }
+        // positions of the runs in `r`
+        let mut bounds = Vec::new();
+        let mut pos = 0;
+        for run in runs(rows) {
+            bounds.push((pos, pos + run.len()));
+            pos += run.len();
+        }
+        let mut q = 0.0;
+        for k in 1..=WHITENESS_LAGS {
+            let lag = k * step;
+            let mut s = 0.0;
+            for &(a, b) in &bounds {
+                if b - a > lag {
+                    s += r[a..b - lag]
+                        .iter()
+                        .zip(&r[a + lag..b])
+                        .map(|(x, y)| x * y)
+                        .sum::<f64>();
+                }
+            }
+            q += (s / e0).powi(2);
+        }
+        let q = q / WHITENESS_LAGS as f64;
+        qn += q;
+        pw += q * e0 / (r.len() as f64 * sg * sg);
+    }
+    let n = chans.len().max(1) as f64;
+    Whiteness {
+        q_per_n: qn / n,
+        nonwhite_power: pw / n,
+    }
+}
+
+/// Effective number of independent samples of the residual of one channel on `part`:
+/// `N / τ` with `τ = 1 + 2 Σ_{k=1}^{M} ρ(k)` the integrated autocorrelation time of the
+/// (centred) residual, `ρ` pooled over the contiguous valid runs (computed by FFT), and `M`
+/// Sokal's automatic window (the smallest `M ≥ 5 τ(M)`), `τ ≥ 1`.
+pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
+    let rows = ch.rows(part);
+    let n = rows.len();
+    if n < 2 {
+        return n as f64;
+    }
+    let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - sim[i]).collect();
+    let mean = r.iter().sum::<f64>() / n as f64;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let mut acov: Vec<f64> = Vec::new();
+    let mut pos = 0;
+    for run in runs(rows) {
+        let len = run.len();
+        let x: Vec<f64> = r[pos..pos + len].iter().map(|v| v - mean).collect();
+        pos += len;
+        let m = (2 * len).next_power_of_two();
+        let fwd = planner.plan_fft_forward(m);
+        let inv = planner.plan_fft_inverse(m);
+        let mut buf = vec![0.0; m];
+        buf[..len].copy_from_slice(&x);
+        let mut spec = fwd.make_output_vec();
+        if fwd.process(&mut buf, &mut spec).is_err() {
+            continue;
+        }
+        for c in spec.iter_mut() {
+            *c = num_complex::Complex::new(c.norm_sqr(), 0.0);
+        }
+        let mut out = inv.make_output_vec();
+        if inv.process(&mut spec, &mut out).is_err() {
+            continue;
+        }
+        if acov.len() < len {
+            acov.resize(len, 0.0);
+        }
+        for k in 0..len {
+            acov[k] += out[k] / m as f64;
+        }
+    }
+    if acov.is_empty() || acov[0] <= 0.0 {
+        return n as f64;
+    }
+    let mut tau = 1.0;
+    for (m, a) in acov.iter().enumerate().skip(1) {
+        tau += 2.0 * a / acov[0];
+        if m as f64 >= 5.0 * tau {
+            break;
+        }
+    }
+    n as f64 / tau.max(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::road::rng::Xoshiro256StarStar;
+
+    fn channel(measured: Vec<f64>) -> Channel {
+        let n = measured.len();
+        Channel {
+            name: "x".into(),
+            unit: "1",
+            domain: Domain::Longitudinal,
+            measured,
+            valid: vec![true; n],
+            train_idx: (0..n).collect(),
+            held_idx: Vec::new(),
+        }
+    }
+
+    fn gauss(rng: &mut Xoshiro256StarStar) -> f64 {
+        // Box–Muller
+        let (u, v) = (rng.next_f64().max(1e-300), rng.next_f64());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+
+    #[test]
+    fn split_alternates_whole_windows() {
+        let t: Vec<f64> = (0..10_000).map(|i| i as f64 * 0.02).collect(); // 200 s
+        let s = Split::alternating(&t, 20.0, None);
+        assert_eq!(s.block_s, 20.0);
+        assert_eq!(s.blocks, 10);
+        assert!(!s.heldout[0] && s.heldout[1000] && !s.heldout[2000]);
+        assert!((s.train_s - 100.0).abs() < 0.1 && (s.heldout_s - 100.0).abs() < 0.1);
+        // an hour: 12 blocks of 5 min
+        let t: Vec<f64> = (0..180_000).map(|i| i as f64 * 0.02).collect();
+        let s = Split::alternating(&t, 20.0, None);
+        assert_eq!((s.block_s, s.blocks), (300.0, 12));
+    }
+
+    #[test]
+    fn whiteness_is_zero_for_noise_and_one_for_a_bias() {
+        let mut rng = Xoshiro256StarStar::seed_from_u64(1);
+        let noise: Vec<f64> = (0..20_000).map(|_| gauss(&mut rng)).collect();
+        let zero = vec![vec![0.0; noise.len()]];
+        let w = whiteness(&[channel(noise)], &[0], &[1.0], &zero, Part::Train, 0.02);
+        assert!(w.q_per_n < 1e-3, "{w:?}");
+        let w = whiteness(
+            &[channel(vec![0.5; 20_000])],
+            &[0],
+            &[1.0],
+            &[vec![0.0; 20_000]],
+            Part::Train,
+            0.02,
+        );
+        assert!((w.q_per_n - 1.0).abs() < 0.05 && (w.nonwhite_power - 0.25).abs() < 0.02);
+    }
+
+    #[test]
+    fn effective_samples_of_ar1_noise() {
+        // AR(1), φ = 0.9: τ = (1 + φ)/(1 − φ) = 19
+        let mut rng = Xoshiro256StarStar::seed_from_u64(2);
+        let mut x = 0.0;
+        let v: Vec<f64> = (0..200_000)
+            .map(|_| {
+                x = 0.9 * x + gauss(&mut rng);
+                x
+            })
+            .collect();
+        let n = v.len() as f64;
+        let ne = effective_samples(&channel(v), &vec![0.0; n as usize], Part::Train);
+        assert!((n / ne / 19.0 - 1.0).abs() < 0.2, "τ = {}", n / ne);
+    }
+
+    #[test]
+    fn metrics_of_a_perfect_and_a_mean_fit() {
+        let ch = channel(vec![1.0, 2.0, 3.0, 4.0]);
+        let m = metrics(&ch, &[1.0, 2.0, 3.0, 4.0], Part::Train);
+        assert_eq!((m.rmse, m.mae, m.fit_percent), (0.0, 0.0, 100.0));
+        let m = metrics(&ch, &[2.5; 4], Part::Train);
+        assert!(m.fit_percent.abs() < 1e-12 && (m.mae - 1.0).abs() < 1e-12);
+    }
+}
