@@ -166,6 +166,49 @@ enum Command {
     /// and axle models over a synthetic road, written as a CAN log (MCAP + canonical Parquet).
     #[command(subcommand)]
     Synth(SynthCommand),
+    /// Diagnose where a recording and the nominal model disagree (diagnosis.md): compare, locate
+    /// against the noise floor, explain with the effect catalogue (fit, held-out test, fixed
+    /// acceptance rule), show. Writes diagnosis.json, mismatch.parquet, findings.parquet,
+    /// report.md with residual plots, and detail.json into the output folder.
+    Diagnose {
+        /// Drive file (MCAP or Parquet).
+        #[arg(long)]
+        drive: PathBuf,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Most findings accepted (greedy rounds).
+        #[arg(long, default_value_t = 3)]
+        max_findings: usize,
+        #[command(flatten)]
+        ingest: IngestArgs,
+    },
+    /// The diagnosis proof (issue 7 point 6): synthetic drives each hiding one catalogue effect,
+    /// nothing, or an effect outside the catalogue; diagnosed blind and scored. Writes
+    /// proof.md, proof.json, proof_cases.parquet and every case's drive, answer and diagnosis.
+    Prove {
+        /// Number of drives (18 cover every effect once, one clean, one out-of-catalogue).
+        #[arg(long, default_value_t = 36)]
+        drives: usize,
+        /// Seed of the plan; drive i uses seed + i.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Shortest drive, km.
+        #[arg(long, default_value_t = 3.0)]
+        min_km: f64,
+        /// Longest drive, km.
+        #[arg(long, default_value_t = 6.0)]
+        max_km: f64,
+        /// Nominal vehicle file (with [driveline] and [axles]).
+        #[arg(long, default_value = "fixtures/vehicles/seed002-6x2-diesel.toml")]
+        vehicle: PathBuf,
+        /// Output folder.
+        #[arg(short, long, default_value = "out/proof")]
+        output: PathBuf,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Run a pipeline file (pipelines/*.toml) over its inputs, in parallel, into a
     /// hive-partitioned dataset with a run report; drives already done with the same input and
     /// configuration are reused. Exit 1 if any drive failed.
@@ -697,8 +740,145 @@ impl ResampleArgs {
     }
 }
 
+fn run_diagnose(
+    drive_path: PathBuf,
+    output: PathBuf,
+    max_findings: usize,
+    ingest: IngestArgs,
+) -> Result<(), Failure> {
+    use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
+    let Some(vehicle_path) = ingest.vehicle.clone() else {
+        return Err(usage(anyhow::anyhow!(
+            "diagnose needs --vehicle FILE: the nominal model the recording is compared with"
+        )));
+    };
+    let vehicle = VehicleFile::load(&vehicle_path).map_err(usage)?;
+    let (cfg, opts) = ingest.resolve(&[])?;
+    let ing = ingest_stage::run(&drive_path, &opts).map_err(drive)?;
+    let dcfg = DiagnoseConfig {
+        max_findings,
+        ..DiagnoseConfig::default()
+    };
+    let t0 = std::time::Instant::now();
+    let d = diagnose(&ing.log, &vehicle, &dcfg).map_err(drive)?;
+    let fp = format!(
+        "{}\nvehicle {}\nmax_findings {max_findings}",
+        cfg.fingerprint(&opts),
+        vehicle_path.display()
+    );
+    let w = write_outputs(&output, &d, &ing.log, &fp).map_err(drive)?;
+    let dg = &d.diagnosis;
+    say!(
+        "{}: {:.0} s of drive diagnosed in {:.1} s: {}",
+        dg.drive_id,
+        ing.log.duration_s(),
+        t0.elapsed().as_secs_f64(),
+        dg.verdict.as_str()
+    );
+    if !d.models.longitudinal {
+        say!(
+            "  longitudinal model not used: {}",
+            d.models.longitudinal_reason.as_deref().unwrap_or("")
+        );
+    }
+    if !d.models.axle {
+        say!(
+            "  axle model not used: {}",
+            d.models.axle_reason.as_deref().unwrap_or("")
+        );
+    }
+    for (sig, floor) in &dg.noise_floor {
+        let n = dg.mismatch.iter().filter(|m| &m.signal == sig).count();
+        say!("  {sig}: noise floor {floor:.4e}, {n} mismatch stretch(es)");
+    }
+    for f in &dg.findings {
+        say!("  finding {}: {}", f.effect, f.sentence);
+        if !f.ambiguous_with.is_empty() {
+            say!("    not isolable from: {}", f.ambiguous_with.join(", "));
+        }
+    }
+    say!(
+        "wrote     {} (+ parquet tables, report.md, plots)",
+        w.json.display()
+    );
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_prove(
+    drives: usize,
+    seed: u64,
+    min_km: f64,
+    max_km: f64,
+    vehicle: PathBuf,
+    output: PathBuf,
+    jobs: Option<usize>,
+) -> Result<(), Failure> {
+    use fleetdyn::diagnose::prove::{run_proof, ProofConfig};
+    if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
+        return Err(usage(anyhow::anyhow!(
+            "--min-km {min_km} and --max-km {max_km} must be finite with 0.5 <= min <= max"
+        )));
+    }
+    if drives == 0 {
+        return Err(usage(anyhow::anyhow!("--drives must be at least 1")));
+    }
+    let cfg = ProofConfig {
+        drives,
+        seed,
+        length_km: (min_km, max_km),
+        ..ProofConfig::default()
+    };
+    let jobs = jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    let t0 = std::time::Instant::now();
+    let progress = |done: usize, total: usize| {
+        eprintln!(
+            "prove: {done}/{total} drives ({:.0} s)",
+            t0.elapsed().as_secs_f64()
+        )
+    };
+    let run = run_proof(&cfg, &vehicle, &output, jobs, &progress).map_err(usage)?;
+    say!("{}", run.summary.to_markdown());
+    for f in &run.failed {
+        say!(
+            "case {} ({}) failed at {}: {}",
+            f.index,
+            f.hidden,
+            f.stage,
+            f.error
+        );
+    }
+    say!(
+        "wrote     {} ({} drives, {} jobs, {:.0} s)",
+        output.join("proof.md").display(),
+        run.summary.drives,
+        jobs,
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
+        Command::Diagnose {
+            drive: d,
+            output,
+            max_findings,
+            ingest,
+        } => run_diagnose(d, output, max_findings, ingest),
+        Command::Prove {
+            drives,
+            seed,
+            min_km,
+            max_km,
+            vehicle,
+            output,
+            jobs,
+        } => run_prove(drives, seed, min_km, max_km, vehicle, output, jobs),
         Command::Ingest {
             input,
             output,

@@ -345,17 +345,8 @@ pub struct Explanation {
     pub theta: Theta,
 }
 
-/// Diagnosis verdict (diagnosis.md output contract).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Verdict {
-    /// At least one finding accepted.
-    Explained,
-    /// The mismatch is significant and nothing in the catalogue passes.
-    Unexplained,
-    /// Nothing significant, nothing accepted.
-    NoSignificantMismatch,
-}
+/// Diagnosis verdict (diagnosis.md output contract), the contract's type.
+pub use super::contract::Verdict;
 
 /// The verdict from the findings and step 2's `significant_mismatch`: any accepted finding →
 /// `explained` (the acceptance rule is a significance test of its own, on held-out data, and

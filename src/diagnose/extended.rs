@@ -63,6 +63,16 @@ pub enum ExtendedError {
         /// Column.
         column: String,
     },
+    /// Neither model can be driven by the recording with this vehicle file.
+    #[error("{file}: nothing to diagnose: longitudinal model: {longitudinal}; axle model: {axle}")]
+    NoModel {
+        /// Source file.
+        file: String,
+        /// Why the longitudinal model does not apply.
+        longitudinal: String,
+        /// Why the axle model does not apply.
+        axle: String,
+    },
 }
 
 /// One parameter per catalogue effect, in [`Effect::ALL`] order, SI.

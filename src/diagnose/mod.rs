@@ -11,4 +11,5 @@ pub mod locate;
 pub mod noise;
 pub mod problem;
 pub mod prove;
+pub mod run;
 pub mod setup;

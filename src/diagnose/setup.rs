@@ -60,7 +60,7 @@ impl Setup {
     /// Sets up the diagnosis of `log` with the nominal `vehicle`.
     ///
     /// # Errors
-    /// [`ExtendedError::Missing`] when neither model applies (the message lists why each does
+    /// [`ExtendedError::NoModel`] when neither model applies (the message lists why each does
     /// not).
     pub fn new(log: &DriveLog, vehicle: &VehicleFile) -> Result<Setup, ExtendedError> {
         let file = log.meta.source_file.clone();
@@ -93,26 +93,16 @@ impl Setup {
         } else {
             None
         };
-        let Some(d) = vehicle.driveline.as_ref() else {
-            return Err(ExtendedError::Missing {
-                file,
-                column: format!(
-                    "a model to diagnose: longitudinal: {}; axle: {}",
-                    longitudinal_reason.unwrap_or_default(),
-                    axle_reason.unwrap_or_default()
-                ),
-            });
+        let d = match vehicle.driveline.as_ref() {
+            Some(d) if longitudinal_reason.is_none() || axle_reason.is_none() => d,
+            _ => {
+                return Err(ExtendedError::NoModel {
+                    file,
+                    longitudinal: longitudinal_reason.unwrap_or_default(),
+                    axle: axle_reason.unwrap_or_default(),
+                })
+            }
         };
-        if longitudinal_reason.is_some() && axle_reason.is_some() {
-            return Err(ExtendedError::Missing {
-                file,
-                column: format!(
-                    "a model to diagnose: longitudinal: {}; axle: {}",
-                    longitudinal_reason.unwrap_or_default(),
-                    axle_reason.unwrap_or_default()
-                ),
-            });
-        }
         let speed = speed.unwrap_or_else(|| vec![0.0; n]);
         let raw_speed = log.signal("vehicle_speed");
         let long_valid: Vec<bool> = (0..n)

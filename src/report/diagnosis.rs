@@ -6,8 +6,10 @@
 
 use super::axle_plot::PlotError;
 use crate::diagnose::contract::{signal_unit, Diagnosis};
+use crate::diagnose::explain::{BeforeAfter, SignalMetrics};
 use crate::io::AtomicFile;
 use plotters::prelude::*;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -127,8 +129,14 @@ pub fn plot_residuals(
     })
 }
 
-/// The Markdown report of `d`; `plots` are (signal, file name) of the residual plots beside it.
-pub fn report_markdown(d: &Diagnosis, plots: &[(String, String)]) -> String {
+/// The Markdown report of `d`; `metrics` holds each finding's RMSE, MAE and fit % per signal
+/// (same order as `d.findings`; may be shorter), `plots` are (signal, file name) of the
+/// residual plots beside it.
+pub fn report_markdown(
+    d: &Diagnosis,
+    metrics: &[BTreeMap<String, SignalMetrics>],
+    plots: &[(String, String)],
+) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Diagnosis of drive {}\n", d.drive_id);
     let _ = writeln!(s, "**Verdict: {}**\n", d.verdict.as_str());
@@ -191,21 +199,46 @@ pub fn report_markdown(d: &Diagnosis, plots: &[(String, String)]) -> String {
                 p.value, p.ci_low, p.ci_high, p.unit
             );
         }
-        let _ = writeln!(
+        if let Some(m) = metrics.get(i) {
+            let _ = writeln!(
+                s,
+                "\n| signal | metric | train before | train after | held-out before | held-out after |\n|---|---|---|---|---|---|"
+            );
+            for (sig, sm) in m {
+                let (k, unit) = display(sig);
+                let rows: [(&str, &BeforeAfter, f64, &str); 3] = [
+                    ("RMSE", &sm.rmse, k, unit),
+                    ("MAE", &sm.mae, k, unit),
+                    ("fit", &sm.fit_percent, 1.0, "%"),
+                ];
+                for (name, v, k, unit) in rows {
+                    let _ = writeln!(
+                        s,
+                        "| {sig} | {name} [{unit}] | {:.4} | {:.4} | {:.4} | {:.4} |",
+                        v.train_before * k,
+                        v.train_after * k,
+                        v.heldout_before * k,
+                        v.heldout_after * k
+                    );
+                }
+            }
+        } else {
+            let _ = writeln!(
             s,
             "\n| signal | train before | train after | held-out before | held-out after |\n|---|---|---|---|---|"
         );
-        for (sig, e) in &f.fit {
-            let (k, unit) = display(sig);
-            let _ = writeln!(
-                s,
-                "| {sig} ({} {unit}) | {:.4} | {:.4} | {:.4} | {:.4} |",
-                e.metric,
-                e.train_before * k,
-                e.train_after * k,
-                e.heldout_before * k,
-                e.heldout_after * k
-            );
+            for (sig, e) in &f.fit {
+                let (k, unit) = display(sig);
+                let _ = writeln!(
+                    s,
+                    "| {sig} ({} {unit}) | {:.4} | {:.4} | {:.4} | {:.4} |",
+                    e.metric,
+                    e.train_before * k,
+                    e.train_after * k,
+                    e.heldout_before * k,
+                    e.heldout_after * k
+                );
+            }
         }
         let _ = writeln!(s);
     }
@@ -222,8 +255,13 @@ pub fn report_markdown(d: &Diagnosis, plots: &[(String, String)]) -> String {
 ///
 /// # Errors
 /// The I/O error.
-pub fn write_report(path: &Path, d: &Diagnosis, plots: &[(String, String)]) -> std::io::Result<()> {
-    AtomicFile::write_all(path, report_markdown(d, plots).as_bytes())
+pub fn write_report(
+    path: &Path,
+    d: &Diagnosis,
+    metrics: &[BTreeMap<String, SignalMetrics>],
+    plots: &[(String, String)],
+) -> std::io::Result<()> {
+    AtomicFile::write_all(path, report_markdown(d, metrics, plots).as_bytes())
 }
 
 #[cfg(test)]
@@ -270,6 +308,7 @@ mod tests {
         };
         let md = report_markdown(
             &d,
+            &[],
             &[("vehicle_speed".into(), "residual_vehicle_speed.svg".into())],
         );
         assert!(md.contains("**Verdict: unexplained**"));

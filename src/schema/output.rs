@@ -6,6 +6,10 @@ use std::sync::OnceLock;
 
 const FILES: &[(&str, &str)] = &[
     (
+        "proof_cases",
+        include_str!("../../schemas/outputs/proof-cases.toml"),
+    ),
+    (
         "distance_log",
         include_str!("../../schemas/outputs/distance-log.toml"),
     ),

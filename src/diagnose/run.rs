@@ -1,0 +1,467 @@
+//! The whole diagnosis of one recording (issue 7 point 1, diagnosis.md "The four steps"):
+//! set up → compare → noise floor → locate → explain → verdict → show, and the per-drive output
+//! folder of the contract.
+//!
+//! # Steps
+//! 1. [`Setup::new`]: which models the recording drives (the signals present decide), the
+//!    nominal parameters from the vehicle file, the slope sensor's resolution read from the
+//!    recording.
+//! 2. Compare ([`ModelSet::compared`]): longitudinal model in 20 s windows re-initialised from the
+//!    measured state (open-loop drift never spans more than a window), axle model open loop.
+//! 3. Noise floor ([`noise_floors`]): blind sensor-noise estimates from the recording's own
+//!    native samples, propagated through the model by Monte-Carlo copies.
+//! 4. Locate ([`locate`]): windows in time, stretches in distance, bands, coherence, lags,
+//!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule.
+//! 5. Explain ([`explain`]) with the noise floors as the signal weights; the verdict
+//!    ([`verdict`]) from the findings and step 4's significance.
+//! 6. Show ([`write_outputs`]): `diagnosis.json`, `mismatch.parquet`, `findings.parquet`,
+//!    `report.md` with one residual SVG per compared signal (before: nominal; after: with the
+//!    accepted findings), and `detail.json` with everything the steps computed (window tests,
+//!    band powers, coherence, lags, condition cells, statements, every greedy round's screen
+//!    and fits) for an engineer who wants to check a verdict.
+//!
+//! # Output atomicity
+//! Files are written into a hidden staging folder inside the output folder and renamed into
+//! place only when all of them are written, `diagnosis.json` last: a reader never sees a
+//! partial diagnosis, and a failed one leaves the folder as it was (issue "Engineering
+//! standards": no partial outputs).
+
+use super::contract::{Diagnosis, FindingEntry, FitEntry, MismatchEntry, ParameterEntry};
+use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding, SignalMetrics};
+use super::extended::{ExtendedError, LongitudinalConfig};
+use super::locate::{
+    inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
+};
+use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
+use super::problem::{ExplainError, Problem};
+use super::setup::Setup;
+use crate::diagnose::compare::Comparison;
+use crate::io::OutputError;
+use crate::model::vehicle::VehicleFile;
+use crate::report::axle_plot::PlotError;
+use crate::report::diagnosis::{plot_residuals, write_report, ResidualSeries};
+use crate::table::DriveLog;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a recording could not be diagnosed.
+#[derive(Debug, Error)]
+pub enum DiagnoseError {
+    /// Neither model applies, or a model cannot be bound to the recording.
+    #[error(transparent)]
+    Setup(#[from] ExtendedError),
+    /// The noise floor could not be estimated.
+    #[error(transparent)]
+    Noise(#[from] NoiseError),
+    /// The locate step failed.
+    #[error(transparent)]
+    Locate(#[from] LocateError),
+    /// The explain step failed.
+    #[error(transparent)]
+    Explain(#[from] ExplainError),
+    /// An output could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// A plot could not be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// Another I/O failure on the output folder.
+    #[error("{path}: {source}")]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+}
+
+/// Settings of a diagnosis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseConfig {
+    /// Noise-floor estimation.
+    pub noise: NoiseConfig,
+    /// Locate settings; the shuffle band and gear ratios are filled in from the vehicle.
+    pub locate: LocateConfig,
+    /// Most findings.
+    pub max_findings: usize,
+}
+
+impl Default for DiagnoseConfig {
+    /// The steps' own defaults.
+    fn default() -> Self {
+        Self {
+            noise: NoiseConfig::default(),
+            locate: LocateConfig::default(),
+            max_findings: ExplainConfig::default().max_findings,
+        }
+    }
+}
+
+/// One compared signal's residual before and after, on the recording's rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Residual {
+    /// Canonical column.
+    pub signal: String,
+    /// Nominal model: measured − simulated (NaN where the row does not count).
+    pub before: Vec<f64>,
+    /// With the accepted findings.
+    pub after: Vec<f64>,
+}
+
+/// Everything a diagnosis produced.
+#[derive(Debug, Clone)]
+pub struct Diagnosed {
+    /// The contract's content.
+    pub diagnosis: Diagnosis,
+    /// Step 3.
+    pub floors: NoiseFloors,
+    /// Step 4.
+    pub location: Location,
+    /// Step 5.
+    pub explanation: Explanation,
+    /// Times of the rows, s from the first.
+    pub t_s: Vec<f64>,
+    /// Per compared signal.
+    pub residuals: Vec<Residual>,
+    /// Models used and why others were not.
+    pub models: ModelsUsed,
+}
+
+/// Which models the diagnosis used.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelsUsed {
+    /// The longitudinal / driveline model ran.
+    pub longitudinal: bool,
+    /// Why it did not.
+    pub longitudinal_reason: Option<String>,
+    /// The axle model ran.
+    pub axle: bool,
+    /// Why it did not.
+    pub axle_reason: Option<String>,
+    /// Slope-sensor resolution read from the recording, tan α per step.
+    pub slope_resolution: f64,
+}
+
+fn mismatch_entry(m: &super::locate::Mismatch) -> MismatchEntry {
+    MismatchEntry {
+        signal: m.signal.clone(),
+        start_s: m.start_s,
+        end_s: m.end_s,
+        start_m: m.start_m,
+        end_m: m.end_m,
+        band_hz: m.band_hz,
+        condition: m.condition.clone(),
+        rms_residual: m.rms_residual,
+        significance: m.significance,
+    }
+}
+
+fn finding_entry(f: &Finding) -> FindingEntry {
+    FindingEntry {
+        effect: f.effect.to_string(),
+        ambiguous_with: f.ambiguous_with.iter().map(|s| s.to_string()).collect(),
+        sentence: f.sentence.clone(),
+        parameters: f
+            .parameters
+            .iter()
+            .map(|(k, p)| {
+                (
+                    k.clone(),
+                    ParameterEntry {
+                        value: p.value,
+                        ci_low: p.ci_low,
+                        ci_high: p.ci_high,
+                        unit: p.unit,
+                    },
+                )
+            })
+            .collect(),
+        fit: f
+            .fit
+            .iter()
+            .map(|(k, e)| {
+                (
+                    k.clone(),
+                    FitEntry {
+                        train_before: e.train_before,
+                        train_after: e.train_after,
+                        heldout_before: e.heldout_before,
+                        heldout_after: e.heldout_after,
+                        metric: e.metric,
+                    },
+                )
+            })
+            .collect(),
+    }
+}
+
+/// Diagnoses `log` against the nominal `vehicle` (module documentation).
+///
+/// # Errors
+/// [`DiagnoseError`] from the step that failed.
+pub fn diagnose(
+    log: &DriveLog,
+    vehicle: &VehicleFile,
+    cfg: &DiagnoseConfig,
+) -> Result<Diagnosed, DiagnoseError> {
+    let setup = Setup::new(log, vehicle)?;
+    let models = ModelSet::for_log(log, &setup.nominal_truth, &setup.ratios, setup.nominal);
+    let floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
+    let cmp = Comparison {
+        signals: models.compared(log, &setup.nominal)?,
+        conditions: setup.conditions.clone(),
+    };
+    let lcfg = LocateConfig {
+        shuffle_band_hz: shuffle_band_hz(&setup.nominal_truth.driveline, &setup.ratios),
+        gear_ratios: setup.ratios.clone(),
+        ..cfg.locate.clone()
+    };
+    let location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
+    let problem = Problem::new(
+        log,
+        &setup.nominal_truth,
+        &setup.ratios,
+        setup.nominal,
+        LongitudinalConfig::default(),
+        None,
+    )?;
+    let noise_floor = floors.summary();
+    let explanation = explain(
+        &problem,
+        &ExplainConfig {
+            noise_floor: Some(noise_floor.clone()),
+            max_findings: cfg.max_findings,
+        },
+    )?;
+    let v = verdict(&explanation.findings, location.any_significant);
+    // residuals after: the extended models at the final parameters, per model in use
+    let mut after: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for domain in problem.domains() {
+        let idx = problem.channel_indices(domain);
+        let sims = problem.simulate(domain, &explanation.theta)?;
+        for (k, sim) in idx.iter().zip(sims) {
+            let ch = &problem.channels()[*k];
+            let r = ch
+                .measured
+                .iter()
+                .zip(&sim)
+                .zip(&ch.valid)
+                .map(|((m, s), ok)| if *ok { m - s } else { f64::NAN })
+                .collect();
+            after.insert(ch.name.clone(), r);
+        }
+    }
+    let residuals = cmp
+        .signals
+        .iter()
+        .map(|c| {
+            let before = c.residual();
+            Residual {
+                signal: c.name.clone(),
+                after: after
+                    .remove(&c.name)
+                    .unwrap_or_else(|| vec![f64::NAN; before.len()]),
+                before,
+            }
+        })
+        .collect();
+    let diagnosis = Diagnosis {
+        drive_id: log.meta.drive_id.clone(),
+        verdict: v,
+        noise_floor,
+        mismatch: location.mismatch.iter().map(mismatch_entry).collect(),
+        findings: explanation.findings.iter().map(finding_entry).collect(),
+    };
+    Ok(Diagnosed {
+        diagnosis,
+        floors,
+        location,
+        explanation,
+        t_s: cmp.conditions.t_s.clone(),
+        residuals,
+        models: ModelsUsed {
+            longitudinal: setup.longitudinal,
+            longitudinal_reason: setup.longitudinal_reason.clone(),
+            axle: setup.axle,
+            axle_reason: setup.axle_reason.clone(),
+            slope_resolution: setup.slope_resolution,
+        },
+    })
+}
+
+/// `detail.json`: everything behind the verdict.
+#[derive(Serialize)]
+struct Detail<'a> {
+    drive_id: &'a str,
+    source_file: &'a str,
+    models: &'a ModelsUsed,
+    noise_floors: &'a NoiseFloors,
+    location: &'a Location,
+    explanation: &'a Explanation,
+}
+
+/// Where the outputs of [`write_outputs`] went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Written {
+    /// `diagnosis.json`.
+    pub json: PathBuf,
+    /// `mismatch.parquet`.
+    pub mismatch: PathBuf,
+    /// `findings.parquet`.
+    pub findings: PathBuf,
+    /// `report.md`.
+    pub report: PathBuf,
+    /// Residual plots.
+    pub plots: Vec<PathBuf>,
+    /// `detail.json`.
+    pub detail: PathBuf,
+}
+
+/// Per-finding MAE and fit % for the report.
+fn metrics_of(d: &Diagnosed) -> Vec<BTreeMap<String, SignalMetrics>> {
+    d.explanation
+        .findings
+        .iter()
+        .map(|f| f.metrics.clone())
+        .collect()
+}
+
+/// Writes the diagnosis of `log` into `dir` (module documentation: staged, then renamed).
+/// `fingerprint` identifies the configuration in the Parquet metadata.
+///
+/// # Errors
+/// [`DiagnoseError::Output`], [`DiagnoseError::Plot`] or [`DiagnoseError::Io`]; the folder is
+/// left without any new file then.
+pub fn write_outputs(
+    dir: &Path,
+    d: &Diagnosed,
+    log: &DriveLog,
+    fingerprint: &str,
+) -> Result<Written, DiagnoseError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| DiagnoseError::Io { path, source }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let stage = dir.join(format!(".diagnose-partial-{}", std::process::id()));
+    if stage.exists() {
+        std::fs::remove_dir_all(&stage).map_err(io(&stage))?;
+    }
+    std::fs::create_dir_all(&stage).map_err(io(&stage))?;
+    let result = write_staged(&stage, d, log, fingerprint);
+    let names = match result {
+        Ok(n) => n,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&stage);
+            return Err(e);
+        }
+    };
+    // diagnosis.json last: its presence means the folder is complete
+    let mut order: Vec<&String> = names.iter().filter(|n| *n != "diagnosis.json").collect();
+    let json_name = "diagnosis.json".to_string();
+    order.push(&json_name);
+    for n in &order {
+        let (from, to) = (stage.join(n), dir.join(n));
+        std::fs::rename(&from, &to).map_err(io(&to))?;
+    }
+    std::fs::remove_dir_all(&stage).map_err(io(&stage))?;
+    let p = |n: &str| dir.join(n);
+    Ok(Written {
+        json: p("diagnosis.json"),
+        mismatch: p("mismatch.parquet"),
+        findings: p("findings.parquet"),
+        report: p("report.md"),
+        plots: names
+            .iter()
+            .filter(|n| n.ends_with(".svg"))
+            .map(|n| p(n))
+            .collect(),
+        detail: p("detail.json"),
+    })
+}
+
+/// File name of a signal's residual plot.
+pub fn plot_name(signal: &str) -> String {
+    format!("residual_{signal}.svg")
+}
+
+fn write_staged(
+    stage: &Path,
+    d: &Diagnosed,
+    log: &DriveLog,
+    fingerprint: &str,
+) -> Result<Vec<String>, DiagnoseError> {
+    let vehicle_id = log.meta.vehicle_id.as_deref();
+    let source = log.meta.source_file.as_str();
+    let diag = &d.diagnosis;
+    diag.write_mismatch(
+        &stage.join("mismatch.parquet"),
+        vehicle_id,
+        source,
+        fingerprint,
+    )?;
+    diag.write_findings(
+        &stage.join("findings.parquet"),
+        vehicle_id,
+        source,
+        fingerprint,
+    )?;
+    let mut names = vec![
+        "mismatch.parquet".to_string(),
+        "findings.parquet".to_string(),
+    ];
+    let mut plots = Vec::new();
+    for r in &d.residuals {
+        if !r.before.iter().any(|x| x.is_finite()) {
+            continue;
+        }
+        let name = plot_name(&r.signal);
+        let stretches: Vec<(f64, f64)> = diag
+            .mismatch
+            .iter()
+            .filter(|m| m.signal == r.signal)
+            .map(|m| (m.start_s, m.end_s))
+            .collect();
+        plot_residuals(
+            &stage.join(&name),
+            &format!("{}: {} residual", diag.drive_id, r.signal),
+            &ResidualSeries {
+                signal: &r.signal,
+                t_s: &d.t_s,
+                before: &r.before,
+                after: &r.after,
+            },
+            &stretches,
+        )?;
+        plots.push((r.signal.clone(), name.clone()));
+        names.push(name);
+    }
+    let report = stage.join("report.md");
+    write_report(&report, diag, &metrics_of(d), &plots).map_err(|source| DiagnoseError::Io {
+        path: report.clone(),
+        source,
+    })?;
+    names.push("report.md".into());
+    let detail = Detail {
+        drive_id: &diag.drive_id,
+        source_file: source,
+        models: &d.models,
+        noise_floors: &d.floors,
+        location: &d.location,
+        explanation: &d.explanation,
+    };
+    let mut text = serde_json::to_string_pretty(&detail).map_err(|e| DiagnoseError::Io {
+        path: stage.join("detail.json"),
+        source: std::io::Error::other(e),
+    })?;
+    text.push('\n');
+    let path = stage.join("detail.json");
+    crate::io::AtomicFile::write_all(&path, text.as_bytes())
+        .map_err(|source| DiagnoseError::Io { path, source })?;
+    names.push("detail.json".into());
+    diag.write_json(&stage.join("diagnosis.json"))?;
+    names.push("diagnosis.json".into());
+    Ok(names)
+}
