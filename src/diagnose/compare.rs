@@ -8,6 +8,7 @@
 //! stable). Both see the recording's own inputs.
 
 use super::extended::{AxleModel, ExtendedError, LongitudinalModel, Theta};
+use crate::table::DriveLog;
 
 /// One compared signal on the recording's rows.
 #[derive(Debug, Clone, PartialEq)]
@@ -68,7 +69,7 @@ impl Conditions {
     /// exceeds 1 kN (5× the 0.2 kN noise of a J1939 brake-force channel, which a brake at rest
     /// never reaches) or the retarder torque 50 N·m (above its 1 %-of-reference step); clutch
     /// actuated above 5 % of its travel.
-    pub fn from_log(log: &crate::table::DriveLog) -> Conditions {
+    pub fn from_log(log: &DriveLog) -> Conditions {
         use crate::schema::Interpolation;
         use crate::signal::distance::fill_gaps;
         let n = log.len();
@@ -108,7 +109,9 @@ impl Conditions {
         } else {
             (0..n)
                 .map(|i| {
-                    brake.as_ref().is_some_and(|b| b[i] > 1000.0)
+                    brake
+                        .as_ref()
+                        .is_some_and(|b| b[i] > BRAKE_RELEASED_BELOW_N)
                         || retarder.as_ref().is_some_and(|r| r[i] > 50.0)
                 })
                 .collect()
@@ -130,6 +133,239 @@ impl Conditions {
     }
 }
 
+/// A recorded service-brake force below this is a released brake, N: 5× the 0.2 kN noise of a
+/// J1939 brake-force channel, which a brake at rest never reaches. The models read it as 0
+/// ([`super::extended::corrected_log`]): a force channel clamped at 0 turns its noise into a
+/// positive mean (σ/√(2π) ≈ 80 N at σ = 0.2 kN), a phantom drag that, measured on synthetic
+/// drives, made the fit call aerodynamic drag 4–20 % lower than the truth on drives whose
+/// hidden effect was elsewhere.
+pub const BRAKE_RELEASED_BELOW_N: f64 = 1000.0;
+
+/// Half-width of the rows left out around a clutch transition for the longitudinal signals, s.
+pub const CLUTCH_TRANSITION_HALFWIDTH_S: f64 = 0.5;
+/// Half-width of the rows left out around a gear change or clutch transition for the bellow
+/// pressures, s.
+pub const SHIFT_HALFWIDTH_AXLE_S: f64 = 1.0;
+
+/// Rows of `log` that are not within `halfwidth_s` of an event: a real sample of `column`
+/// that differs from the previous real one by more than `tolerance`, or (for
+/// `clutch_position`) lies strictly inside (`tolerance`, 1 − `tolerance`). A log without the
+/// column has no events.
+fn away_from_events(log: &DriveLog, column: &str, tolerance: f64, halfwidth_s: f64) -> Vec<bool> {
+    let n = log.len();
+    let Some(v) = log.signal(column) else {
+        return vec![true; n];
+    };
+    let t: Vec<f64> = log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+        .collect();
+    let clutch = column == "clutch_position";
+    let mut events = Vec::new();
+    let mut prev: Option<f64> = None;
+    for (i, &x) in v.iter().enumerate() {
+        if !x.is_finite() {
+            continue;
+        }
+        let moving = prev.is_some_and(|p| (x - p).abs() > tolerance);
+        let between = clutch && x > tolerance && x < 1.0 - tolerance;
+        if moving || between {
+            events.push(t[i]);
+        }
+        prev = Some(x);
+    }
+    let mut ok = vec![true; n];
+    for e in events {
+        let a = t.partition_point(|&x| x < e - halfwidth_s);
+        let b = t.partition_point(|&x| x <= e + halfwidth_s);
+        for o in &mut ok[a..b] {
+            *o = false;
+        }
+    }
+    ok
+}
+
+/// Input columns of the models: a gap in any of them makes the rows it covers unknown.
+pub const MODEL_INPUTS: [&str; 7] = [
+    "engine_torque",
+    "gear",
+    "clutch_position",
+    "brake_force",
+    "retarder_torque",
+    "road_slope",
+    "vehicle_speed",
+];
+
+/// Rows of `log` with every input of [`MODEL_INPUTS`] the log has recorded (not a gap the
+/// ingest left missing) for the last `after_s`. Why: the noise floor perturbs the recorded
+/// samples, but inside a CAN dropout the input is the gap fill, whose error is not noise —
+/// measured on a clean synthetic drive, a 0.9 s EEC1 dropout during a torque ramp left 6.8 kPa
+/// of pressure residual (6.6× the floor). The `after_s` tail covers the models' response.
+fn away_from_input_gaps(log: &DriveLog, after_s: f64) -> Vec<bool> {
+    let n = log.len();
+    let t: Vec<f64> = log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+        .collect();
+    let mut ok = vec![true; n];
+    for c in MODEL_INPUTS {
+        let Some(v) = log.signal(c) else { continue };
+        let mut last_gap: Option<f64> = None;
+        for i in 0..n {
+            if !v[i].is_finite() {
+                last_gap = Some(t[i]);
+                ok[i] = false;
+            } else if last_gap.is_some_and(|g| t[i] - g <= after_s) {
+                ok[i] = false;
+            }
+        }
+    }
+    ok
+}
+
+/// Rows where the longitudinal model's clutch mode is known from the recording: not within
+/// ±[`CLUTCH_TRANSITION_HALFWIDTH_S`] of a clutch transition (a `clutch_position` sample
+/// between 2 % and 98 % or 2 % away from the previous one). Why: the clutch actuator is
+/// reported at 10 Hz while the engine speed comes at 50 Hz, so the moment the clutch
+/// closes — where the model switches from slipping to locked and the engine speed jumps onto
+/// the gearbox's — is known only to one 0.1 s sample; measured on clean synthetic drives,
+/// that sample alone gives engine-speed residual spikes of ~10 rad/s (12× the noise floor)
+/// at every shift, and the torque ramp after it a further 8 rad/s spike 0.4 s later. Rows with the clutch fully open or fully closed still count, so a clutch
+/// that slips when closed (`clutch_slip`) stays visible.
+///
+/// Also left out: ±[`CLUTCH_TRANSITION_HALFWIDTH_S`] around a service-brake step
+/// ([`BRAKE_STEP_N`]), and input gaps with [`INPUT_GAP_TAIL_S`] after them.
+pub fn longitudinal_rows(log: &DriveLog) -> Vec<bool> {
+    let a = away_from_events(log, "clutch_position", 0.02, CLUTCH_TRANSITION_HALFWIDTH_S);
+    let b = away_from_steps(
+        log,
+        "brake_force",
+        BRAKE_STEP_N,
+        TORQUE_STEP_WINDOW_S,
+        CLUTCH_TRANSITION_HALFWIDTH_S,
+    );
+    let c = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
+    (0..a.len()).map(|i| a[i] && b[i] && c[i]).collect()
+}
+
+/// Rows after an input gap that still do not count, s ([`away_from_input_gaps`]).
+pub const INPUT_GAP_TAIL_S: f64 = 1.0;
+
+/// Rows where the axle model's torque input is known from the recording: not within
+/// ±[`SHIFT_HALFWIDTH_AXLE_S`] of a gear change or a clutch transition. Why: within a shift
+/// the drive torque at the wheels comes from the inverse dynamics of an engine synchronising
+/// behind a clutch that is reported at 10 Hz; measured on clean synthetic drives, the
+/// pressures' residual there reaches 15–30 kPa (15–30× the floor) for a few tenths of a
+/// second at each shift, an artefact of the input, not of the axle physics.
+///
+/// Also left out: ±[`SHIFT_HALFWIDTH_AXLE_S`] around an engine-torque step of more than
+/// [`TORQUE_STEP_NM`] within [`TORQUE_STEP_WINDOW_S`] (a tip-in or tip-out). The axle model's
+/// drive torque is the quasi-static inverse dynamics of the recorded engine torque, which
+/// neglects the shafts' torsion (the shuffle a step excites for about a second); measured on
+/// clean synthetic drives, a tip-out from 1 300 N·m to engine braking leaves 6–9 kPa of
+/// residual (6–9× the floor) for ~1 s. And input gaps with [`INPUT_GAP_TAIL_S`] after them.
+pub fn axle_rows(log: &DriveLog) -> Vec<bool> {
+    let a = away_from_events(log, "clutch_position", 0.02, SHIFT_HALFWIDTH_AXLE_S);
+    let b = away_from_events(log, "gear", 0.5, SHIFT_HALFWIDTH_AXLE_S);
+    let mut ok: Vec<bool> = a.iter().zip(&b).map(|(x, y)| *x && *y).collect();
+    let c = away_from_steps(
+        log,
+        "engine_torque",
+        TORQUE_STEP_NM,
+        TORQUE_STEP_WINDOW_S,
+        SHIFT_HALFWIDTH_AXLE_S,
+    );
+    let d = away_from_steps(
+        log,
+        "brake_force",
+        BRAKE_STEP_N,
+        TORQUE_STEP_WINDOW_S,
+        SHIFT_HALFWIDTH_AXLE_S,
+    );
+    let e = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
+    for (i, o) in ok.iter_mut().enumerate() {
+        *o = *o && c[i] && d[i] && e[i];
+    }
+    ok
+}
+
+/// Rows of `log` not within `halfwidth_s` of a step of `column` (gaps filled linearly): a row
+/// whose value differs by more than `step` from the value `window_s` earlier. A log without
+/// the column has no steps.
+fn away_from_steps(
+    log: &DriveLog,
+    column: &str,
+    step: f64,
+    window_s: f64,
+    halfwidth_s: f64,
+) -> Vec<bool> {
+    use crate::schema::Interpolation;
+    use crate::signal::distance::fill_gaps;
+    let n = log.len();
+    let Some(m) = log
+        .signal(column)
+        .and_then(|m| fill_gaps(m, Interpolation::Linear))
+    else {
+        return vec![true; n];
+    };
+    let t: Vec<f64> = log
+        .timestamp_ns
+        .iter()
+        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
+        .collect();
+    let mut ok = vec![true; n];
+    for i in 0..n {
+        let j = t.partition_point(|&x| x < t[i] - window_s);
+        if (m[i] - m[j]).abs() > step {
+            let lo = t.partition_point(|&x| x < t[i] - halfwidth_s);
+            let hi = t.partition_point(|&x| x <= t[i] + halfwidth_s);
+            for o in &mut ok[lo..hi] {
+                *o = false;
+            }
+        }
+    }
+    ok
+}
+
+/// A service-brake force change larger than this within [`TORQUE_STEP_WINDOW_S`] is a step
+/// for [`axle_rows`] and [`longitudinal_rows`], N: the 10 Hz brake channel samples a brake
+/// pulse once or twice, so its shape between samples — which the pitch and the speed follow —
+/// is unknown (measured on clean synthetic drives: a single 6.7 kN sample left 12.7 kPa of
+/// pressure residual).
+pub const BRAKE_STEP_N: f64 = 2000.0;
+
+/// An engine-torque change larger than this within [`TORQUE_STEP_WINDOW_S`] is a step for
+/// [`axle_rows`], N·m (about a quarter of a heavy-truck engine's reference torque).
+pub const TORQUE_STEP_NM: f64 = 600.0;
+/// See [`TORQUE_STEP_NM`], s.
+pub const TORQUE_STEP_WINDOW_S: f64 = 0.3;
+
+/// Rows where the engine speed is a driveline output: the longitudinal rows
+/// ([`longitudinal_rows`]) with a gear engaged and the clutch not fully open
+/// (`clutch_position` below 98 %). With the clutch open or in neutral the engine is decoupled
+/// and its speed is set by the idle governor, which the driveline model does not contain
+/// (measured on clean synthetic drives: a steady 5–7 rad/s offset through every coasting
+/// phase). The vehicle speed still counts there.
+pub fn engine_speed_rows(log: &DriveLog) -> Vec<bool> {
+    use crate::schema::Interpolation;
+    use crate::signal::distance::fill_gaps;
+    let mut ok = longitudinal_rows(log);
+    let clutch = log
+        .signal("clutch_position")
+        .and_then(|c| fill_gaps(c, Interpolation::Linear));
+    let gear = log
+        .signal("gear")
+        .and_then(|g| fill_gaps(g, Interpolation::Hold));
+    for (i, o) in ok.iter_mut().enumerate() {
+        let open = clutch.as_ref().is_some_and(|c| c[i] >= 0.98);
+        let neutral = gear.as_ref().is_some_and(|g| g[i].round() < 1.0);
+        *o = *o && !open && !neutral;
+    }
+    ok
+}
+
 /// What the nominal models say about one recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Comparison {
@@ -140,7 +376,8 @@ pub struct Comparison {
 }
 
 /// Simulated outputs of the extended models at `theta`, as [`Compared`] signals with the
-/// measured ones (`None` for a model the recording cannot drive).
+/// measured ones (`None` for a model the recording cannot drive); `long_valid` holds the rows
+/// of both longitudinal signals, `engine_valid` further restricts the engine speed.
 ///
 /// # Errors
 /// [`ExtendedError`] from the simulations.
@@ -149,6 +386,7 @@ pub fn compare_at(
     axle: Option<&AxleModel<'_>>,
     theta: &Theta,
     long_valid: &[bool],
+    engine_valid: &[bool],
     axle_measured: Option<&[Vec<f64>; 3]>,
     axle_valid: Option<&[Vec<bool>; 3]>,
 ) -> Result<Vec<Compared>, ExtendedError> {
@@ -167,7 +405,11 @@ pub fn compare_at(
             unit: "rad/s".into(),
             measured: m.measured_engine_speed().to_vec(),
             simulated: o.engine_speed,
-            valid: long_valid.to_vec(),
+            valid: long_valid
+                .iter()
+                .zip(engine_valid)
+                .map(|(a, b)| *a && *b)
+                .collect(),
         });
     }
     if let (Some(m), Some(meas), Some(valid)) = (axle, axle_measured, axle_valid) {

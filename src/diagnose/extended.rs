@@ -120,7 +120,8 @@ pub fn index(e: Effect) -> usize {
 
 /// The recording with the sensor effects of `theta` undone (see the module documentation);
 /// `filtered_slope` is the recording's filtered slope ([`filtered_slope`]) for the
-/// `slope_quantization` switch.
+/// `slope_quantization` switch. A service-brake force below
+/// [`super::compare::BRAKE_RELEASED_BELOW_N`] is read as a released brake (0).
 pub fn corrected_log(
     log: &DriveLog,
     theta: &Theta,
@@ -156,6 +157,13 @@ pub fn corrected_log(
                 if offset != 0.0 {
                     for v in s.values.iter_mut() {
                         *v -= offset;
+                    }
+                }
+            }
+            "brake_force" => {
+                for v in s.values.iter_mut() {
+                    if *v < super::compare::BRAKE_RELEASED_BELOW_N {
+                        *v = 0.0;
                     }
                 }
             }
@@ -334,6 +342,43 @@ impl<'a> LongitudinalModel<'a> {
         Ok(tm)
     }
 
+    /// Sets the shaft twists of a locked-clutch start state `y0` (rigid speeds already set) to
+    /// carry the recorded engine torque at `ta` with the measured acceleration: with
+    /// `ω̇_w = a/r_w`, `M_c = M_e − (J_e + J_c) i_t i_f ω̇_w`,
+    /// `M_p = i_t M_c − b_t ω_p − (J_t + J_p) i_f ω̇_w`, `M_d = i_f M_p − b_f ω_d − (J_f + J_d) ω̇_w`
+    /// (physics.md §1 with every shaft rigid), twist = torque / stiffness. The road-load steady
+    /// state assumes zero acceleration; under full drive torque its twist is far from the
+    /// recording's, and the window started ringing at the shuffle frequency (measured: ±8 rad/s
+    /// of engine speed for 0.2 s after a re-initialisation at 0.7 m/s² in 11th gear).
+    fn load_twists(
+        &self,
+        p: &DrivelineParams,
+        sc: &crate::sim::hybrid::Scenario,
+        gear: usize,
+        ta: f64,
+        y0: &mut [f64; crate::sim::hybrid::N_STATES],
+    ) {
+        let crate::sim::hybrid::EngineInput::Torque(m) = &sc.engine else {
+            return;
+        };
+        let Some(it) = gear.checked_sub(1).and_then(|g| self.ratios.get(g)) else {
+            return;
+        };
+        let h = 0.25;
+        let (t0, t1) = ((ta - h).max(0.0), ta + h);
+        let a = (interp(&self.t, &self.v_meas, t1) - interp(&self.t, &self.v_meas, t0)) / (t1 - t0);
+        let fi = p.final_drive_ratio;
+        let wdot_w = a / p.wheel_radius_m;
+        let m_e = m.eval(ta + 1e-9);
+        let m_c = m_e - (p.j_e_kg_m2 + p.j_c_kg_m2) * it * fi * wdot_w;
+        let j2 = p.j_t_kg_m2[gear - 1] + p.j_p_kg_m2;
+        let m_p = it * m_c - p.b_t_nm_s_per_rad * y0[3] - j2 * fi * wdot_w;
+        let m_d = fi * m_p - p.b_f_nm_s_per_rad * y0[5] - (p.j_f_kg_m2 + p.j_d_kg_m2) * wdot_w;
+        y0[2] = m_c / p.k_c_nm_per_rad;
+        y0[4] = m_p / p.k_p_nm_per_rad;
+        y0[6] = m_d / p.k_d_nm_per_rad;
+    }
+
     /// Simulates the recording with parameters `theta`, window by window from the measured
     /// state (see the module documentation).
     ///
@@ -385,6 +430,9 @@ impl<'a> LongitudinalModel<'a> {
                 ClutchMode::Slipping(sigma)
             };
             y0[8] = 0.0;
+            if mode == ClutchMode::Locked {
+                self.load_twists(p, sc, gear, ta, &mut y0);
+            }
             if tm.lash_rad > 0.0 {
                 // the steady twist carries the drive torque: in contact on its side
                 y0[6] += 0.5 * tm.lash_rad * y0[6].signum();

@@ -1398,7 +1398,9 @@ impl<'a> ModelSet<'a> {
 
     /// The compared signals of `log` at `theta` ([`compare_at`]). Rows that count: the
     /// recorded value is a real sample (not a filled gap); for the longitudinal signals also
-    /// vehicle speed at least [`LongitudinalConfig::min_speed_mps`] and engine speed recorded.
+    /// vehicle speed at least [`LongitudinalConfig::min_speed_mps`], engine speed recorded and
+    /// no clutch transition near ([`super::compare::longitudinal_rows`]); for the pressures no
+    /// shift near ([`super::compare::axle_rows`]).
     ///
     /// # Errors
     /// [`NoiseError::Model`] when a model cannot be built or run.
@@ -1417,11 +1419,13 @@ impl<'a> ModelSet<'a> {
         let long_valid: Vec<bool> = match (&self.longitudinal, log.signal("vehicle_speed")) {
             (Some(cfg), Some(v)) => {
                 let w = log.signal("engine_speed");
+                let steady = super::compare::longitudinal_rows(log);
                 (0..n)
                     .map(|i| {
                         v[i].is_finite()
                             && v[i] >= cfg.min_speed_mps
                             && w.is_some_and(|w| w[i].is_finite())
+                            && steady[i]
                     })
                     .collect()
             }
@@ -1434,19 +1438,27 @@ impl<'a> ModelSet<'a> {
         };
         let (mut meas, mut valid): (Vec<Vec<f64>>, Vec<Vec<bool>>) = (Vec::new(), Vec::new());
         if self.axle {
+            let steady = super::compare::axle_rows(log);
             for c in PRESSURES {
                 let raw = log.signal(c).unwrap_or(&[]);
-                valid.push(raw.iter().map(|x| x.is_finite()).collect());
+                valid.push(
+                    raw.iter()
+                        .zip(&steady)
+                        .map(|(x, s)| x.is_finite() && *s)
+                        .collect(),
+                );
                 meas.push(fill_gaps(raw, Interpolation::Linear).unwrap_or_else(|| raw.to_vec()));
             }
         }
         let am: Option<[Vec<f64>; 3]> = meas.try_into().ok();
         let av: Option<[Vec<bool>; 3]> = valid.try_into().ok();
+        let engine_valid = super::compare::engine_speed_rows(log);
         Ok(compare_at(
             long.as_ref(),
             axle.as_ref(),
             theta,
             &long_valid,
+            &engine_valid,
             am.as_ref(),
             av.as_ref(),
         )?)

@@ -8,7 +8,7 @@
 //!   state): `vehicle_speed` (m/s) and `engine_speed` (rad/s), on rows where the sample is a real
 //!   one (not a filled gap) and the measured speed is at least the model's minimum (1 m/s);
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
-//!   (Pa), on rows with a real sample.
+//!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
 //! A model is used when the recording has its outputs and inputs; which ones were used is
 //! reported ([`Problem::domains`]).
@@ -324,30 +324,35 @@ impl<'a> Problem<'a> {
             }
         };
         if let Some(m) = &long {
+            let steady = super::compare::longitudinal_rows(log);
             let moving: Vec<bool> = m
                 .measured_speed()
                 .iter()
-                .map(|v| *v >= long_cfg.min_speed_mps)
+                .zip(&steady)
+                .map(|(v, s)| *v >= long_cfg.min_speed_mps && *s)
                 .collect();
+            let engine = super::compare::engine_speed_rows(log);
             for ((name, unit), meas) in long_channel_names()
                 .into_iter()
                 .zip([m.measured_speed(), m.measured_engine_speed()])
             {
                 let raw = log.signal(name).unwrap_or(&[]);
+                let coupled = |i: usize| name != "engine_speed" || engine[i];
                 let valid: Vec<bool> = (0..log.len())
-                    .map(|i| moving[i] && raw.get(i).is_some_and(|x| x.is_finite()))
+                    .map(|i| moving[i] && coupled(i) && raw.get(i).is_some_and(|x| x.is_finite()))
                     .collect();
                 channels.push(mk(name, unit, Domain::Longitudinal, meas.to_vec(), valid));
             }
         }
         if axle.is_some() {
+            let steady = super::compare::axle_rows(log);
             for name in PRESSURES {
                 let raw = log.signal(name).unwrap_or(&[]);
                 let meas =
                     crate::signal::distance::fill_gaps(raw, crate::schema::Interpolation::Linear)
                         .unwrap_or_else(|| vec![f64::NAN; log.len()]);
                 let valid: Vec<bool> = (0..log.len())
-                    .map(|i| raw.get(i).is_some_and(|x| x.is_finite()))
+                    .map(|i| steady[i] && raw.get(i).is_some_and(|x| x.is_finite()))
                     .collect();
                 channels.push(mk(name, "Pa", Domain::Axle, meas, valid));
             }

@@ -4,9 +4,10 @@
 //!
 //! - Longitudinal/driveline: needs a vehicle `[driveline]` and the columns `vehicle_speed`,
 //!   `engine_speed`, `engine_torque`, `gear`. Rows count while the measured speed is at least
-//!   1 m/s (the model has no creep mode) and the speed sample is real (not a filled gap).
-//! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Every row with a
-//!   real pressure sample counts.
+//!   1 m/s (the model has no creep mode), the speed sample is real (not a filled gap) and no
+//!   clutch transition is near ([`super::compare::longitudinal_rows`]).
+//! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Rows with a real
+//!   pressure sample count, away from shifts ([`super::compare::axle_rows`]).
 //! - Operating conditions: [`Conditions::from_log`].
 //! - The slope sensor's resolution is estimated from the recording (`slope_quantization`'s
 //!   nominal value, [`crate::signal::quantization`]); an unquantised slope counts as 0.1 %.
@@ -42,12 +43,6 @@ pub struct Setup {
     pub axle: bool,
     /// Why not, when it does not.
     pub axle_reason: Option<String>,
-    /// Rows that count for the longitudinal signals.
-    pub long_valid: Vec<bool>,
-    /// Measured bellow pressures front, rear, tag (gaps filled), Pa.
-    pub axle_measured: Option<[Vec<f64>; 3]>,
-    /// Rows with a real pressure sample, per axle.
-    pub axle_valid: Option<[Vec<bool>; 3]>,
     /// Operating conditions.
     pub conditions: Conditions,
 }
@@ -103,27 +98,6 @@ impl Setup {
                 })
             }
         };
-        let speed = speed.unwrap_or_else(|| vec![0.0; n]);
-        let raw_speed = log.signal("vehicle_speed");
-        let long_valid: Vec<bool> = (0..n)
-            .map(|i| {
-                longitudinal_reason.is_none()
-                    && raw_speed.is_some_and(|v| v[i].is_finite())
-                    && speed[i] >= MIN_SPEED_MPS
-            })
-            .collect();
-        let (axle_measured, axle_valid) = if axle_reason.is_none() {
-            let m = pressures
-                .clone()
-                .map(|c| column(log, &c, Interpolation::Linear).expect("checked"));
-            let v = pressures.clone().map(|c| {
-                let raw = log.signal(&c).expect("checked");
-                raw.iter().map(|x| x.is_finite()).collect::<Vec<bool>>()
-            });
-            (Some(m), Some(v))
-        } else {
-            (None, None)
-        };
         let slope = column(log, "road_slope", Interpolation::Hold).unwrap_or_else(|| vec![0.0; n]);
         let slope_resolution = estimate_quantization(&slope)
             .map(|q| q.step)
@@ -141,9 +115,6 @@ impl Setup {
             longitudinal_reason,
             axle: axle_reason.is_none(),
             axle_reason,
-            long_valid,
-            axle_measured,
-            axle_valid,
             conditions,
         })
     }
