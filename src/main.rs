@@ -187,8 +187,8 @@ enum Command {
     /// nothing, or an effect outside the catalogue; diagnosed blind and scored. Writes
     /// proof.md, proof.json, proof_cases.parquet and every case's drive, answer and diagnosis.
     Prove {
-        /// Number of drives (18 cover every effect once, one clean, one out-of-catalogue).
-        #[arg(long, default_value_t = 36)]
+        /// Number of drives (22 cover every effect once, four clean, two out-of-catalogue).
+        #[arg(long, default_value_t = 66)]
         drives: usize,
         /// Seed of the plan; drive i uses seed + i.
         #[arg(long, default_value_t = 1)]

@@ -139,7 +139,13 @@ impl Conditions {
 /// positive mean (σ/√(2π) ≈ 80 N at σ = 0.2 kN), a phantom drag that, measured on synthetic
 /// drives, made the fit call aerodynamic drag 4–20 % lower than the truth on drives whose
 /// hidden effect was elsewhere.
+///
+/// Only outside braking episodes: within ±[`BRAKE_EPISODE_HALFWIDTH_S`] of a sample at or above
+/// the threshold every value counts — a driver holding 0.4–1 kN on a descent is braking
+/// (measured: zeroing such a stretch left −0.1 m/s of speed residual on a clean drive).
 pub const BRAKE_RELEASED_BELOW_N: f64 = 1000.0;
+/// Half-width of a braking episode around a sample at or above [`BRAKE_RELEASED_BELOW_N`], s.
+pub const BRAKE_EPISODE_HALFWIDTH_S: f64 = 3.0;
 
 /// Half-width of the rows left out around a clutch transition for the longitudinal signals, s.
 pub const CLUTCH_TRANSITION_HALFWIDTH_S: f64 = 0.5;

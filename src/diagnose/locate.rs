@@ -17,8 +17,9 @@
 //! Holm-adjusted p ≤ α **and** its RMS residual exceeds [`LocateConfig::practical_ratio`]
 //! (1.5) × its floor RMS: a residual within 1.5× the floor is not worth explaining, and the
 //! rule keeps a floor underestimated by up to a third from turning into findings. Adjacent
-//! mismatch windows of one signal merge into a stretch, one [`Mismatch`] record of the output
-//! contract each; its `significance` is the smallest Holm-adjusted p-value of its windows
+//! mismatch windows of one signal merge into a stretch — also across one window with too few
+//! counting rows to be tested (a shift, a stop or a CAN dropout leaves such windows) — one
+//! [`Mismatch`] record of the output contract each; its `significance` is the smallest Holm-adjusted p-value of its windows
 //! (smaller = more significant).
 //!
 //! # In frequency
@@ -144,6 +145,9 @@ pub struct LocateConfig {
     pub integrated_signals: Vec<String>,
     /// Re-initialisation window of the integrated signals, s (the compare step's).
     pub reinit_window_s: f64,
+    /// Re-initialisation times of the integrated signals, s, increasing (the compare step's
+    /// [`super::extended::window_starts`]); empty: every `reinit_window_s`.
+    pub reinit_times_s: Vec<f64>,
     /// Smallest share of the residual energy a stated shape explains.
     pub min_share: f64,
     /// Gear ratios (gear 1 first) for the gear-ratio shape; empty: no such shape.
@@ -173,6 +177,7 @@ impl Default for LocateConfig {
             event_halfwidth_s: 1.0,
             integrated_signals: vec!["vehicle_speed".into(), "engine_speed".into()],
             reinit_window_s: 20.0,
+            reinit_times_s: Vec::new(),
             min_share: 0.1,
             gear_ratios: Vec::new(),
         }
@@ -970,7 +975,7 @@ pub fn locate(
             let mut e = k;
             while e + 1 < loc.windows.len()
                 && loc.windows[e + 1].significant
-                && loc.windows[e + 1].index == loc.windows[e].index + 1
+                && loc.windows[e + 1].index <= loc.windows[e].index + 2
             {
                 e += 1;
             }
@@ -1636,10 +1641,12 @@ fn statements(
         let mut acc = 0.0;
         let mut win = i64::MIN;
         for i in 0..n {
-            let w = if c.t[i].is_finite() {
+            let w = if !c.t[i].is_finite() {
+                win
+            } else if cfg.reinit_times_s.is_empty() {
                 (c.t[i] / cfg.reinit_window_s).floor() as i64
             } else {
-                win
+                cfg.reinit_times_s.partition_point(|&x| x <= c.t[i]) as i64
             };
             if w != win {
                 acc = 0.0;

@@ -28,7 +28,7 @@
 
 use super::contract::{Diagnosis, FindingEntry, FitEntry, MismatchEntry, ParameterEntry};
 use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding, SignalMetrics};
-use super::extended::{ExtendedError, LongitudinalConfig};
+use super::extended::{window_starts, ExtendedError, LongitudinalConfig};
 use super::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
@@ -216,6 +216,7 @@ pub fn diagnose(
     let lcfg = LocateConfig {
         shuffle_band_hz: shuffle_band_hz(&setup.nominal_truth.driveline, &setup.ratios),
         gear_ratios: setup.ratios.clone(),
+        reinit_times_s: window_starts(log, LongitudinalConfig::default().window_s),
         ..cfg.locate.clone()
     };
     let location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
