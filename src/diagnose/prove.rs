@@ -710,9 +710,10 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
         c.seed = case.seed + u64::from(attempt) * RESEED_STRIDE;
         match generate(&c, vehicle, cfg, &out.join("drives"), &out.join("answers")) {
             Ok(g) => break g,
-            Err(DriveError::Can(crate::synth::can::SynthError::Ingest(_)))
-                if attempt + 1 < MAX_ATTEMPTS =>
-            {
+            Err(
+                DriveError::Can(crate::synth::can::SynthError::Ingest(_))
+                | DriveError::Export(crate::synth::export::ExportError::Ingest { .. }),
+            ) if attempt + 1 < MAX_ATTEMPTS => {
                 attempt += 1;
             }
             Err(e) => return fail("generate", e.to_string()),
