@@ -558,7 +558,8 @@ impl ProofSummary {
         let _ = writeln!(
             s,
             "| median parameter error (relative to the hidden change) | {} |",
-            self.median_parameter_error.map_or("n/a".into(), pct)
+            self.median_parameter_error
+                .map_or("n/a".into(), |x| format!("{:.1} %", 100.0 * x))
         );
         let _ = writeln!(
             s,
