@@ -256,7 +256,7 @@ pub fn longitudinal_rows(log: &DriveLog) -> Vec<bool> {
     (0..a.len()).map(|i| a[i] && b[i] && c[i]).collect()
 }
 
-/// Rows after an input gap that still do not count, s ([`away_from_input_gaps`]).
+/// Rows after an input gap that still do not count, s ([`longitudinal_rows`], [`axle_rows`]).
 pub const INPUT_GAP_TAIL_S: f64 = 1.0;
 
 /// Rows where the axle model's torque input is known from the recording: not within
