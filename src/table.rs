@@ -73,6 +73,15 @@ impl DriveLog {
             .map(|s| s.values.as_slice())
     }
 
+    /// Time of every row from the first, s (empty for an empty log).
+    pub fn seconds_from_start(&self) -> Vec<f64> {
+        let t0 = self.timestamp_ns.first().copied().unwrap_or(0);
+        self.timestamp_ns
+            .iter()
+            .map(|&x| (x - t0) as f64 * 1e-9)
+            .collect()
+    }
+
     /// Duration from the first to the last sample, s.
     pub fn duration_s(&self) -> f64 {
         match (self.timestamp_ns.first(), self.timestamp_ns.last()) {

@@ -74,11 +74,7 @@ impl Conditions {
         use crate::signal::distance::fill_gaps;
         let n = log.len();
         let col = |c: &str, k: Interpolation| log.signal(c).and_then(|v| fill_gaps(v, k));
-        let t_s: Vec<f64> = log
-            .timestamp_ns
-            .iter()
-            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-            .collect();
+        let t_s: Vec<f64> = log.seconds_from_start();
         let speed = col("vehicle_speed", Interpolation::Linear).unwrap_or_default();
         let mut distance_m = vec![0.0; if speed.is_empty() { 0 } else { n }];
         for i in 1..distance_m.len() {
@@ -153,6 +149,15 @@ pub const CLUTCH_TRANSITION_HALFWIDTH_S: f64 = 0.5;
 /// pressures, s.
 pub const SHIFT_HALFWIDTH_AXLE_S: f64 = 1.0;
 
+/// Marks the rows of `t` within ±`half_s` of `center` as not counting.
+fn clear_around(ok: &mut [bool], t: &[f64], center: f64, half_s: f64) {
+    let lo = t.partition_point(|&x| x < center - half_s);
+    let hi = t.partition_point(|&x| x <= center + half_s);
+    for o in &mut ok[lo..hi] {
+        *o = false;
+    }
+}
+
 /// Rows of `log` that are not within `halfwidth_s` of an event: a real sample of `column`
 /// that differs from the previous real one by more than `tolerance`, or (for
 /// `clutch_position`) lies strictly inside (`tolerance`, 1 − `tolerance`). A log without the
@@ -162,11 +167,7 @@ fn away_from_events(log: &DriveLog, column: &str, tolerance: f64, halfwidth_s: f
     let Some(v) = log.signal(column) else {
         return vec![true; n];
     };
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-        .collect();
+    let t: Vec<f64> = log.seconds_from_start();
     let clutch = column == "clutch_position";
     let mut events = Vec::new();
     let mut prev: Option<f64> = None;
@@ -183,11 +184,7 @@ fn away_from_events(log: &DriveLog, column: &str, tolerance: f64, halfwidth_s: f
     }
     let mut ok = vec![true; n];
     for e in events {
-        let a = t.partition_point(|&x| x < e - halfwidth_s);
-        let b = t.partition_point(|&x| x <= e + halfwidth_s);
-        for o in &mut ok[a..b] {
-            *o = false;
-        }
+        clear_around(&mut ok, &t, e, halfwidth_s);
     }
     ok
 }
@@ -210,11 +207,7 @@ pub const MODEL_INPUTS: [&str; 7] = [
 /// of pressure residual (6.6× the floor). The `after_s` tail covers the models' response.
 fn away_from_input_gaps(log: &DriveLog, after_s: f64) -> Vec<bool> {
     let n = log.len();
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-        .collect();
+    let t: Vec<f64> = log.seconds_from_start();
     let mut ok = vec![true; n];
     for c in MODEL_INPUTS {
         let Some(v) = log.signal(c) else { continue };
@@ -316,20 +309,12 @@ fn away_from_steps(
     else {
         return vec![true; n];
     };
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-        .collect();
+    let t: Vec<f64> = log.seconds_from_start();
     let mut ok = vec![true; n];
     for i in 0..n {
         let j = t.partition_point(|&x| x < t[i] - window_s);
         if (m[i] - m[j]).abs() > step {
-            let lo = t.partition_point(|&x| x < t[i] - halfwidth_s);
-            let hi = t.partition_point(|&x| x <= t[i] + halfwidth_s);
-            for o in &mut ok[lo..hi] {
-                *o = false;
-            }
+            clear_around(&mut ok, &t, t[i], halfwidth_s);
         }
     }
     ok

@@ -131,11 +131,7 @@ pub fn corrected_log(
     filtered_slope: Option<&[f64]>,
 ) -> DriveLog {
     let mut out = log.clone();
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-        .collect();
+    let t: Vec<f64> = log.seconds_from_start();
     let delta = theta.get(Effect::GradeOffset);
     let quantised = theta.get(Effect::SlopeQuantization) > nominal.get(Effect::SlopeQuantization);
     let offset = theta.get(Effect::EngineTorqueOffset);
@@ -300,11 +296,7 @@ pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     if n == 0 {
         return vec![0.0];
     }
-    let t: Vec<f64> = log
-        .timestamp_ns
-        .iter()
-        .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-        .collect();
+    let t: Vec<f64> = log.seconds_from_start();
     let end = t[n - 1];
     let regular = (end / window_s).ceil().max(1.0) as usize;
     let mut starts: Vec<f64> = (0..regular).map(|k| k as f64 * window_s).collect();
@@ -350,11 +342,7 @@ impl<'a> LongitudinalModel<'a> {
     ) -> Result<Self, ExtendedError> {
         let v_meas = filled(log, "vehicle_speed")?;
         let w_meas = filled(log, "engine_speed")?;
-        let t: Vec<f64> = log
-            .timestamp_ns
-            .iter()
-            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-            .collect();
+        let t: Vec<f64> = log.seconds_from_start();
         Ok(Self {
             log,
             nominal_truth,

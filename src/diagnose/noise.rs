@@ -1575,11 +1575,7 @@ pub fn perturbed_log(
             // up to half a native period earlier or later
             let half = 0.5 / s.native_rate_hz;
             let tau = stream(cfg.seed, copy, &format!("{}/phase", s.column)).uniform(-half, half);
-            let t: Vec<f64> = log
-                .timestamp_ns
-                .iter()
-                .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-                .collect();
+            let t: Vec<f64> = log.seconds_from_start();
             let before = col.values.clone();
             col.values = super::extended::shifted(&t, &before, tau)
                 .into_iter()

@@ -247,11 +247,7 @@ impl<'a> Problem<'a> {
                 reasons: format!("{} rows", log.len()),
             });
         }
-        let t_s: Vec<f64> = log
-            .timestamp_ns
-            .iter()
-            .map(|&x| (x - log.timestamp_ns[0]) as f64 * 1e-9)
-            .collect();
+        let t_s: Vec<f64> = log.seconds_from_start();
         let split = Split::alternating(&t_s, long_cfg.window_s, block_windows);
         let mut left_out = Vec::new();
         let (long, axle) = rayon::join(
