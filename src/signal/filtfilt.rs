@@ -9,7 +9,7 @@
 
 use super::butterworth::Sos;
 use super::error::{check_finite, SignalError};
-use super::sos::{sosfilt_in_place, sosfilt_zi};
+use super::sos::{sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi};
 
 /// Relative impulse-response level below which the transient counts as
 /// decayed; sets the default `Matched` padding ([`impulse_decay_len`]).
@@ -248,14 +248,10 @@ fn filtfilt_scipy(sos: &Sos, x: &[f64], padlen: Option<usize>) -> Result<Vec<f64
     let x0 = ext[0];
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect();
     sosfilt_in_place(sos, &mut ext, &mut state);
-    ext.reverse();
-    let y0 = ext[0];
+    let y0 = ext[ext.len() - 1];
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * y0, z[1] * y0]).collect();
-    sosfilt_in_place(sos, &mut ext, &mut state);
-    ext.reverse();
-    ext.truncate(edge + n);
-    ext.drain(..edge);
-    Ok(ext)
+    sosfilt_in_place_rev(sos, &mut ext, &mut state);
+    Ok(ext[edge..edge + n].to_vec())
 }
 
 /// Least-squares line through `v[0..m]` at abscissae `0..m`: returns the
@@ -314,14 +310,10 @@ fn filtfilt_matched(
     // Backward pass: after `pad` samples of the right-hand line the forward
     // output is (to the decay threshold) a line again; start in its steady
     // state.
-    ext.reverse();
-    let (lvl, slp) = fit_line(ext.iter().copied(), m_level.max(2).min(ext.len()));
+    let (lvl, slp) = fit_line(ext.iter().rev().copied(), m_level.max(2).min(ext.len()));
     let mut state = ramp_zi(sos, lvl, slp);
-    sosfilt_in_place(sos, &mut ext, &mut state);
-    ext.reverse();
-    ext.truncate(pad + n);
-    ext.drain(..pad);
-    ext
+    sosfilt_in_place_rev(sos, &mut ext, &mut state);
+    ext[pad..pad + n].to_vec()
 }
 
 #[cfg(test)]

@@ -31,7 +31,9 @@ pub use filtfilt::{
     impulse_decay_len, matched_default_fit_len, ramp_zi, scipy_default_padlen, sosfiltfilt,
     EdgeMode, MATCHED_DECAY_THRESHOLD,
 };
-pub use sos::{sosfilt, sosfilt_in_place, sosfilt_zi};
+pub use sos::{
+    sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FUSED_SECTIONS, SOSFILT_BLOCK,
+};
 pub use spectrum::{cumulative_power, knee_frequency};
 pub use welch::{
     chi2_ppf, csd, csd_pieces, equivalent_dof, hann_periodic, welch, WelchConfig, WelchCsd,

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The side-by-side comparison of fleetdyn with its Python peers (issue 8), in one command:
+#   bash benches/peers/run.sh [--n N] [--repeats R] [--markdown FILE]
+# Makes its own venv (.venv-peers, ignored) with the pinned peers, builds fleetdyn's side
+# (benches/peers/peer_side.rs, release), runs the same inputs through both, checks the outputs
+# agree and prints the table (benches/peers/peers.py says what is compared and how).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+VENV=.venv-peers
+if [ ! -x "$VENV/bin/python" ]; then
+    python3 -m venv "$VENV"
+    "$VENV/bin/pip" install --quiet -r benches/peers/requirements.txt
+fi
+cargo build --release --quiet --example peer_side
+exec "$VENV/bin/python" benches/peers/peers.py --fleetdyn target/release/examples/peer_side "$@"
