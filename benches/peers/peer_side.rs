@@ -26,7 +26,10 @@ use std::time::Instant;
 
 fn read_f64(path: &str) -> Vec<f64> {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    assert!(bytes.len().is_multiple_of(8), "{path}: not a whole number of f64");
+    assert!(
+        bytes.len().is_multiple_of(8),
+        "{path}: not a whole number of f64"
+    );
     bytes
         .chunks_exact(8)
         .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
