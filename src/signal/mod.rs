@@ -32,7 +32,8 @@ pub use filtfilt::{
     EdgeMode, MATCHED_DECAY_THRESHOLD,
 };
 pub use sos::{
-    sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FUSED_SECTIONS, SOSFILT_BLOCK,
+    sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FREE_RESPONSE_FLOOR,
+    FUSED_SECTIONS, LANES, LOCKSTEP_MIN, SOSFILT_BLOCK,
 };
 pub use spectrum::{cumulative_power, knee_frequency};
 pub use welch::{
