@@ -152,7 +152,7 @@ fn fused<const N: usize>(sos: &Sos, x: &mut [f64], state: &mut [[f64; 2]], rev: 
     state.copy_from_slice(&z);
 }
 
-/// Independent chunks filtered side by side by [`lockstep`].
+/// Independent chunks filtered side by side for signals of [`LOCKSTEP_MIN`] samples or more.
 pub const LANES: usize = 4;
 /// Shortest signal filtered in [`LANES`] chunks side by side.
 pub const LOCKSTEP_MIN: usize = 1 << 16;
