@@ -242,7 +242,7 @@ pub fn longitudinal_rows(log: &DriveLog) -> Vec<bool> {
         log,
         "brake_force",
         BRAKE_STEP_N,
-        TORQUE_STEP_WINDOW_S,
+        STEP_WINDOW_S,
         CLUTCH_TRANSITION_HALFWIDTH_S,
     );
     let c = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
@@ -260,7 +260,7 @@ pub const INPUT_GAP_TAIL_S: f64 = 1.0;
 /// second at each shift, an artefact of the input, not of the axle physics.
 ///
 /// Also left out: ±[`SHIFT_HALFWIDTH_AXLE_S`] around an engine-torque step of more than
-/// [`TORQUE_STEP_NM`] within [`TORQUE_STEP_WINDOW_S`] (a tip-in or tip-out). The axle model's
+/// [`TORQUE_STEP_NM`] within [`STEP_WINDOW_S`] (a tip-in or tip-out). The axle model's
 /// drive torque is the quasi-static inverse dynamics of the recorded engine torque, which
 /// neglects the shafts' torsion (the shuffle a step excites for about a second); measured on
 /// clean synthetic drives, a tip-out from 1 300 N·m to engine braking leaves 6–9 kPa of
@@ -273,14 +273,14 @@ pub fn axle_rows(log: &DriveLog) -> Vec<bool> {
         log,
         "engine_torque",
         TORQUE_STEP_NM,
-        TORQUE_STEP_WINDOW_S,
+        STEP_WINDOW_S,
         SHIFT_HALFWIDTH_AXLE_S,
     );
     let d = away_from_steps(
         log,
         "brake_force",
         BRAKE_STEP_N,
-        TORQUE_STEP_WINDOW_S,
+        STEP_WINDOW_S,
         SHIFT_HALFWIDTH_AXLE_S,
     );
     let e = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
@@ -320,18 +320,18 @@ fn away_from_steps(
     ok
 }
 
-/// A service-brake force change larger than this within [`TORQUE_STEP_WINDOW_S`] is a step
+/// A service-brake force change larger than this within [`STEP_WINDOW_S`] is a step
 /// for [`axle_rows`] and [`longitudinal_rows`], N: the 10 Hz brake channel samples a brake
 /// pulse once or twice, so its shape between samples — which the pitch and the speed follow —
 /// is unknown (measured on clean synthetic drives: a single 6.7 kN sample left 12.7 kPa of
 /// pressure residual).
 pub const BRAKE_STEP_N: f64 = 2000.0;
 
-/// An engine-torque change larger than this within [`TORQUE_STEP_WINDOW_S`] is a step for
+/// An engine-torque change larger than this within [`STEP_WINDOW_S`] is a step for
 /// [`axle_rows`], N·m (about a quarter of a heavy-truck engine's reference torque).
 pub const TORQUE_STEP_NM: f64 = 600.0;
-/// See [`TORQUE_STEP_NM`], s.
-pub const TORQUE_STEP_WINDOW_S: f64 = 0.3;
+/// Window of the step tests ([`TORQUE_STEP_NM`], [`BRAKE_STEP_N`]), s.
+pub const STEP_WINDOW_S: f64 = 0.3;
 
 /// Rows where the engine speed is a driveline output: the longitudinal rows
 /// ([`longitudinal_rows`]) with a gear engaged and the clutch not fully open

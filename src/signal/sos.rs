@@ -215,21 +215,14 @@ fn lockstep<const N: usize>(c: &[[f64; 5]; N], z0: &mut [[f64; 2]; N], x: &mut [
 fn blocked(sos: &Sos, x: &mut [f64], state: &mut [[f64; 2]], rev: bool) {
     let mut section = |block: &mut [f64]| {
         for (s, z) in sos.sections().iter().zip(state.iter_mut()) {
-            let (b0, b1, b2, a1, a2) = (s[0], s[1], s[2], s[4], s[5]);
-            let (mut z0, mut z1) = (z[0], z[1]);
-            let mut one = |v: &mut f64| {
-                let xc = *v;
-                let y = b0 * xc + z0;
-                z0 = b1 * xc - a1 * y + z1;
-                z1 = b2 * xc - a2 * y;
-                *v = y;
-            };
+            let c = [[s[0], s[1], s[2], s[4], s[5]]];
+            let mut zs = [*z];
             if rev {
-                block.iter_mut().rev().for_each(&mut one);
+                block.iter_mut().rev().for_each(|v| step(&c, &mut zs, v));
             } else {
-                block.iter_mut().for_each(&mut one);
+                block.iter_mut().for_each(|v| step(&c, &mut zs, v));
             }
-            *z = [z0, z1];
+            *z = zs[0];
         }
     };
     if rev {
