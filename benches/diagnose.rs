@@ -13,46 +13,23 @@
 //!
 //! Run: `cargo bench --bench diagnose` (from the repository top; not part of `cargo test`).
 
-use fleetdyn::diagnose::catalogue::Effect;
+#[path = "common/hour_drive.rs"]
+mod hour_drive;
+
 use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::model::vehicle::VehicleFile;
-use fleetdyn::synth::can::Dropouts;
-use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect};
-use fleetdyn::synth::effects::EffectChoice;
-use std::path::PathBuf;
+use hour_drive::{hour_drive, HOUR_DRIVE_KM};
 use std::time::Instant;
 
 fn main() {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
-    let mut cfg = DriveConfig {
-        slope_resolution: 0.001,
-        dropouts: Some(Dropouts {
-            start_probability: 0.001,
-            mean_length_s: 0.3,
-        }),
-        ..DriveConfig::default()
-    };
-    cfg.driver.stop_every_m = Some(5000.0);
     let t0 = Instant::now();
-    let d = synth_drive(
-        &root.join("fixtures/vehicles/seed002-6x2-diesel.toml"),
-        "highway-se",
-        65.0,
-        3,
-        &dir.path().join("drive"),
-        &cfg,
-        Some(&HiddenEffect {
-            choice: EffectChoice::Given(Effect::AeroDrag, Some(6.6)),
-            answer_path: dir.path().join("answer.json"),
-        }),
-    )
-    .expect("the bench drive generates");
+    let d = hour_drive(dir.path());
     let hours = d.log.duration_s() / 3600.0;
     println!(
         "drive: {:.1} km, {:.2} h, {} rows (generated in {:.0} s)",
-        65.0,
+        HOUR_DRIVE_KM,
         hours,
         d.log.len(),
         t0.elapsed().as_secs_f64()

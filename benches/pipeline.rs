@@ -15,87 +15,14 @@
 //!
 //! Run: `cargo bench --bench pipeline` (from the repository top; not part of `cargo test`).
 
-use arrow::record_batch::RecordBatchReader as _;
+#[path = "common/pipeline_io.rs"]
+mod pipeline_io;
+
 use criterion::{criterion_group, criterion_main, Criterion};
-use fleetdyn::io::AtomicFile;
-use fleetdyn::pipeline::run::{run_plan, RunOptions};
-use fleetdyn::pipeline::spec::{PipelineSpec, Plan};
-use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-use parquet::arrow::ArrowWriter;
-use parquet::basic::{Compression, ZstdLevel};
-use parquet::file::properties::WriterProperties;
-use std::path::{Path, PathBuf};
+use pipeline_io::{nightly, parquet_files, plan, read_write};
 use std::time::Instant;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn plan() -> Plan {
-    std::env::set_current_dir(root()).unwrap();
-    PipelineSpec::load(Path::new("pipelines/nightly.toml"))
-        .unwrap()
-        .plan("pipelines/nightly.toml", None)
-        .unwrap()
-}
-
-fn nightly(plan: &Plan, out: &Path) -> f64 {
-    let r = run_plan(
-        plan,
-        &RunOptions {
-            out_root: out.to_path_buf(),
-            jobs: 1,
-            shard: None,
-            force: true,
-        },
-        &|_| {},
-    )
-    .unwrap();
-    assert_eq!(r.failed, 0);
-    r.drives
-        .iter()
-        .filter_map(|d| d.record.as_ref())
-        .map(|r| r.metrics.duration_s)
-        .sum::<f64>()
-        / 3600.0
-}
-
-fn parquet_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            parquet_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "parquet") {
-            out.push(p);
-        }
-    }
-}
-
-fn read_write(plan: &Plan, tables: &[PathBuf], dst: &Path) {
-    for it in &plan.inputs {
-        std::hint::black_box(std::fs::read(&it.path).unwrap());
-    }
-    let props = WriterProperties::builder()
-        .set_compression(Compression::ZSTD(ZstdLevel::try_new(3).unwrap()))
-        .build();
-    for (k, f) in tables.iter().enumerate() {
-        let reader = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(f).unwrap())
-            .unwrap()
-            .build()
-            .unwrap();
-        let schema = reader.schema();
-        let tmp = AtomicFile::create(&dst.join(format!("{k}.parquet"))).unwrap();
-        let mut w =
-            ArrowWriter::try_new(tmp.try_clone_file().unwrap(), schema, Some(props.clone()))
-                .unwrap();
-        for b in reader {
-            w.write(&b.unwrap()).unwrap();
-        }
-        w.close().unwrap();
-        tmp.commit().unwrap();
-    }
-}
-
+/// Median wall time of `n` runs of `f`, s.
 fn median_s(mut f: impl FnMut(), n: usize) -> f64 {
     let mut t: Vec<f64> = (0..n)
         .map(|_| {

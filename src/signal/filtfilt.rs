@@ -238,21 +238,23 @@ fn filtfilt_scipy(sos: &Sos, x: &[f64], padlen: Option<usize>) -> Result<Vec<f64
             padlen: edge,
         });
     }
-    // odd_ext: [2*x0 - x[edge..=1], x, 2*x[-1] - x[-2..=-(edge+1)]]
-    let mut ext = Vec::with_capacity(n + 2 * edge);
-    ext.extend((1..=edge).rev().map(|j| 2.0 * x[0] - x[j]));
+    // odd_ext: [2*x0 - x[edge..=1], x, 2*x[-1] - x[-2..=-(edge+1)]]. The left extension only
+    // moves the forward state (the backward pass reaches it last, and its outputs there are
+    // cut), so it is filtered in a scratch buffer and the work buffer is [x, right extension]:
+    // the result ends up at the buffer's start, with no copy after the backward pass.
+    let mut left: Vec<f64> = (1..=edge).rev().map(|j| 2.0 * x[0] - x[j]).collect();
+    let mut ext = Vec::with_capacity(n + edge);
     ext.extend_from_slice(x);
     ext.extend((1..=edge).map(|j| 2.0 * x[n - 1] - x[n - 1 - j]));
 
     let zi = sosfilt_zi(sos);
-    let x0 = ext[0];
+    let x0 = left.first().copied().unwrap_or(ext[0]);
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect();
+    sosfilt_in_place(sos, &mut left, &mut state);
     sosfilt_in_place(sos, &mut ext, &mut state);
     let y0 = ext[ext.len() - 1];
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * y0, z[1] * y0]).collect();
     sosfilt_in_place_rev(sos, &mut ext, &mut state);
-    // the result in place: one memmove, no second allocation
-    ext.copy_within(edge..edge + n, 0);
     ext.truncate(n);
     Ok(ext)
 }
