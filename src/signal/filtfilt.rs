@@ -118,12 +118,18 @@ impl Default for EdgeMode {
 /// x)`. Errors: [`SignalError::NonFinite`] for NaN/inf input (first index),
 /// [`SignalError::InputTooShort`] in scipy mode when `len ≤ padlen`.
 pub fn sosfiltfilt(sos: &Sos, x: &[f64], edge: &EdgeMode) -> Result<Vec<f64>, SignalError> {
-    check_finite(x)?;
     match *edge {
+        // checks the input while copying it (one pass over memory instead of two)
         EdgeMode::Scipy { padlen } => filtfilt_scipy(sos, x, padlen),
-        EdgeMode::Matched { padlen, fit_len } => Ok(filtfilt_matched(sos, x, padlen, fit_len)),
+        EdgeMode::Matched { padlen, fit_len } => {
+            check_finite(x)?;
+            Ok(filtfilt_matched(sos, x, padlen, fit_len))
+        }
     }
 }
+
+/// Samples checked per block while copying: the block is still in L1 when it is copied.
+const CHECK_BLOCK: usize = 2048;
 
 /// scipy's default `padlen` for `sosfiltfilt`:
 /// `3·(2·n_sections + 1 − min(#sections with b2 == 0, #sections with a2 == 0))`.
@@ -233,6 +239,7 @@ fn filtfilt_scipy(sos: &Sos, x: &[f64], padlen: Option<usize>) -> Result<Vec<f64
     let n = x.len();
     let edge = padlen.unwrap_or_else(|| scipy_default_padlen(sos));
     if n <= edge {
+        check_finite(x)?;
         return Err(SignalError::InputTooShort {
             len: n,
             padlen: edge,
@@ -244,7 +251,16 @@ fn filtfilt_scipy(sos: &Sos, x: &[f64], padlen: Option<usize>) -> Result<Vec<f64
     // the result ends up at the buffer's start, with no copy after the backward pass.
     let mut left: Vec<f64> = (1..=edge).rev().map(|j| 2.0 * x[0] - x[j]).collect();
     let mut ext = Vec::with_capacity(n + edge);
-    ext.extend_from_slice(x);
+    for (k, block) in x.chunks(CHECK_BLOCK).enumerate() {
+        check_finite(block).map_err(|e| match e {
+            SignalError::NonFinite { index, value } => SignalError::NonFinite {
+                index: k * CHECK_BLOCK + index,
+                value,
+            },
+            other => other,
+        })?;
+        ext.extend_from_slice(block);
+    }
     ext.extend((1..=edge).map(|j| 2.0 * x[n - 1] - x[n - 1 - j]));
 
     let zi = sosfilt_zi(sos);
@@ -330,6 +346,35 @@ mod tests {
 
     fn slope() -> Sos {
         butter(3, 4e-3, 1.0, BandType::Lowpass).unwrap()
+    }
+
+    #[test]
+    fn non_finite_input_names_its_index_in_both_modes() {
+        // the scipy path checks block by block while copying: an index past the first block,
+        // and one in the short-input path, must come out as the input's own index
+        let sos = slope();
+        let mut x: Vec<f64> = (0..3 * CHECK_BLOCK)
+            .map(|i| (i as f64 * 0.01).sin())
+            .collect();
+        x[CHECK_BLOCK + 7] = f64::NAN;
+        x[2 * CHECK_BLOCK] = f64::INFINITY;
+        for edge in [EdgeMode::Scipy { padlen: None }, EdgeMode::default()] {
+            match sosfiltfilt(&sos, &x, &edge) {
+                Err(SignalError::NonFinite { index, value }) => {
+                    assert_eq!(index, CHECK_BLOCK + 7, "{edge:?}");
+                    assert!(value.is_nan());
+                }
+                other => panic!("{edge:?}: {other:?}"),
+            }
+        }
+        match sosfiltfilt(
+            &sos,
+            &[1.0, f64::NEG_INFINITY],
+            &EdgeMode::Scipy { padlen: None },
+        ) {
+            Err(SignalError::NonFinite { index: 1, value }) => assert!(value.is_infinite()),
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]
