@@ -248,8 +248,10 @@ def driveline(a, d):
         el = time.perf_counter() - t
         if not sol.success or sol.y.shape[1] != n + 1:
             raise RuntimeError(f"solve_ivp {method} rtol {rtol}: {sol.message}")
+        nfev[(method, rtol)] = sol.nfev
         return el, model.r_w * sol.y[6], sol.y[0]
 
+    nfev = {}
     t_ref, v_ref, w_ref = peer("Radau", 1e-12)
     err = lambda v, w: (float(np.max(np.abs(v - v_ref))), float(np.max(np.abs(w - w_ref))))
     delta = err(v_12, w_12)
@@ -278,6 +280,14 @@ def driveline(a, d):
             times = [first[0]] + [peer(method, rtol)[0] for _ in range(max(a.repeats, 1) - 1)]
             t_py = sorted(times)[len(times) // 2]
             e_py = first[1]
+            if r["rhs_evals"]:
+                notes.append(
+                    f"profile, driveline {name} vs {method} rtol {rtol:.0e}: fleetdyn "
+                    f"{r['rhs_evals']:,} right-hand-side evaluations in {r['steps']:,} steps, "
+                    f"{1e9 * r['median_s'] / r['rhs_evals']:.0f} ns each; peer "
+                    f"{nfev[(method, rtol)]:,} evaluations, "
+                    f"{1e6 * t_py / nfev[(method, rtol)]:.1f} µs each (Jacobian and linear "
+                    f"algebra included)")
             rows.append(row(
                 f"driveline {name}, {a.driveline_s:g} s simulated",
                 f"solve_ivp {method} rtol {rtol:.0e}" + ("" if matched else " (not matched)"),

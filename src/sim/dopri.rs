@@ -193,6 +193,8 @@ pub fn integrate(
     }
     let mut h = h0.min(span).max(span * 1e-12);
     let mut g_prev: Vec<f64> = events.iter().map(|(g, _)| g(t, &y)).collect();
+    // event values at the step's end; swapped with g_prev on acceptance (no allocation per step)
+    let mut g_new: Vec<f64> = Vec::with_capacity(events.len());
     let mut h_last = h;
     while t < t1 {
         let last = t + h >= t1 - 1e-15 * t1.abs().max(1.0);
@@ -251,7 +253,7 @@ pub fn integrate(
         let t_new = if last { t1 } else { t + h };
         // events in this step: locate every crossing, keep the earliest
         let mut first: Option<(usize, f64)> = None;
-        let mut g_new = Vec::with_capacity(events.len());
+        g_new.clear();
         for (k, ((g, dir), &gp)) in events.iter().zip(&g_prev).enumerate() {
             let gn = g(t_new, &ynew);
             g_new.push(gn);
@@ -302,7 +304,7 @@ pub fn integrate(
                 stats,
             });
         }
-        g_prev = g_new;
+        std::mem::swap(&mut g_prev, &mut g_new);
         on_step(
             &Knot { t, y: &y, f: &k1 },
             &Knot {

@@ -587,7 +587,7 @@ pub fn steady_state_locked(
     let w_p = fi * w_d;
     let w_e = it * w_p;
     let f = if smoothing {
-        1.0 - (-p.c_sr_s2_per_m2 * v_mps * v_mps).exp()
+        p.rolling_smoothing(v_mps)
     } else {
         1.0
     };
