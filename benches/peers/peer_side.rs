@@ -33,6 +33,8 @@
 //! - `read_file IN`: read the file's bytes into memory (the floor of any ingest);
 //! - `parquet_write IN OUT`: the canonical log of IN written to OUT (`ingest_stage::write`:
 //!   zstd, unit metadata, atomic rename after fsync) — timed;
+//! - `parquet_decode IN`: decode every column of IN into Arrow record batches (arrow-rs, 64 Ki
+//!   rows per batch, as ingest reads), nothing else — the decode share of `ingest`;
 //! - `memcpy IN`: copy IN's decoded drive-log columns once (the floor of a Parquet decode or
 //!   encode: moving the same values through memory);
 //! - `nightly`: `pipelines/nightly.toml` over the bundled fixtures on one worker
@@ -49,6 +51,7 @@ mod hour_drive;
 #[path = "../common/pipeline_io.rs"]
 mod pipeline_io;
 
+use arrow::record_batch::RecordBatch;
 use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::model::vehicle::VehicleFile;
@@ -59,6 +62,7 @@ use fleetdyn::sim::hybrid::{
     steady_state_locked, ClutchMode, EngineInput, HybridDriveline, Scenario,
 };
 use fleetdyn::sim::inputs::Piecewise;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
@@ -152,6 +156,23 @@ fn main() {
                 ingest_stage::write(out, black_box(&log), "peer").expect("writes");
             });
             report(op, log.len(), &times, "");
+        }
+        "parquet_decode" => {
+            let input = Path::new(arg(0));
+            let mut rows = 0;
+            let times = timed(repeats, || {
+                let file = std::fs::File::open(input).expect("readable");
+                let reader = ParquetRecordBatchReaderBuilder::try_new(file)
+                    .expect("Parquet")
+                    .with_batch_size(64 * 1024)
+                    .build()
+                    .expect("reader");
+                let batches: Vec<RecordBatch> =
+                    reader.map(|b| b.expect("decodes")).collect::<Vec<_>>();
+                rows = batches.iter().map(RecordBatch::num_rows).sum();
+                black_box(batches);
+            });
+            report(op, rows, &times, "");
         }
         "memcpy" => {
             let log = ingest_file(Path::new(arg(0)), &IngestOptions::default())

@@ -44,7 +44,8 @@ Sections, what is compared, and the tolerance of "outputs agree":
   parquet    The drive-hour's canonical Parquet (15 columns, 163 k rows): pyarrow.parquet
              read_table (use_threads=False: one thread each side) vs fleetdyn's reader (ingest of canonical Parquet: decode, unit and
              range checks), and pyarrow write_table (zstd level 3) vs fleetdyn's writer (zstd
-             level 3, unit metadata, fsync + atomic rename). Agreement: every value equal
+             level 3, unit metadata, fsync + atomic rename); fleetdyn's decode alone (arrow-rs
+             record batches, no checks) as a row of its own. Agreement: every value equal
              (missing cells alike) when both sides' outputs are read back. Floor: reading the
              file's bytes plus copying the decoded columns once (read); copying the columns once
              (write).
@@ -419,6 +420,7 @@ def parquet(a, d):
     py_out = os.path.join(d, "py_rw.parquet")
     r_read = fleetdyn(a.fleetdyn, "ingest", a.repeats, src, fd_out)
     r_write = fleetdyn(a.fleetdyn, "parquet_write", a.repeats, src, fd_out)
+    r_decode = fleetdyn(a.fleetdyn, "parquet_decode", a.repeats, src)
     f_read = fleetdyn(a.fleetdyn, "read_file", a.repeats, src)["median_s"]
     f_copy = fleetdyn(a.fleetdyn, "memcpy", a.repeats, src)["median_s"]
     t_read, table = median_time(lambda: pq.read_table(src, use_threads=False), a.repeats)
@@ -437,6 +439,11 @@ def parquet(a, d):
         row(f"Parquet read, {label}", "pyarrow.parquet.read_table", t_read,
             r_read["median_s"], "read the file + copy the columns", f_read + f_copy, agree_r,
             ok_r),
+        row(f"Parquet decode only (arrow-rs record batches), {label}",
+            "pyarrow.parquet.read_table", t_read, r_decode["median_s"],
+            "read the file + copy the columns", f_read + f_copy,
+            f"{r_decode['n']} rows decoded (the rest of fleetdyn's read: unit, time-order, "
+            f"range and gap checks, SI conversion)", r_decode["n"] == table.num_rows),
         row(f"Parquet write (zstd 3), {label}", "pyarrow.parquet.write_table", t_write,
             r_write["median_s"], "copy the columns", f_copy,
             "both files read back equal: " + agree_w, ok_w),
