@@ -18,6 +18,7 @@
 //! options override both.
 
 pub mod align;
+pub mod can;
 pub mod channel;
 mod error;
 pub mod mapping;
@@ -139,6 +140,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
         Some(m) => {
             let fits = match m.format {
                 SourceFormat::McapJson => is_mcap,
+                SourceFormat::CanDbc => false,
                 _ => is_parquet,
             };
             if !fits {
@@ -163,15 +165,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             .map_or_else(|| "canonical".into(), |m| m.name.clone()),
         ..Default::default()
     };
-    let schema = drive_log();
-    let mut required: Vec<(&str, &str)> = Vec::new(); // (column, stage)
-    for stage in &opts.stages {
-        for c in schema.required_for(&[*stage]) {
-            if !required.iter().any(|r| r.0 == c.name) {
-                required.push((&c.name, stage.name()));
-            }
-        }
-    }
+    let required = required_columns(&opts.stages);
     if let Some(m) = &mapping {
         for (col, stage) in &required {
             if !m.signals.contains_key(*col) {
@@ -241,6 +235,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     };
 
     check_nan_runs(path, &t_ns, &signals, &required, opts.max_nan_run_s)?;
+    check_moves(path, &signals, &opts.stages)?;
     let file_stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -266,6 +261,55 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     };
     log.sort_columns();
     Ok(Ingested { log, report })
+}
+
+/// (column, stage) of every column the stages require.
+pub(crate) fn required_columns(stages: &[Stage]) -> Vec<(&'static str, &'static str)> {
+    let schema = drive_log();
+    let mut required: Vec<(&str, &str)> = Vec::new();
+    for stage in stages {
+        for c in schema.required_for(&[*stage]) {
+            if !required.iter().any(|r| r.0 == c.name) {
+                required.push((&c.name, stage.name()));
+            }
+        }
+    }
+    required
+}
+
+/// Below this top speed a drive "never moves", m/s: 1 m/s is well above a standing vehicle's
+/// GNSS speed noise (a few cm/s) and wheel-speed sensors' dead band (they read 0 below about
+/// 2 km/h), and below any real driving.
+pub const MIN_MOVING_SPEED_MPS: f64 = 1.0;
+
+/// Rejects a drive whose vehicle never moves when a stage needs motion (resampling to distance
+/// and everything after it).
+pub(crate) fn check_moves(
+    path: &Path,
+    signals: &[Signal],
+    stages: &[Stage],
+) -> Result<(), IngestError> {
+    let Some(stage) = stages.iter().find(|s| **s != Stage::Ingest) else {
+        return Ok(());
+    };
+    let Some(v) = signals.iter().find(|s| s.name == "vehicle_speed") else {
+        return Ok(());
+    };
+    let max = v
+        .values
+        .iter()
+        .copied()
+        .filter(|x| !x.is_nan())
+        .fold(f64::NAN, f64::max);
+    if max.is_nan() || max < MIN_MOVING_SPEED_MPS {
+        return Err(IngestError::NeverMoves {
+            file: path.into(),
+            max_speed_mps: max,
+            min_speed_mps: MIN_MOVING_SPEED_MPS,
+            stage: stage.name().into(),
+        });
+    }
+    Ok(())
 }
 
 fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestError> {
@@ -325,7 +369,7 @@ fn range_check(
     check_range(path, name, unit, t_ns, values, rows, lo, hi)
 }
 
-fn align_channels(
+pub(crate) fn align_channels(
     path: &Path,
     mut channels: Vec<Channel>,
     required: &[(&str, &str)],
@@ -383,7 +427,7 @@ fn align_channels(
 }
 
 /// Rejects runs of missing values in required columns longer than `limit_s`.
-fn check_nan_runs(
+pub(crate) fn check_nan_runs(
     path: &Path,
     t_ns: &[i64],
     signals: &[Signal],
