@@ -325,7 +325,11 @@ pub fn raw_bits(data: &[u8], start_bit: u32, size: u32, big_endian: bool) -> Opt
         for i in 0..size {
             raw = (raw << 1) | bit(pos)?;
             if i + 1 < size {
-                pos = if pos.is_multiple_of(8) { pos + 15 } else { pos - 1 };
+                pos = if pos.is_multiple_of(8) {
+                    pos + 15
+                } else {
+                    pos - 1
+                };
             }
         }
     } else {

@@ -19,6 +19,7 @@ pub mod frames;
 pub mod j1939;
 pub mod mapping;
 pub mod mdf4;
+pub mod mdf4_write;
 pub mod session;
 
 pub use dbc::Database;
