@@ -83,7 +83,7 @@ fn compare(ch: &Channel, reference: &[(f64, f64)], dt_s: f64, tol: f64) -> (usiz
         }
         let k = match ch.t_ns.binary_search(&t_ns) {
             Ok(k) => k,
-            Err(k) if k == 0 => 0,
+            Err(0) => 0,
             Err(k) if k == ch.len() => k - 1,
             Err(k) => {
                 if t_ns - ch.t_ns[k - 1] <= ch.t_ns[k] - t_ns {

@@ -42,6 +42,9 @@ pub enum Storage {
 
 const RECORD_BYTES: usize = 22;
 
+/// A composition child: name, byte offset, bit offset, bit count, (cn_type, sync, data type).
+type ChildSpec = (&'static str, u32, u8, u32, (u8, u8, u8));
+
 struct Writer {
     buf: Vec<u8>,
 }
@@ -68,7 +71,7 @@ impl Writer {
     fn text(&mut self, s: &str) -> u64 {
         let mut d = s.as_bytes().to_vec();
         d.push(0);
-        while d.len() % 8 != 0 {
+        while !d.len().is_multiple_of(8) {
             d.push(0);
         }
         self.block(b"##TX", &[], &d)
@@ -255,7 +258,7 @@ pub fn write_mdf4(frames: &[CanFrame], start_ns: i64, layout: Layout, storage: S
     } else {
         (1, 0, 10)
     };
-    let children: [(&str, u32, u8, u32, (u8, u8, u8)); 7] = [
+    let children: [ChildSpec; 7] = [
         ("CAN_DataFrame.BusChannel", 8, 1, 2, (0, 0, 0)),
         ("CAN_DataFrame.ID", 8, 3, 29, (0, 0, 0)),
         ("CAN_DataFrame.IDE", 8, 0, 1, (0, 0, 0)),
