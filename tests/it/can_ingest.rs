@@ -395,3 +395,100 @@ fn whole_car_session_when_the_originals_are_present() {
         .collect();
     assert_eq!(compare(ch("engine_speed"), &rpm, 1e-3, 1e-9).0, 4790);
 }
+
+/// A ROS 2 `can_msgs/msg/Frame` message in little-endian CDR, as a ROS 2 CAN bridge publishes.
+fn ros2_frame_cdr(f: &fleetdyn::ingest::can::CanFrame) -> Vec<u8> {
+    let mut b = vec![0, 1, 0, 0]; // CDR_LE encapsulation
+    let sec = (f.t_ns / 1_000_000_000) as i32;
+    let nsec = (f.t_ns % 1_000_000_000) as u32;
+    b.extend_from_slice(&sec.to_le_bytes());
+    b.extend_from_slice(&nsec.to_le_bytes());
+    let frame_id = b"can0\0";
+    b.extend_from_slice(&(frame_id.len() as u32).to_le_bytes());
+    b.extend_from_slice(frame_id);
+    while (b.len() - 4) % 4 != 0 {
+        b.push(0);
+    }
+    b.extend_from_slice(&f.id.to_le_bytes());
+    b.extend_from_slice(&[0, u8::from(f.extended), 0, f.data().len() as u8]);
+    let mut data = [0u8; 8];
+    data[..f.data().len()].copy_from_slice(f.data());
+    b.extend_from_slice(&data);
+    b
+}
+
+/// MCAP raw frames go through the same DBC path: the parked-truck excerpt's frames, published
+/// as ROS 2 CDR frames in one file and as JSON frames in another (beside a JSON topic that is
+/// not frames), ingest to exactly the table the MDF4 excerpt gives.
+#[test]
+fn mcap_frames_decode_like_mdf4() {
+    use std::collections::BTreeMap;
+    let mdf = vec![fixture(&format!("{TRUCK}/excerpt/00000001.MF4"))];
+    let dbc = vec![fixture("schemas/dbc/j1939-fleetdyn.dbc")];
+    let frames = read_mdf4(&mdf[0]).unwrap().frames;
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, cdr: bool| -> PathBuf {
+        let path = dir.path().join(name);
+        let f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        let mut w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .create(f)
+            .unwrap();
+        let (schema, enc) = if cdr {
+            (w.add_schema("can_msgs/msg/Frame", "ros2msg", b"std_msgs/Header header\nuint32 id\nbool is_rtr\nbool is_extended\nbool is_error\nuint8 dlc\nuint8[8] data").unwrap(), "cdr")
+        } else {
+            (
+                w.add_schema("CanFrame", "jsonschema", b"{}").unwrap(),
+                "json",
+            )
+        };
+        let ch = w
+            .add_channel(schema, "/can0/rx", enc, &BTreeMap::new())
+            .unwrap();
+        let other_schema = w.add_schema("Status", "jsonschema", b"{}").unwrap();
+        let other = w
+            .add_channel(other_schema, "/status", "json", &BTreeMap::new())
+            .unwrap();
+        for (seq, f) in frames.iter().enumerate() {
+            let data = if cdr {
+                ros2_frame_cdr(f)
+            } else {
+                let bytes: Vec<String> = f.data().iter().map(u8::to_string).collect();
+                format!(
+                    "{{\"id\": {}, \"extended\": {}, \"bus\": {}, \"data\": [{}]}}",
+                    f.id,
+                    f.extended,
+                    f.bus,
+                    bytes.join(",")
+                )
+                .into_bytes()
+            };
+            let header = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: seq as u32,
+                log_time: f.t_ns as u64,
+                publish_time: f.t_ns as u64,
+            };
+            w.write_to_known_channel(&header, &data).unwrap();
+            if seq % 1000 == 0 {
+                let header = mcap::records::MessageHeader {
+                    channel_id: other,
+                    ..header
+                };
+                w.write_to_known_channel(&header, br#"{"status": "ok"}"#)
+                    .unwrap();
+            }
+        }
+        w.finish().unwrap();
+        path
+    };
+    let reference = ingest_session(&mdf, &dbc, &IngestOptions::default()).unwrap();
+    for (name, cdr) in [("ros2.mcap", true), ("json.mcap", false)] {
+        let path = write(name, cdr);
+        let ing = ingest_session(&[path], &dbc, &IngestOptions::default()).unwrap();
+        assert_eq!(ing.report.format, "mcap-can");
+        assert_eq!(ing.report.source_rows, frames.len() as u64, "{name}");
+        assert_eq!(ing.log.timestamp_ns, reference.log.timestamp_ns, "{name}");
+        assert_eq!(ing.log.signals, reference.log.signals, "{name}");
+    }
+}

@@ -62,6 +62,8 @@ pub struct BusLog {
     pub skipped_records: u64,
     /// The file was unfinalised (`UnFinMF`).
     pub unfinalised: bool,
+    /// `mdf4` or `mcap`.
+    pub format: &'static str,
 }
 
 /// Largest inflated DZ block accepted, bytes (bounds memory on corrupt length fields).
@@ -347,6 +349,7 @@ impl<'a> Reader<'a> {
             frames,
             skipped_records: skipped,
             unfinalised: self.unfinalised,
+            format: "mdf4",
         })
     }
 

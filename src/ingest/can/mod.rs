@@ -4,6 +4,8 @@
 //! - [`frames`]: the frame type every source yields;
 //! - [`mdf4`]: ASAM MDF4 bus-logging files (CANedge and other loggers), several files of one
 //!   session concatenated in time;
+//! - [`mcap_frames`]: MCAP channels of CAN frames (ROS 2 `can_msgs/msg/Frame` in CDR, JSON
+//!   frames);
 //! - [`dbc`]: DBC parsing (the `can-dbc` crate) and signal decoding (byte order, sign,
 //!   scaling, multiplexing);
 //! - [`j1939`]: SAE J1939 PGN matching, "not available" / "error" values, and transport-protocol
@@ -18,6 +20,7 @@ pub mod dbc;
 pub mod frames;
 pub mod j1939;
 pub mod mapping;
+pub mod mcap_frames;
 pub mod mdf4;
 pub mod mdf4_write;
 pub mod session;
@@ -61,6 +64,22 @@ pub enum CanError {
         block: String,
         /// What is wrong.
         message: String,
+    },
+    /// An MCAP file that is invalid, or a frame message in it that does not decode.
+    #[error("{file}: MCAP CAN frames: {message}")]
+    Mcap {
+        /// MCAP file.
+        file: PathBuf,
+        /// What is wrong (topic, message index).
+        message: String,
+    },
+    /// A session file that is neither MDF4 nor MCAP.
+    #[error("{file}: not an MDF4 or MCAP file (first bytes {head})")]
+    UnknownFormat {
+        /// File.
+        file: PathBuf,
+        /// First bytes, hex.
+        head: String,
     },
     /// `%` torque needs a reference torque the log does not carry.
     #[error("{column} is a percentage of the reference torque {message}.{signal}, but no {message} frame was decoded from {files}; log {message} (J1939 EC1 is sent with the transport protocol) or set reference_torque_nm in the mapping")]

@@ -11,7 +11,7 @@
 
 use super::dbc::Database;
 use super::mapping::decode_channels;
-use super::{j1939, mdf4, CanError, CanFrame};
+use super::{j1939, mcap_frames, mdf4, CanError, CanFrame};
 use crate::ingest::mapping::{Mapping, SourceFormat};
 use crate::ingest::{
     align_channels, check_moves, check_nan_runs, required_columns, IngestError, IngestOptions,
@@ -29,19 +29,49 @@ pub struct Session {
     pub frames: Vec<CanFrame>,
     /// Frames read from the files (before reassembly).
     pub raw_frames: u64,
-    /// Records of other bus-logging groups skipped.
+    /// Records of other bus-logging groups (MDF4) or other messages (MCAP) skipped.
     pub skipped_records: u64,
+    /// Some file was MCAP.
+    pub mcap: bool,
 }
 
-/// Reads the frames of a session's files (MDF4).
+/// Reads one file of a session: MDF4 or MCAP, told by its first bytes.
+///
+/// # Errors
+/// [`CanError`] for a file that cannot be read, or is neither format.
+pub fn read_bus_log(path: &Path) -> Result<mdf4::BusLog, CanError> {
+    let mut head = [0u8; 8];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
+        .map_err(|e| CanError::Io {
+            file: path.into(),
+            source: e,
+        })?;
+    match &head[..n] {
+        b"MDF     " | b"UnFinMF " => mdf4::read_mdf4(path),
+        b"\x89MCAP0\r\n" => mcap_frames::read_mcap_frames(path),
+        other => Err(CanError::UnknownFormat {
+            file: path.into(),
+            head: other
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+        }),
+    }
+}
+
+/// Reads the frames of a session's files (MDF4 or MCAP).
 ///
 /// # Errors
 /// [`CanError`] for the first file that cannot be read.
 pub fn read_session(files: &[PathBuf]) -> Result<Session, CanError> {
     let mut frames = Vec::new();
     let mut skipped = 0;
+    let mut mcap = false;
     for f in files {
-        let log = mdf4::read_mdf4(f)?;
+        let log = read_bus_log(f)?;
+        mcap |= log.format == "mcap";
         skipped += log.skipped_records;
         frames.extend(log.frames);
     }
@@ -57,6 +87,7 @@ pub fn read_session(files: &[PathBuf]) -> Result<Session, CanError> {
         frames,
         raw_frames,
         skipped_records: skipped,
+        mcap,
     })
 }
 
@@ -171,7 +202,7 @@ pub fn ingest_session(
         }
     }
     let mut report = IngestReport {
-        format: "mdf4-can".into(),
+        format: if session.mcap { "mcap-can" } else { "mdf4-can" }.into(),
         mapping: mapping.name.clone(),
         source_rows: session.raw_frames,
         ignored: decoded.ignored,
