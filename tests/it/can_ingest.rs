@@ -406,7 +406,7 @@ fn ros2_frame_cdr(f: &fleetdyn::ingest::can::CanFrame) -> Vec<u8> {
     let frame_id = b"can0\0";
     b.extend_from_slice(&(frame_id.len() as u32).to_le_bytes());
     b.extend_from_slice(frame_id);
-    while (b.len() - 4) % 4 != 0 {
+    while !(b.len() - 4).is_multiple_of(4) {
         b.push(0);
     }
     b.extend_from_slice(&f.id.to_le_bytes());

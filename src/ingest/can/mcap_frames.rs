@@ -180,7 +180,7 @@ fn json_frame(data: &[u8], t_ns: i64) -> Result<Option<CanFrame>, JsonFrame> {
             .ok_or_else(|| JsonFrame::Bad("data holds a value that is not a byte".into()))?,
         Value::String(s) => {
             let s: String = s.chars().filter(|c| !c.is_whitespace()).collect();
-            if s.len() % 2 != 0 {
+            if !s.len().is_multiple_of(2) {
                 return Err(JsonFrame::Bad(format!("hex data {s:?} of odd length")));
             }
             (0..s.len())
@@ -216,7 +216,7 @@ mod tests {
         body.extend_from_slice(&(frame_id.len() as u32 + 1).to_le_bytes());
         body.extend_from_slice(frame_id.as_bytes());
         body.push(0);
-        while body.len() % 4 != 0 {
+        while !body.len().is_multiple_of(4) {
             body.push(0);
         }
         body.extend_from_slice(&id.to_le_bytes());
