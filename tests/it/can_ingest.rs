@@ -492,3 +492,59 @@ fn mcap_frames_decode_like_mdf4() {
         assert_eq!(ing.log.signals, reference.log.signals, "{name}");
     }
 }
+
+/// `fleetdyn ingest --dbc F.dbc LOG.MF4…`: a session of several files to one canonical table;
+/// a parked truck is refused for resampling with the "never moves" message; several files
+/// without --dbc are a usage error.
+#[test]
+fn cli_ingest_with_dbc() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("car.parquet");
+    let mut args: Vec<PathBuf> = Vec::new();
+    for d in car_dbcs() {
+        args.push("--dbc".into());
+        args.push(d);
+    }
+    args.extend(car_files());
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .arg("ingest")
+        .args(&args)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains("mdf4-can") && stdout.contains("can-css-gnss-obd2"),
+        "{stdout}"
+    );
+    assert!(out.is_file());
+
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .args(["ingest", "--stages", "resample", "--dbc"])
+        .arg(fixture(&format!(
+            "{TRUCK}/CSS-Electronics-SAE-J1939-DEMO.dbc"
+        )))
+        .arg(fixture(&format!("{TRUCK}/00000001-head80k.MF4")))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("never moves"),
+        "{stderr}"
+    );
+
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .arg("ingest")
+        .args(car_files())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("--dbc"), "{stderr}");
+}
