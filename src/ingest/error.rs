@@ -203,18 +203,6 @@ pub enum IngestError {
         /// What is missing.
         what: String,
     },
-    /// The vehicle never moves, so nothing can be resampled to distance.
-    #[error("{file}: the vehicle never moves (top vehicle_speed {max_speed_mps} m/s, below {min_speed_mps} m/s); stage {stage} needs a drive")]
-    NeverMoves {
-        /// Input file.
-        file: PathBuf,
-        /// Highest vehicle speed in the log (NaN when it has none), m/s.
-        max_speed_mps: f64,
-        /// Threshold, m/s.
-        min_speed_mps: f64,
-        /// First stage that needs motion.
-        stage: String,
-    },
     /// Raw CAN input (MDF4, DBC) that could not be read or decoded.
     #[error(transparent)]
     Can(#[from] crate::ingest::can::CanError),

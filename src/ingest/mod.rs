@@ -5,13 +5,15 @@
 //! - Parquet exports with other names and units, wide or long (time, signal, value), through a
 //!   mapping file (`schemas/mappings/*.toml`, see [`mapping`]);
 //! - MCAP with JSON messages, one topic per CAN message group at its own rate, through a topic
-//!   mapping.
+//!   mapping;
+//! - raw CAN frames (MDF4 bus logging, MCAP frame channels) with DBC files: [`can`].
 //!
 //! Multi-rate sources are aligned onto one time base ([`align`]); wide tables keep their own.
 //! Checks, each an [`IngestError`] naming file, column, row, time and value: required columns of
 //! the requested stages, dtypes, units, time order and duplicates, physical ranges (the vehicle's
-//! gearbox narrows the gear range), and runs of missing values longer than the limit. Nothing is
-//! written here; a failed drive leaves no output.
+//! gearbox narrows the gear range), and runs of missing values longer than the limit. A vehicle
+//! that never moves is refused by resampling ([`crate::signal::distance`]). Nothing is written
+//! here; a failed drive leaves no output.
 //!
 //! Identification: `drive_id` and `vehicle_id` come from the source's metadata (Parquet
 //! key–value metadata; MCAP metadata records), else the drive id is the file stem; explicit
@@ -76,7 +78,7 @@ impl Default for IngestOptions {
 /// Facts about one ingest, for the summary and the run report.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct IngestReport {
-    /// `parquet-wide`, `parquet-long` or `mcap-json`.
+    /// `parquet-wide`, `parquet-long`, `mcap-json`, or for raw CAN sessions `mdf4-can` / `mcap-can`.
     pub format: String,
     /// Mapping used (`canonical` for the canonical layout).
     pub mapping: String,
@@ -235,7 +237,6 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     };
 
     check_nan_runs(path, &t_ns, &signals, &required, opts.max_nan_run_s)?;
-    check_moves(path, &signals, &opts.stages)?;
     let file_stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -275,41 +276,6 @@ pub(crate) fn required_columns(stages: &[Stage]) -> Vec<(&'static str, &'static 
         }
     }
     required
-}
-
-/// Below this top speed a drive "never moves", m/s: 1 m/s is well above a standing vehicle's
-/// GNSS speed noise (a few cm/s) and wheel-speed sensors' dead band (they read 0 below about
-/// 2 km/h), and below any real driving.
-pub const MIN_MOVING_SPEED_MPS: f64 = 1.0;
-
-/// Rejects a drive whose vehicle never moves when a stage needs motion (resampling to distance
-/// and everything after it).
-pub(crate) fn check_moves(
-    path: &Path,
-    signals: &[Signal],
-    stages: &[Stage],
-) -> Result<(), IngestError> {
-    let Some(stage) = stages.iter().find(|s| **s != Stage::Ingest) else {
-        return Ok(());
-    };
-    let Some(v) = signals.iter().find(|s| s.name == "vehicle_speed") else {
-        return Ok(());
-    };
-    let max = v
-        .values
-        .iter()
-        .copied()
-        .filter(|x| !x.is_nan())
-        .fold(f64::NAN, f64::max);
-    if max.is_nan() || max < MIN_MOVING_SPEED_MPS {
-        return Err(IngestError::NeverMoves {
-            file: path.into(),
-            max_speed_mps: max,
-            min_speed_mps: MIN_MOVING_SPEED_MPS,
-            stage: stage.name().into(),
-        });
-    }
-    Ok(())
 }
 
 fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestError> {

@@ -10,6 +10,7 @@ use fleetdyn::ingest::can::{ingest_session, j1939, read_mdf4, read_session, CanE
 use fleetdyn::ingest::channel::Channel;
 use fleetdyn::ingest::{IngestError, IngestOptions};
 use fleetdyn::schema::Stage;
+use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig, ResampleError};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use std::path::{Path, PathBuf};
 
@@ -229,7 +230,7 @@ fn car_excerpt_ingests_to_the_canonical_table() {
 
 /// The parked truck (J1939, the original file's first 80 kB: unfinalised, unsorted, payloads in
 /// a VLSD channel group) decodes with CSS Electronics' J1939 demo DBC: engine speed about
-/// 650 rpm, wheel-based speed 0; stages past ingest refuse it because it never moves.
+/// 650 rpm, wheel-based speed 0; resampling to distance refuses it because it never moves.
 #[test]
 fn parked_truck_decodes_and_is_refused_for_dynamics() {
     let dbc = vec![fixture(&format!(
@@ -260,32 +261,20 @@ fn parked_truck_decodes_and_is_refused_for_dynamics() {
         .iter()
         .all(|&v| v == 0.0));
 
-    for stages in [vec![Stage::Resample], vec![Stage::Slope]] {
-        let opts = IngestOptions {
-            stages,
-            max_nan_run_s: 10.0,
-            ..Default::default()
-        };
-        let e = ingest_session(&head, &dbc, &opts).unwrap_err();
-        assert!(
-            matches!(
-                e,
-                IngestError::NeverMoves { .. } | IngestError::MissingColumn { .. }
-            ),
-            "{e}"
-        );
-        if let IngestError::NeverMoves { max_speed_mps, .. } = e {
-            assert_eq!(max_speed_mps, 0.0);
-        }
-    }
+    // the stage after ingest refuses it: ingest for resampling, then the distance map
     let opts = IngestOptions {
         stages: vec![Stage::Resample],
         ..Default::default()
     };
-    let e = ingest_session(&head, &dbc, &opts).unwrap_err();
+    let ing = ingest_session(&head, &dbc, &opts).unwrap();
+    let e = resample_to_distance(&ing.log, &ResampleConfig::default()).unwrap_err();
+    assert!(
+        matches!(e, ResampleError::NoDistance { distance_m, .. } if distance_m == 0.0),
+        "{e}"
+    );
     let msg = e.to_string();
     assert!(
-        msg.contains("never moves") && msg.contains("resample"),
+        msg.contains("never moves") && msg.contains("00000001-head80k.MF4"),
         "{msg}"
     );
 }
@@ -494,8 +483,8 @@ fn mcap_frames_decode_like_mdf4() {
 }
 
 /// `fleetdyn ingest --dbc F.dbc LOG.MF4…`: a session of several files to one canonical table;
-/// a parked truck is refused for resampling with the "never moves" message; several files
-/// without --dbc are a usage error.
+/// the parked truck's table is refused by `fleetdyn resample` with the "never moves" message;
+/// several files without --dbc are a usage error.
 #[test]
 fn cli_ingest_with_dbc() {
     use std::process::Command;
@@ -526,12 +515,23 @@ fn cli_ingest_with_dbc() {
     );
     assert!(out.is_file());
 
+    let truck = dir.path().join("truck.parquet");
     let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
-        .args(["ingest", "--stages", "resample", "--dbc"])
+        .args(["ingest", "--dbc"])
         .arg(fixture(&format!(
             "{TRUCK}/CSS-Electronics-SAE-J1939-DEMO.dbc"
         )))
         .arg(fixture(&format!("{TRUCK}/00000001-head80k.MF4")))
+        .arg("-o")
+        .arg(&truck)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .arg("resample")
+        .arg(&truck)
+        .arg("-o")
+        .arg(dir.path().join("d.parquet"))
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -539,6 +539,7 @@ fn cli_ingest_with_dbc() {
         !o.status.success() && stderr.contains("never moves"),
         "{stderr}"
     );
+    assert!(!dir.path().join("d.parquet").exists());
 
     let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
         .arg("ingest")

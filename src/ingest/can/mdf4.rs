@@ -545,6 +545,20 @@ impl<'a> Reader<'a> {
 
     /// The data of a DT/SD block, or of a list or zipped form of them, as one stream.
     fn stream(&self, link: u64, kind: &[u8; 2], depth: usize) -> Result<Cow<'a, [u8]>, CanError> {
+        self.stream_once(link, kind, depth, &mut HashSet::new())
+    }
+
+    /// [`Self::stream`], refusing a data block listed twice (which would multiply memory).
+    fn stream_once(
+        &self,
+        link: u64,
+        kind: &[u8; 2],
+        depth: usize,
+        listed: &mut HashSet<u64>,
+    ) -> Result<Cow<'a, [u8]>, CanError> {
+        if !listed.insert(link) {
+            return Err(self.err(link, "DL", "data block listed twice".into()));
+        }
         if depth > LIST_DEPTH_LIMIT {
             return Err(self.err(link, "DL", "data lists nested too deep".into()));
         }
@@ -562,7 +576,12 @@ impl<'a> Reader<'a> {
                     }
                     for &child in l.links.iter().skip(1) {
                         if child != 0 {
-                            out.extend_from_slice(&self.stream(child, kind, depth + 1)?);
+                            out.extend_from_slice(&self.stream_once(
+                                child,
+                                kind,
+                                depth + 1,
+                                listed,
+                            )?);
                         }
                     }
                     dl = match l.link(0) {
@@ -574,7 +593,7 @@ impl<'a> Reader<'a> {
             }
             b"##HL" => match b.link(0) {
                 0 => Ok(Cow::Borrowed(&[])),
-                dl => self.stream(dl, kind, depth + 1),
+                dl => self.stream_once(dl, kind, depth + 1, listed),
             },
             _ => Ok(Cow::Borrowed(b.data)),
         }
@@ -617,7 +636,9 @@ impl<'a> Reader<'a> {
                 format!("inflated length {org_len} bytes over the limit"),
             ));
         }
-        let mut out = Vec::with_capacity(org_len as usize);
+        // deflate expands at most ~1032:1; a larger stated length is not trusted for allocation
+        let cap = org_len.min(zipped_len.saturating_mul(1032).saturating_add(64));
+        let mut out = Vec::with_capacity(cap as usize);
         flate2::read::ZlibDecoder::new(zipped)
             .take(org_len + 1)
             .read_to_end(&mut out)

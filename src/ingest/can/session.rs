@@ -14,8 +14,8 @@ use super::mapping::decode_channels;
 use super::{j1939, mcap_frames, mdf4, CanError, CanFrame};
 use crate::ingest::mapping::{Mapping, SourceFormat};
 use crate::ingest::{
-    align_channels, check_moves, check_nan_runs, required_columns, IngestError, IngestOptions,
-    IngestReport, Ingested,
+    align_channels, check_nan_runs, required_columns, IngestError, IngestOptions, IngestReport,
+    Ingested,
 };
 use crate::table::{DriveLog, DriveMeta};
 use std::path::{Path, PathBuf};
@@ -145,8 +145,7 @@ pub fn auto_can_mapping(dbs: &[Database]) -> Result<Mapping, IngestError> {
 ///
 /// # Errors
 /// Any [`IngestError`]: unreadable files ([`IngestError::Can`]), mapping problems, missing
-/// required columns, the checks every source gets, a vehicle that never moves when a stage
-/// needs motion.
+/// required columns, the checks every source gets.
 pub fn ingest_session(
     files: &[PathBuf],
     dbcs: &[PathBuf],
@@ -217,7 +216,6 @@ pub fn ingest_session(
         &mut report,
     )?;
     check_nan_runs(first, &t_ns, &signals, &required, opts.max_nan_run_s)?;
-    check_moves(first, &signals, &opts.stages)?;
     let meta = DriveMeta {
         drive_id: opts.drive_id.clone().unwrap_or_else(|| {
             first
