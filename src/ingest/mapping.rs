@@ -27,6 +27,10 @@
 //! FuelRate_lph = "l/h"
 //! ```
 //!
+//! Raw CAN (`format = "can-dbc"`, see [`crate::ingest::can::mapping`]): each signal names a DBC
+//! `message` and `signal`, optionally `valid_signal`, `reference_torque_from` and
+//! `source_address`; `[passthrough_signals.NAME]` keeps extra decoded signals.
+//!
 //! Unknown keys, unknown canonical names and unknown units are errors that name the mapping.
 
 use super::IngestError;

@@ -21,8 +21,8 @@
 //!   PID) names each signal's switch and the raw ranges that select it; switches may themselves
 //!   be multiplexed (`m65M`), and a signal is present only when its whole chain is.
 //! - **J1939** messages (database `ProtocolType` "J1939", or a message whose `VFrameFormat` is
-//!   `J1939PG`, and always 29-bit) match frames by PGN (see [`super::j1939`]); their raw values in
-//!   the "not available" / "error" ranges decode to NaN.
+//!   `J1939PG`, and always 29-bit) match frames by PGN (see [`super::j1939`]); their unsigned raw
+//!   values in the "not available" / "error" ranges decode to NaN.
 //! - A signal reaching past the end of a (short) payload decodes to NaN.
 
 use super::frames::CanFrame;
@@ -347,7 +347,9 @@ impl SignalDef {
         let Some(raw) = raw_bits(data, self.start_bit, self.size, self.big_endian) else {
             return f64::NAN;
         };
-        if j1939 && j1939::indicator(raw, self.size).is_some() {
+        // J1939 parameters are unsigned with an offset; a signal a DBC declares signed or float
+        // is taken as it is
+        if j1939 && self.kind == RawKind::Unsigned && j1939::indicator(raw, self.size).is_some() {
             return f64::NAN;
         }
         let x = match self.kind {

@@ -293,3 +293,67 @@ pub fn decode_channels(
         frames_used,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DBC: &str = "VERSION \"\"\n\nNS_ :\n\nBS_:\n\nBU_:\n\nBO_ 2566844926 CCVS1: 8 X\n SG_ WheelBasedVehicleSpeed : 8|16@1+ (0.00390625,0) [0|250.996] \"km/h\" X\n\nBO_ 4 gnss_altitude: 4 X\n SG_ AltitudeValid : 0|1@1+ (1,0) [0|1] \"\" X\n SG_ Altitude : 1|18@1+ (0.1,-6000) [-6000|20000] \"m\" X\n\nBA_DEF_ \"ProtocolType\" STRING ;\nBA_ \"ProtocolType\" \"J1939\";\n";
+
+    fn mapping(extra: &str) -> Mapping {
+        Mapping::parse(
+            &format!(
+                "name = \"t\"\nformat = \"can-dbc\"\n[signals.vehicle_speed]\nmessage = \"CCVS1\"\nsignal = \"WheelBasedVehicleSpeed\"\nunit = \"km/h\"\n{extra}\n[signals.altitude]\nmessage = \"gnss_altitude\"\nsignal = \"Altitude\"\nunit = \"m\"\nvalid_signal = \"AltitudeValid\"\n"
+            ),
+            "t.toml",
+        )
+        .unwrap()
+    }
+
+    fn ccvs1(t: i64, sa: u32, kmh: f64) -> CanFrame {
+        let raw = (kmh * 256.0) as u16;
+        let [lo, hi] = raw.to_le_bytes();
+        CanFrame::new(t, 0x18FE_F100 | sa, true, 1, &[0, lo, hi, 0, 0, 0, 0, 0])
+    }
+
+    fn altitude(t: i64, valid: bool, m: f64) -> CanFrame {
+        let raw = ((m + 6000.0) / 0.1).round() as u32;
+        let word = u32::from(valid) | (raw << 1);
+        CanFrame::new(t, 4, false, 1, &word.to_le_bytes())
+    }
+
+    #[test]
+    fn the_most_frequent_sender_wins_unless_pinned_and_invalid_values_are_missing() {
+        let db = Database::parse(DBC, "t.dbc").unwrap();
+        // the engine (SA 0x00) sends 36 km/h three times, the tachograph (SA 0xEE) 40 km/h twice
+        let frames = vec![
+            ccvs1(0, 0x00, 36.0),
+            ccvs1(1, 0xEE, 40.0),
+            ccvs1(2, 0x00, 36.0),
+            ccvs1(3, 0xEE, 40.0),
+            ccvs1(4, 0x00, 36.0),
+            altitude(5, true, 101.3),
+            altitude(6, false, -5400.0),
+        ];
+        let d = decode_channels(&frames, std::slice::from_ref(&db), &mapping(""), "f").unwrap();
+        let v = &d.channels[1];
+        assert_eq!(v.column, "vehicle_speed");
+        assert_eq!(v.t_ns, [0, 2, 4]);
+        assert!(v.values.iter().all(|&x| (x - 10.0).abs() < 1e-12));
+        assert!(
+            d.ignored.iter().any(|s| s.contains("source address 238")),
+            "{:?}",
+            d.ignored
+        );
+        let a = &d.channels[0];
+        assert_eq!(a.column, "altitude");
+        assert!((a.values[0] - 101.3).abs() < 1e-9);
+        assert!(a.values[1].is_nan());
+
+        let pinned = mapping("source_address = 238");
+        let d = decode_channels(&frames, &[db], &pinned, "f").unwrap();
+        let v = &d.channels[1];
+        assert_eq!(v.t_ns, [1, 3]);
+        assert!(v.values.iter().all(|&x| (x - 40.0 / 3.6).abs() < 1e-12));
+    }
+}

@@ -19,15 +19,12 @@
 use super::frames::CanFrame;
 use super::mdf4::BusLog;
 use super::CanError;
-use mcap::sans_io::LinearReaderOptions;
 use serde_json::Value;
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
-/// Largest record accepted, bytes (bounds memory on corrupt length fields).
-const RECORD_LIMIT_BYTES: usize = 512 << 20;
 /// The ROS 2 CAN frame message type.
 pub const ROS2_CAN_FRAME: &str = "can_msgs/msg/Frame";
 
@@ -47,12 +44,10 @@ pub fn read_mcap_frames(path: &Path) -> Result<BusLog, CanError> {
         file: path.into(),
         source: e,
     })?;
-    let options = LinearReaderOptions::default()
-        .with_prevalidate_chunk_crcs(true)
-        .with_validate_data_section_crc(true)
-        .with_validate_summary_section_crc(true)
-        .with_record_length_limit(RECORD_LIMIT_BYTES);
-    let reader = mcap::io::MessageReader::new_with_options(BufReader::new(file), options);
+    let reader = mcap::io::MessageReader::new_with_options(
+        BufReader::new(file),
+        crate::ingest::mcap_source::validated_options(),
+    );
     let mut frames = Vec::new();
     let mut skipped = 0u64;
     let mut kinds: HashMap<u16, Kind> = HashMap::new();
