@@ -128,6 +128,9 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     let head = &head[..n];
     let is_parquet = head.starts_with(PARQUET_MAGIC);
     let is_mcap = head.starts_with(MCAP_MAGIC);
+    if head.starts_with(b"MDF     ") || head.starts_with(b"UnFinMF ") {
+        return Err(IngestError::NeedsDbc { file: path.into() });
+    }
     if !is_parquet && !is_mcap {
         return Err(IngestError::UnknownFormat {
             file: path.into(),

@@ -548,4 +548,15 @@ fn cli_ingest_with_dbc() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && stderr.contains("--dbc"), "{stderr}");
+    // one MDF4 file without --dbc: the error says what is missing
+    let o = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .arg("ingest")
+        .arg(&car_files()[0])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("raw CAN") && stderr.contains("--dbc"),
+        "{stderr}"
+    );
 }
