@@ -529,6 +529,41 @@ mod tests {
         assert!(m.signal_value(1, &[0; 8]).unwrap().is_nan());
     }
 
+    /// Reference for both byte orders from a different formulation: the payload as one bit
+    /// stream. Intel: little-endian bit index = start + i. Motorola: renumber bits MSB-first
+    /// (sequential index 8·byte + 7 − bit), where the signal is `size` consecutive bits from its
+    /// start bit's sequential index.
+    fn reference_bits(data: &[u8], start: u32, size: u32, big_endian: bool) -> Option<u64> {
+        let bit = |byte: usize, b: u32| data.get(byte).map(|x| u64::from((x >> b) & 1));
+        let mut v = 0u64;
+        if big_endian {
+            let first = (start / 8) * 8 + (7 - start % 8);
+            for k in first..first + size {
+                v = (v << 1) | bit((k / 8) as usize, 7 - k % 8)?;
+            }
+        } else {
+            for k in (start..start + size).rev() {
+                v = (v << 1) | bit((k / 8) as usize, k % 8)?;
+            }
+        }
+        Some(v)
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn raw_bits_agree_with_the_bit_stream_reference(
+            data in proptest::collection::vec(proptest::num::u8::ANY, 0..=16),
+            start in 0u32..128,
+            size in 1u32..=64,
+            big_endian in proptest::bool::ANY,
+        ) {
+            proptest::prop_assert_eq!(
+                raw_bits(&data, start, size, big_endian),
+                reference_bits(&data, start, size, big_endian)
+            );
+        }
+    }
+
     #[test]
     fn bad_dbc_is_a_typed_error() {
         let e = Database::parse("BO_ x", "broken.dbc").unwrap_err();
