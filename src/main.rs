@@ -69,10 +69,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Read one MCAP or Parquet file into the canonical drive log and print a summary.
+    /// Read one MCAP or Parquet file (or, with --dbc, the MDF4 files of one raw CAN logging
+    /// session) into the canonical drive log and print a summary.
     Ingest {
-        /// Input file (MCAP or Parquet; format detected from its magic bytes).
-        input: PathBuf,
+        /// Input file (MCAP or Parquet; format detected from its magic bytes); with --dbc, the
+        /// session's MDF4 files, concatenated in time.
+        #[arg(required = true, num_args = 1..)]
+        inputs: Vec<PathBuf>,
+        /// DBC file(s) decoding raw CAN frames (repeat for several buses / databases).
+        #[arg(long)]
+        dbc: Vec<PathBuf>,
         /// Output Parquet file (canonical drive log). Without it only the summary is printed.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -880,15 +886,34 @@ fn run(cli: Cli) -> Result<(), Failure> {
             jobs,
         } => run_prove(drives, seed, min_km, max_km, vehicle, output, jobs),
         Command::Ingest {
-            input,
+            inputs,
+            dbc,
             output,
             ingest,
         } => {
             let (cfg, opts) = ingest.resolve(&[])?;
-            let ing = ingest_stage::run(&input, &opts).map_err(drive)?;
+            let mut fingerprint = cfg.fingerprint(&opts);
+            let ing = if dbc.is_empty() {
+                let [input] = inputs.as_slice() else {
+                    return Err(usage(anyhow::anyhow!(
+                        "{} inputs: several files are one raw CAN session and need --dbc",
+                        inputs.len()
+                    )));
+                };
+                ingest_stage::run(input, &opts).map_err(drive)?
+            } else {
+                let texts = dbc
+                    .iter()
+                    .map(std::fs::read)
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(usage)?;
+                let parts: Vec<&[u8]> = texts.iter().map(Vec::as_slice).collect();
+                fingerprint.push_str(&format!("\ndbc {}", fleetdyn::io::config_hash(&parts)));
+                fleetdyn::ingest::can::ingest_session(&inputs, &dbc, &opts).map_err(drive)?
+            };
             say_raw!("{}", IngestSummary::new(&ing));
             if let Some(out) = output {
-                ingest_stage::write(&out, &ing.log, &cfg.fingerprint(&opts)).map_err(drive)?;
+                ingest_stage::write(&out, &ing.log, &fingerprint).map_err(drive)?;
                 say!("wrote     {}", out.display());
             }
             Ok(())

@@ -203,4 +203,13 @@ pub enum IngestError {
         /// What is missing.
         what: String,
     },
+    /// An MDF4 file of raw CAN frames given without DBC files to decode it.
+    #[error("{file}: an MDF4 log of raw CAN frames; decode it with --dbc FILE.dbc (see `fleetdyn ingest --help`)")]
+    NeedsDbc {
+        /// Input file.
+        file: PathBuf,
+    },
+    /// Raw CAN input (MDF4, DBC) that could not be read or decoded.
+    #[error(transparent)]
+    Can(#[from] crate::ingest::can::CanError),
 }

@@ -27,6 +27,10 @@
 //! FuelRate_lph = "l/h"
 //! ```
 //!
+//! Raw CAN (`format = "can-dbc"`, see [`crate::ingest::can::mapping`]): each signal names a DBC
+//! `message` and `signal`, optionally `valid_signal`, `reference_torque_from` and
+//! `source_address`; `[passthrough_signals.NAME]` keeps extra decoded signals.
+//!
 //! Unknown keys, unknown canonical names and unknown units are errors that name the mapping.
 
 use super::IngestError;
@@ -48,6 +52,10 @@ pub enum SourceFormat {
     /// MCAP with JSON-encoded messages, one topic per CAN message group.
     #[serde(rename = "mcap-json")]
     McapJson,
+    /// Raw CAN frames (MDF4 bus logging, MCAP frames) decoded with DBC files; signals name a
+    /// DBC `message` and `signal` (see [`crate::ingest::can`]).
+    #[serde(rename = "can-dbc")]
+    CanDbc,
 }
 
 /// Time column settings.
@@ -84,6 +92,20 @@ pub struct SignalSource {
     pub unit: String,
     /// Engine reference torque for `%` torque, N·m.
     pub reference_torque_nm: Option<f64>,
+    /// `can-dbc`: DBC message name.
+    pub message: Option<String>,
+    /// `can-dbc`: signal name within `message`.
+    pub signal: Option<String>,
+    /// `can-dbc`, `%` torque: the decoded signal (`MESSAGE.SIGNAL`, e.g.
+    /// `EC1.EngineReferenceTorque`) that holds the reference torque in N·m, instead of a fixed
+    /// `reference_torque_nm`. A log without that message is an error naming it.
+    pub reference_torque_from: Option<String>,
+    /// `can-dbc`: a signal of the same message that flags the value valid (non-zero) or not
+    /// (zero: the sample is missing), e.g. `PositionValid` of a GNSS message.
+    pub valid_signal: Option<String>,
+    /// `can-dbc`, J1939: only frames from this source address (default: the address that sent
+    /// the message most often).
+    pub source_address: Option<u8>,
 }
 
 /// A parsed mapping file.
@@ -112,6 +134,10 @@ pub struct Mapping {
     /// Units of non-canonical columns that are passed through.
     #[serde(default)]
     pub passthrough_units: BTreeMap<String, String>,
+    /// `can-dbc`: non-canonical columns decoded and kept as they are (column name with its
+    /// unit → message, signal, `unit`).
+    #[serde(default)]
+    pub passthrough_signals: BTreeMap<String, SignalSource>,
     /// Where the mapping came from (set by the loader).
     #[serde(skip)]
     pub origin: String,
@@ -131,6 +157,9 @@ pub struct ResolvedSignal {
     pub field_path: Vec<String>,
     /// Conversion into the canonical SI unit.
     pub conversion: Conversion,
+    /// `can-dbc` `%` torque: the `MESSAGE.SIGNAL` holding the reference torque (N·m); the
+    /// `conversion` then still has to be scaled by reference / 100.
+    pub reference_torque_from: Option<String>,
 }
 
 const EMBEDDED: &[(&str, &str)] = &[
@@ -153,6 +182,14 @@ const EMBEDDED: &[(&str, &str)] = &[
     (
         "css-gnss-wide",
         include_str!("../../schemas/mappings/css-gnss-wide.toml"),
+    ),
+    (
+        "can-j1939",
+        include_str!("../../schemas/mappings/can-j1939.toml"),
+    ),
+    (
+        "can-css-gnss-obd2",
+        include_str!("../../schemas/mappings/can-css-gnss-obd2.toml"),
     ),
 ];
 
@@ -215,12 +252,27 @@ impl Mapping {
                 .column(column)
                 .filter(|c| c.name != "timestamp")
                 .ok_or_else(|| err(format!("unknown canonical column {column:?}")))?;
-            let conversion = conversion(&src.unit, &spec.quantity, src.reference_torque_nm)
-                .map_err(|e| IngestError::Unit {
+            let deferred = self.format == SourceFormat::CanDbc
+                && src.reference_torque_from.is_some()
+                && src.reference_torque_nm.is_none();
+            if src.reference_torque_from.is_some() && !deferred {
+                return Err(err(format!(
+                    "{column}: reference_torque_from is for can-dbc mappings without reference_torque_nm"
+                )));
+            }
+            // a deferred reference torque is applied at decode time: 1 %/unit until then
+            let reference = if deferred {
+                Some(100.0)
+            } else {
+                src.reference_torque_nm
+            };
+            let conversion = conversion(&src.unit, &spec.quantity, reference).map_err(|e| {
+                IngestError::Unit {
                     mapping: self.origin.clone(),
                     column: column.clone(),
                     source: e,
-                })?;
+                }
+            })?;
             let (source, field_path) =
                 match self.format {
                     SourceFormat::McapJson => {
@@ -232,6 +284,14 @@ impl Mapping {
                         })?;
                         (topic, field.split('.').map(str::to_string).collect())
                     }
+                    SourceFormat::CanDbc => match (&src.message, &src.signal) {
+                        (Some(m), Some(s)) => (format!("{m}.{s}"), Vec::new()),
+                        _ => {
+                            return Err(err(format!(
+                                "{column}: `message` and `signal` are required for can-dbc"
+                            )))
+                        }
+                    },
                     _ => (
                         src.source
                             .clone()
@@ -244,6 +304,11 @@ impl Mapping {
                 source,
                 field_path,
                 conversion,
+                reference_torque_from: if deferred {
+                    src.reference_torque_from.clone()
+                } else {
+                    None
+                },
             });
         }
         Ok(out)

@@ -34,6 +34,16 @@ pub struct McapRead {
     pub metadata: HashMap<String, String>,
 }
 
+/// Streaming options that check every chunk CRC before its messages are used, the data and
+/// summary section CRCs, and bound a record's length (also used for MCAP CAN frames).
+pub(crate) fn validated_options() -> LinearReaderOptions {
+    LinearReaderOptions::default()
+        .with_prevalidate_chunk_crcs(true)
+        .with_validate_data_section_crc(true)
+        .with_validate_summary_section_crc(true)
+        .with_record_length_limit(RECORD_LIMIT_BYTES)
+}
+
 fn lookup<'a>(v: &'a Value, path: &[String]) -> Option<&'a Value> {
     path.iter().try_fold(v, |v, k| v.get(k))
 }
@@ -55,12 +65,8 @@ pub fn read_mcap(path: &Path, mapping: &Mapping) -> Result<McapRead, IngestError
     for (i, r) in resolved.iter().enumerate() {
         by_topic.entry(r.source.as_str()).or_default().push(i);
     }
-    let options = LinearReaderOptions::default()
-        .with_prevalidate_chunk_crcs(true)
-        .with_validate_data_section_crc(true)
-        .with_validate_summary_section_crc(true)
-        .with_record_length_limit(RECORD_LIMIT_BYTES);
-    let reader = mcap::io::MessageReader::new_with_options(BufReader::new(file), options);
+    let reader =
+        mcap::io::MessageReader::new_with_options(BufReader::new(file), validated_options());
     let mut messages = 0u64;
     let mut per_topic: HashMap<String, u64> = HashMap::new();
     let mut ignored: Vec<String> = Vec::new();

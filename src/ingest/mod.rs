@@ -5,19 +5,22 @@
 //! - Parquet exports with other names and units, wide or long (time, signal, value), through a
 //!   mapping file (`schemas/mappings/*.toml`, see [`mapping`]);
 //! - MCAP with JSON messages, one topic per CAN message group at its own rate, through a topic
-//!   mapping.
+//!   mapping;
+//! - raw CAN frames (MDF4 bus logging, MCAP frame channels) with DBC files: [`can`].
 //!
 //! Multi-rate sources are aligned onto one time base ([`align`]); wide tables keep their own.
 //! Checks, each an [`IngestError`] naming file, column, row, time and value: required columns of
 //! the requested stages, dtypes, units, time order and duplicates, physical ranges (the vehicle's
-//! gearbox narrows the gear range), and runs of missing values longer than the limit. Nothing is
-//! written here; a failed drive leaves no output.
+//! gearbox narrows the gear range), and runs of missing values longer than the limit. A vehicle
+//! that never moves is refused by resampling ([`crate::signal::distance`]). Nothing is written
+//! here; a failed drive leaves no output.
 //!
 //! Identification: `drive_id` and `vehicle_id` come from the source's metadata (Parquet
 //! key–value metadata; MCAP metadata records), else the drive id is the file stem; explicit
 //! options override both.
 
 pub mod align;
+pub mod can;
 pub mod channel;
 mod error;
 pub mod mapping;
@@ -75,7 +78,7 @@ impl Default for IngestOptions {
 /// Facts about one ingest, for the summary and the run report.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct IngestReport {
-    /// `parquet-wide`, `parquet-long` or `mcap-json`.
+    /// `parquet-wide`, `parquet-long`, `mcap-json`, or for raw CAN sessions `mdf4-can` / `mcap-can`.
     pub format: String,
     /// Mapping used (`canonical` for the canonical layout).
     pub mapping: String,
@@ -125,6 +128,9 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     let head = &head[..n];
     let is_parquet = head.starts_with(PARQUET_MAGIC);
     let is_mcap = head.starts_with(MCAP_MAGIC);
+    if head.starts_with(b"MDF     ") || head.starts_with(b"UnFinMF ") {
+        return Err(IngestError::NeedsDbc { file: path.into() });
+    }
     if !is_parquet && !is_mcap {
         return Err(IngestError::UnknownFormat {
             file: path.into(),
@@ -139,6 +145,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
         Some(m) => {
             let fits = match m.format {
                 SourceFormat::McapJson => is_mcap,
+                SourceFormat::CanDbc => false,
                 _ => is_parquet,
             };
             if !fits {
@@ -163,15 +170,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             .map_or_else(|| "canonical".into(), |m| m.name.clone()),
         ..Default::default()
     };
-    let schema = drive_log();
-    let mut required: Vec<(&str, &str)> = Vec::new(); // (column, stage)
-    for stage in &opts.stages {
-        for c in schema.required_for(&[*stage]) {
-            if !required.iter().any(|r| r.0 == c.name) {
-                required.push((&c.name, stage.name()));
-            }
-        }
-    }
+    let required = required_columns(&opts.stages);
     if let Some(m) = &mapping {
         for (col, stage) in &required {
             if !m.signals.contains_key(*col) {
@@ -268,6 +267,20 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     Ok(Ingested { log, report })
 }
 
+/// (column, stage) of every column the stages require.
+pub(crate) fn required_columns(stages: &[Stage]) -> Vec<(&'static str, &'static str)> {
+    let schema = drive_log();
+    let mut required: Vec<(&str, &str)> = Vec::new();
+    for stage in stages {
+        for c in schema.required_for(&[*stage]) {
+            if !required.iter().any(|r| r.0 == c.name) {
+                required.push((&c.name, stage.name()));
+            }
+        }
+    }
+    required
+}
+
 fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestError> {
     let embedded = Mapping::embedded();
     if is_mcap {
@@ -325,7 +338,7 @@ fn range_check(
     check_range(path, name, unit, t_ns, values, rows, lo, hi)
 }
 
-fn align_channels(
+pub(crate) fn align_channels(
     path: &Path,
     mut channels: Vec<Channel>,
     required: &[(&str, &str)],
@@ -383,7 +396,7 @@ fn align_channels(
 }
 
 /// Rejects runs of missing values in required columns longer than `limit_s`.
-fn check_nan_runs(
+pub(crate) fn check_nan_runs(
     path: &Path,
     t_ns: &[i64],
     signals: &[Signal],

@@ -110,7 +110,7 @@ pub enum ResampleError {
         column: String,
     },
     /// The vehicle never moved far enough.
-    #[error("{file}: the vehicle travelled {distance_m:.2} m in {duration_s:.1} s (minimum {min_m} m): no distance to resample")]
+    #[error("{file}: the vehicle never moves: it travelled {distance_m:.2} m in {duration_s:.1} s (minimum {min_m} m), no distance to resample")]
     NoDistance {
         /// Source file.
         file: String,

@@ -9,6 +9,7 @@ mod axle_scenarios;
 mod axle_static_table;
 mod axle_validate;
 mod batch_pipeline;
+mod can_ingest;
 mod common;
 mod diagnose_cli;
 mod diagnose_explain;
