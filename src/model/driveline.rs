@@ -316,16 +316,21 @@ impl DrivelineParams {
 mod tests {
     use super::*;
 
-    #[test]
-    fn rolling_smoothing_has_the_bits_of_the_formula() {
-        // the short cut above c_sr v² = 40 must give exactly 1 − exp(−c_sr v²): checked on a
-        // fine sweep across the cut (x from 0 to 60) and far beyond it (exp underflows)
+    /// The bundled truck-40t vehicle file as a TOML table.
+    fn truck_40t() -> toml::Table {
         let text = std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/fixtures/vehicles/truck-40t.toml"
         ))
         .unwrap();
-        let doc: toml::Table = toml::from_str(&text).unwrap();
+        toml::from_str(&text).unwrap()
+    }
+
+    #[test]
+    fn rolling_smoothing_has_the_bits_of_the_formula() {
+        // the short cut above c_sr v² = 40 must give exactly 1 − exp(−c_sr v²): checked on a
+        // fine sweep across the cut (x from 0 to 60) and far beyond it (exp underflows)
+        let doc = truck_40t();
         let mut p: DrivelineParams = doc["driveline"].clone().try_into().unwrap();
         for c_sr in [p.c_sr_s2_per_m2, 1.0, 1e3] {
             p.c_sr_s2_per_m2 = c_sr;
@@ -349,12 +354,7 @@ mod tests {
     #[test]
     fn schema_lists_every_field() {
         // every struct field has a schema entry and vice versa: the fixture parses through both
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/fixtures/vehicles/truck-40t.toml"
-        ))
-        .unwrap();
-        let doc: toml::Table = toml::from_str(&text).unwrap();
+        let doc = truck_40t();
         let t = doc["driveline"].as_table().unwrap();
         let p = DrivelineParams::from_table(t, 12).unwrap();
         assert_eq!(t.len(), vehicle_schema().driveline.len());
@@ -365,12 +365,7 @@ mod tests {
 
     #[test]
     fn problems_name_the_key() {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/fixtures/vehicles/truck-40t.toml"
-        ))
-        .unwrap();
-        let doc: toml::Table = toml::from_str(&text).unwrap();
+        let doc = truck_40t();
         let base = doc["driveline"].as_table().unwrap().clone();
         let with = |k: &str, v: toml::Value| {
             let mut t = base.clone();
