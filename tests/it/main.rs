@@ -8,6 +8,8 @@ mod axle_reference;
 mod axle_scenarios;
 mod axle_static_table;
 mod axle_validate;
+mod bad_corpus;
+mod bad_corpus_gen;
 mod batch_pipeline;
 mod common;
 mod diagnose_cli;
