@@ -1522,7 +1522,11 @@ fn run_pipeline(
         shard,
         force,
     };
-    let report = run_plan(&plan, &opts, &on_drive).map_err(drive)?;
+    let report = run_plan(&plan, &opts, &on_drive).map_err(|e| match e {
+        // the environment, not a drive: a configuration error like a bad output path
+        e @ fleetdyn::pipeline::run::RunError::OutputFolder { .. } => usage(e),
+        e => drive(e),
+    })?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }

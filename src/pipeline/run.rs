@@ -261,6 +261,15 @@ pub enum RunError {
     /// A report table.
     #[error(transparent)]
     Table(#[from] OutputError),
+    /// The output root cannot be written (read-only, no permission): checked before any drive.
+    #[error("output folder {path} is not writable: {source}")]
+    OutputFolder {
+        /// Output root.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// A stage error with the stage it belongs to.
@@ -1092,7 +1101,8 @@ fn write_drive(
 /// outcome as it completes, from any worker thread (progress output).
 ///
 /// # Errors
-/// [`RunError`] only for the pool and the report itself; drive failures are in the report.
+/// [`RunError`] only for an unwritable output root, the pool and the report itself; drive
+/// failures are in the report.
 pub fn run_plan(
     plan: &Plan,
     opts: &RunOptions,
@@ -1120,6 +1130,12 @@ pub fn run_plan(
         force: opts.force,
         claims: Mutex::new(HashMap::new()),
     };
+    ctx.ds
+        .check_writable()
+        .map_err(|source| RunError::OutputFolder {
+            path: opts.out_root.clone(),
+            source,
+        })?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()

@@ -4,9 +4,9 @@
 //! drives, which must still complete. The files come from `bad_corpus_gen.rs`.
 
 use crate::bad_corpus_gen::generate;
+use crate::batch_pipeline::walk;
 use crate::common::fixture;
 use serde::Deserialize;
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 #[derive(Debug, Deserialize)]
@@ -47,22 +47,6 @@ fn fleetdyn(args: &[String]) -> Output {
         .unwrap()
 }
 
-fn files_under(dir: &Path) -> Vec<PathBuf> {
-    let mut v = Vec::new();
-    if let Ok(rd) = std::fs::read_dir(dir) {
-        for e in rd {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                v.extend(files_under(&p));
-            } else {
-                v.push(p);
-            }
-        }
-    }
-    v.sort();
-    v
-}
-
 #[test]
 fn bad_corpus_matches_its_generator() {
     let committed = fixture("fixtures/bad");
@@ -71,7 +55,7 @@ fn bad_corpus_matches_its_generator() {
     }
     let dir = tempfile::tempdir().unwrap();
     generate(dir.path());
-    let made = files_under(dir.path());
+    let made = walk(dir.path());
     assert!(made.len() >= 30, "{} files", made.len());
     for p in &made {
         let name = p.file_name().unwrap();
@@ -84,7 +68,7 @@ fn bad_corpus_matches_its_generator() {
     }
     // every committed corpus file is generated and has exactly one manifest case
     let m = manifest();
-    for c in files_under(&committed) {
+    for c in walk(&committed) {
         let name = c.file_name().unwrap().to_string_lossy().into_owned();
         if name == "manifest.toml" {
             continue;
@@ -147,7 +131,7 @@ fn every_bad_input_fails_clearly_through_the_cli() {
         if c.exit != 0 {
             // the message names the file it is about (the corpus file, or the input it was
             // applied to)
-            let left = files_under(&out);
+            let left = walk(&out);
             if !left.is_empty() {
                 problems.push(format!("{}: left output behind: {left:?}", c.file));
             }
@@ -209,10 +193,7 @@ fn bad_drives_fail_alone_inside_a_batch() {
     };
     let mut problems = Vec::new();
     // the good fixture drives completed with all their tables
-    let written: Vec<String> = files_under(&out)
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect();
+    let written: Vec<String> = walk(&out).iter().map(|p| p.display().to_string()).collect();
     for g in good {
         let r = by_input(g);
         if r["status"] == "failed" {

@@ -17,7 +17,7 @@ fn fleetdyn(args: &[&str], extra: &[&Path]) -> Output {
         .unwrap()
 }
 
-fn walk(dir: &Path) -> Vec<PathBuf> {
+pub fn walk(dir: &Path) -> Vec<PathBuf> {
     let mut v = Vec::new();
     let Ok(rd) = std::fs::read_dir(dir) else {
         return v;
@@ -36,7 +36,7 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
 
 /// Files of a run that are a function of inputs and configuration only (everything but the
 /// two report files holding wall-clock times), relative to the root.
-fn deterministic_files(root: &Path) -> Vec<PathBuf> {
+pub fn deterministic_files(root: &Path) -> Vec<PathBuf> {
     walk(root)
         .into_iter()
         .map(|p| p.strip_prefix(root).unwrap().to_path_buf())
@@ -47,7 +47,7 @@ fn deterministic_files(root: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
-fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
+pub fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
     for rel in files {
         let (x, y) = (a.join(rel), b.join(rel));
         assert!(y.is_file(), "{rel:?} missing in {}", b.display());
@@ -60,7 +60,7 @@ fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
     }
 }
 
-fn report(root: &Path, pipeline: &str, model: &str) -> serde_json::Value {
+pub fn report(root: &Path, pipeline: &str, model: &str) -> serde_json::Value {
     let p = root
         .join("_reports")
         .join(pipeline)
@@ -259,7 +259,7 @@ fn shards_in_separate_processes_union_to_the_unsharded_run() {
 
 /// `n` canonical drives of `rows` samples at 10 Hz, each with its own slope profile, and a
 /// manifest naming their vehicles.
-fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
+pub fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
     let inputs = dir.join("in");
     std::fs::create_dir_all(&inputs).unwrap();
     let mut manifest = String::from("path,vehicle_id\n");
@@ -277,7 +277,7 @@ fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
     m
 }
 
-fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
+pub fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
     let p = dir.join("fleet.toml");
     std::fs::write(
         &p,

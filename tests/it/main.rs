@@ -22,6 +22,7 @@ mod driveline_hybrid;
 mod driveline_linear;
 mod driveline_reference;
 mod driveline_validate;
+mod fault_injection;
 mod fixtures_regen;
 mod ingest_errors;
 mod ingest_fixtures;
