@@ -53,10 +53,47 @@ fn open(path: &Path) -> Result<ParquetRecordBatchReaderBuilder<File>, IngestErro
         file: path.into(),
         source: e,
     })?;
-    ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| IngestError::Parquet {
+    let len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let builder =
+        ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| IngestError::Parquet {
+            file: path.into(),
+            source: e,
+        })?;
+    check_chunks(builder.metadata(), len).map_err(|message| IngestError::Parquet {
         file: path.into(),
-        source: e,
-    })
+        source: parquet::errors::ParquetError::General(message),
+    })?;
+    Ok(builder)
+}
+
+/// Every column chunk the footer declares must lie inside the file: the parquet crate asserts
+/// (panics) on a negative offset or length while reading (found by `cargo fuzz`, target
+/// `ingest_parquet`; docs/fuzzing.md), so a corrupt footer is refused here instead.
+fn check_chunks(
+    meta: &parquet::file::metadata::ParquetMetaData,
+    file_len: u64,
+) -> Result<(), String> {
+    for (r, rg) in meta.row_groups().iter().enumerate() {
+        for (c, col) in rg.columns().iter().enumerate() {
+            let start = col
+                .dictionary_page_offset()
+                .unwrap_or(col.data_page_offset());
+            let len = col.compressed_size();
+            let inside = u64::try_from(start)
+                .ok()
+                .zip(u64::try_from(len).ok())
+                .and_then(|(s, l)| s.checked_add(l))
+                .is_some_and(|end| end <= file_len);
+            if !inside {
+                return Err(format!(
+                    "row group {r}, column {} ({}): chunk at byte {start}, length {len}, is outside the file ({file_len} bytes)",
+                    c,
+                    col.column_path()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A batch reader over the root columns `roots` only.

@@ -962,14 +962,16 @@ fn write_drive(
         outputs: Vec::new(),
         metrics: metrics_of(c),
     };
-    let mut tables: Vec<(DatasetTable, TableMeta, Vec<OutColumn>)> = Vec::new();
     let meta = |t: &str| base_meta(t, log, hash, &vehicle_id);
-    for &t in &plan.tables {
+    // Each table is built just before it is written and dropped after: one table's columns
+    // in memory at a time, not every table of the drive (a 10-hour drive's drive_log alone
+    // is ~300 MB).
+    let build = |t: DatasetTable| -> Option<(TableMeta, Vec<OutColumn>)> {
         match t {
             DatasetTable::DriveLog => {
                 let mut cols = vec![OutColumn::timestamp(log.timestamp_ns.clone())];
                 cols.extend(conformed(&log.signals, log.len()));
-                tables.push((t, meta("drive_log"), cols));
+                return Some((meta("drive_log"), cols));
             }
             DatasetTable::DistanceLog => {
                 if let Some(d) = &c.dist {
@@ -981,7 +983,7 @@ fn write_drive(
                         OutColumn::timestamp(d.timestamp_ns.clone()),
                     ];
                     cols.extend(conformed(&d.signals, d.distance_m.len()));
-                    tables.push((t, m, cols));
+                    return Some((m, cols));
                 }
             }
             DatasetTable::SlopeDistance | DatasetTable::SlopeTime => {
@@ -995,7 +997,7 @@ fn write_drive(
                     let mut m = slope_stage::meta(name, d, f, &plan.spec.slope, "");
                     m.config_hash = hash.into();
                     m.vehicle_id = Some(vehicle_id.clone());
-                    tables.push((t, m, cols));
+                    return Some((m, cols));
                 }
             }
             DatasetTable::ShuffleSim | DatasetTable::ShuffleValidation => {
@@ -1008,7 +1010,7 @@ fn write_drive(
                     };
                     m.config_hash = hash.into();
                     m.vehicle_id = Some(vehicle_id.clone());
-                    tables.push((t, m, cols));
+                    return Some((m, cols));
                 }
             }
             DatasetTable::AxleSim | DatasetTable::AxleValidation => {
@@ -1032,7 +1034,7 @@ fn write_drive(
                     } else {
                         axle_validation_columns(a)
                     };
-                    tables.push((t, m, cols));
+                    return Some((m, cols));
                 }
             }
             DatasetTable::RoadSpectrum => {
@@ -1045,14 +1047,15 @@ fn write_drive(
                         ("nperseg".into(), sp.psd.nperseg.to_string()),
                         ("step_m".into(), sp.step_m.to_string()),
                     ];
-                    tables.push((t, m, spectrum_columns(sp)));
+                    return Some((m, spectrum_columns(sp)));
                 }
             }
             DatasetTable::DriveSummary => {
-                tables.push((t, meta("drive_summary"), summary_columns(&rec)));
+                return Some((meta("drive_summary"), summary_columns(&rec)));
             }
         }
-    }
+        None
+    };
     let wst = PipelineStage::Write;
     let root = &ctx.ds.root;
     let mut written: Vec<PathBuf> = Vec::new();
@@ -1061,14 +1064,17 @@ fn write_drive(
             let _ = std::fs::remove_file(root.join(p));
         }
     };
-    for (t, m, cols) in &tables {
+    for &t in &plan.tables {
+        let Some((m, cols)) = build(t) else {
+            continue;
+        };
         let rel = ctx
             .ds
             .table_rel(t.name(), &vehicle_id, &rec.date, &rec.drive_id);
         let path = root.join(&rel);
         sweep_temps(&path);
         if let Err(e) =
-            write_table_with_constants(&path, m, cols, &[("drive_id", rec.drive_id.as_str())])
+            write_table_with_constants(&path, &m, &cols, &[("drive_id", rec.drive_id.as_str())])
         {
             undo(&written);
             return Err(fail(wst, e));
