@@ -382,14 +382,19 @@ fn run_shuffle(
     }
     let cfg = spec.validation();
     let ratios = &vehicle.file.gearbox.ratios;
-    let val = validate_shuffle(log, p, ratios, slope_col, &cfg).map_err(|e| fail(st, e))?;
-    let ms_raw = if spec.compare_raw_slope && slope_col.is_some() {
+    // The raw-slope run first: only its mean-square shuffle is kept, so its trajectories are
+    // freed before the run whose outputs are written (a 10-hour drive: ~170 MB less at peak).
+    let raw_ms = if spec.compare_raw_slope && slope_col.is_some() {
         let raw = validate_shuffle(log, p, ratios, None, &cfg).map_err(|e| fail(st, e))?;
-        mean_square(&raw.shuffle_indicator)
-    } else if slope_col.is_none() {
-        mean_square(&val.shuffle_indicator)
+        Some(mean_square(&raw.shuffle_indicator))
     } else {
         None
+    };
+    let val = validate_shuffle(log, p, ratios, slope_col, &cfg).map_err(|e| fail(st, e))?;
+    let ms_raw = match raw_ms {
+        Some(ms) => ms,
+        None if slope_col.is_none() => mean_square(&val.shuffle_indicator),
+        None => None,
     };
     notes.push(ran(st));
     Ok(Some(ShuffleOut { val, ms_raw }))
