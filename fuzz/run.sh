@@ -5,7 +5,7 @@
 # vehicle files a pipeline names relative to it).
 #
 #   cargo +nightly fuzz build            # once (nightly, ASan + libFuzzer)
-#   bash fuzz/run.sh TARGET [SECONDS]    # ingest_mcap | ingest_parquet | pipeline_toml | vehicle_toml
+#   bash fuzz/run.sh TARGET [SECONDS [LIBFUZZER FLAGS…]]   # ingest_mcap | ingest_parquet | pipeline_toml | vehicle_toml
 set -euo pipefail
 cd "$(dirname "$0")/.."
 T=${1:?target}
@@ -23,5 +23,5 @@ case "$T" in
 esac
 echo "target $T, $(date -u +%FT%TZ), $SECS s, seed corpus $(ls "$C" | wc -l) files"
 nice -n 10 "$BIN" "$C" -max_total_time="$SECS" -timeout=20 -rss_limit_mb=2048 -malloc_limit_mb=8192 \
-    -print_final_stats=1 -artifact_prefix="fuzz/artifacts/$T/"
+    -print_final_stats=1 -artifact_prefix="fuzz/artifacts/$T/" "${@:3}"
 echo "corpus after: $(ls "$C" | wc -l) files, $(du -sh "$C" | cut -f1)"
