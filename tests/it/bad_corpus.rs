@@ -4,7 +4,7 @@
 //! drives, which must still complete. The files come from `bad_corpus_gen.rs`.
 
 use crate::bad_corpus_gen::generate;
-use crate::batch_pipeline::walk;
+use crate::batch_pipeline::{nightly_with_default_vehicle, walk};
 use crate::common::fixture;
 use serde::Deserialize;
 use std::process::{Command, Output};
@@ -158,16 +158,7 @@ fn bad_drives_fail_alone_inside_a_batch() {
     let m = manifest();
     let dir = tempfile::tempdir().unwrap();
     // nightly with a default vehicle file, so drives without a vehicle id reach their own error
-    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    let pipeline = dir.path().join("nightly-default-vehicle.toml");
-    std::fs::write(
-        &pipeline,
-        text.replace(
-            "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
-        ),
-    )
-    .unwrap();
+    let pipeline = nightly_with_default_vehicle(dir.path(), "nightly-default-vehicle.toml");
     let good = ["truck-0001.mcap", "truck-0003-export.parquet"];
     let drives: Vec<&Case> = m.case.iter().filter(|c| c.batch.is_some()).collect();
     assert!(drives.len() >= 25, "{} drive inputs", drives.len());

@@ -69,6 +69,12 @@ fn replace_all(b: &mut [u8], from: &[u8], to: &[u8]) -> usize {
     n
 }
 
+/// `text` with its first `from` replaced by `to` (which must be there).
+fn edited(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "{from}");
+    text.replacen(from, to, 1)
+}
+
 /// Writes every corpus file into `dir`.
 pub fn generate(dir: &Path) {
     std::fs::create_dir_all(dir).unwrap();
@@ -305,10 +311,7 @@ pub fn generate(dir: &Path) {
 
     // ---- vehicle files ------------------------------------------------------------------------
     let truck = std::fs::read_to_string(fixture("fixtures/vehicles/truck-40t.toml")).unwrap();
-    let edit = |from: &str, to: &str| {
-        assert!(truck.contains(from), "{from}");
-        truck.replacen(from, to, 1)
-    };
+    let edit = |from: &str, to: &str| edited(&truck, from, to);
     write(
         dir,
         "vehicle-negative-mass.toml",
@@ -341,10 +344,7 @@ pub fn generate(dir: &Path) {
 
     // ---- pipeline files -----------------------------------------------------------------------
     let nightly = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    let edit = |from: &str, to: &str| {
-        assert!(nightly.contains(from), "{from}");
-        nightly.replacen(from, to, 1)
-    };
+    let edit = |from: &str, to: &str| edited(&nightly, from, to);
     write(
         dir,
         "pipeline-unknown-key.toml",

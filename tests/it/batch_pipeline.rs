@@ -277,6 +277,44 @@ pub fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
     m
 }
 
+/// Done-markers (committed drives) under an output root.
+pub fn markers(root: &Path) -> usize {
+    walk(&root.join("_state"))
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .count()
+}
+
+/// What a reader of the output root may see: only whole Parquet files, and no temporary file
+/// under a visible name (temporaries are hidden names that do not end in .parquet).
+pub fn assert_only_whole_files(root: &Path) {
+    for f in walk(root) {
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        if name.ends_with(".parquet") {
+            SerializedFileReader::new(std::fs::File::open(&f).unwrap())
+                .unwrap_or_else(|e| panic!("{f:?} is visible but not whole: {e}"));
+        } else if name.contains(".tmp-") {
+            assert!(name.starts_with('.'), "visible temporary {f:?}");
+        }
+    }
+}
+
+/// `pipelines/nightly.toml` with a default vehicle file (`truck-40t.toml`), written to
+/// `dir/name`: drives without a vehicle id then reach their own stages.
+pub fn nightly_with_default_vehicle(dir: &Path, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
+    let p = dir.join(name);
+    std::fs::write(
+        &p,
+        text.replace(
+            "[vehicles]",
+            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
+        ),
+    )
+    .unwrap();
+    p
+}
+
 pub fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
     let p = dir.join("fleet.toml");
     std::fs::write(
@@ -308,12 +346,6 @@ fn a_killed_run_resumes_to_the_bytes_of_a_clean_run() {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    let markers = |root: &Path| {
-        walk(&root.join("_state"))
-            .iter()
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .count()
-    };
     // wait for the first finished drive, then kill -9 mid-run
     loop {
         if markers(&killed) >= 1 || child.try_wait().unwrap().is_some() {
@@ -325,17 +357,8 @@ fn a_killed_run_resumes_to_the_bytes_of_a_clean_run() {
     child.wait().unwrap();
     let done = markers(&killed);
     assert!(done < 16, "the run finished before it could be killed");
-    // what a reader sees meanwhile: only whole Parquet files (temporaries are hidden names that
-    // do not end in .parquet)
-    for f in walk(&killed) {
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
-        if name.ends_with(".parquet") {
-            SerializedFileReader::new(std::fs::File::open(&f).unwrap())
-                .unwrap_or_else(|e| panic!("{f:?} is not whole: {e}"));
-        } else if name.contains(".tmp-") {
-            assert!(name.starts_with('.'), "visible temporary {f:?}");
-        }
-    }
+    // what a reader sees meanwhile: only whole Parquet files
+    assert_only_whole_files(&killed);
     let o = run_ok(&["run", p, "--jobs", "2"], &killed);
     let r = report(&killed, "fleet", "t1");
     assert_eq!(
@@ -416,16 +439,7 @@ fn a_corrupt_drive_fails_alone_with_its_stage_and_exit_1() {
     assert!(md.contains("Failures (2)"), "{md}");
 
     // with a default vehicle file the parked drive gets to resample, and fails there
-    let p = dir.path().join("with-default.toml");
-    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    std::fs::write(
-        &p,
-        text.replace(
-            "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
-        ),
-    )
-    .unwrap();
+    let p = nightly_with_default_vehicle(dir.path(), "with-default.toml");
     let o = fleetdyn(
         &["run", p.to_str().unwrap(), "--input"],
         &[&inputs.join("sub/parked.parquet"), Path::new("--out"), &out],

@@ -10,10 +10,10 @@
 //! user `nobody` so the permission bits apply.
 
 use crate::batch_pipeline::{
-    assert_same_bytes, deterministic_files, fleet_pipeline, report, synthetic_fleet, walk,
+    assert_only_whole_files, assert_same_bytes, deterministic_files, fleet_pipeline, markers,
+    nightly_with_default_vehicle, report, synthetic_fleet, walk,
 };
 use crate::common::*;
-use parquet::file::reader::SerializedFileReader;
 use std::os::unix::fs::PermissionsExt;
 use std::os::unix::process::CommandExt;
 use std::path::Path;
@@ -33,6 +33,15 @@ fn text(o: &Output) -> String {
     )
 }
 
+/// Runs `cmd`, checks that it did not panic and exited with `code`; its stdout and stderr.
+fn run_expecting(cmd: &mut Command, code: i32) -> String {
+    let o = cmd.output().unwrap();
+    assert_no_panic(&o);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(code), "{t}");
+    t
+}
+
 fn assert_no_panic(o: &Output) {
     let t = text(o);
     assert!(
@@ -40,27 +49,6 @@ fn assert_no_panic(o: &Output) {
         "{:?}: {t}",
         o.status
     );
-}
-
-/// What a reader of the output root may see: only whole Parquet files, and no temporary file
-/// under a visible name.
-fn assert_only_whole_files(root: &Path) {
-    for f in walk(root) {
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
-        if name.ends_with(".parquet") {
-            SerializedFileReader::new(std::fs::File::open(&f).unwrap())
-                .unwrap_or_else(|e| panic!("{f:?} is visible but not whole: {e}"));
-        } else if name.contains(".tmp-") {
-            assert!(name.starts_with('.'), "visible temporary {f:?}");
-        }
-    }
-}
-
-fn markers(root: &Path) -> usize {
-    walk(&root.join("_state"))
-        .iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .count()
 }
 
 /// Dataset files (not markers or reports) under `root`.
@@ -165,26 +153,14 @@ fn read_only_folder(dir: &Path) -> (std::path::PathBuf, Command) {
 fn a_read_only_output_folder_is_refused_before_any_drive_naming_it() {
     let dir = tempfile::tempdir().unwrap();
     let (ro, mut cmd) = read_only_folder(dir.path());
-    let pipeline = dir.path().join("p.toml");
-    let nightly = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    std::fs::write(
-        &pipeline,
-        nightly.replace(
-            "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
-        ),
-    )
-    .unwrap();
+    let pipeline = nightly_with_default_vehicle(dir.path(), "p.toml");
     std::fs::set_permissions(&pipeline, std::fs::Permissions::from_mode(0o644)).unwrap();
-    let o = cmd
-        .args(["run", pipeline.to_str().unwrap(), "--out"])
-        .arg(&ro)
-        .args(["--input", "fixtures/bad/good-small.parquet"])
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    let t = text(&o);
-    assert_eq!(o.status.code(), Some(2), "{t}");
+    let t = run_expecting(
+        cmd.args(["run", pipeline.to_str().unwrap(), "--out"])
+            .arg(&ro)
+            .args(["--input", "fixtures/bad/good-small.parquet"]),
+        2,
+    );
     assert!(
         t.contains(&format!("output folder {} is not writable", ro.display()))
             && t.contains("Permission denied"),
@@ -199,14 +175,11 @@ fn a_read_only_output_folder_is_refused_before_any_drive_naming_it() {
     std::fs::create_dir(&single).unwrap();
     let (ro2, mut cmd) = read_only_folder(&single);
     let target = ro2.join("drive.parquet");
-    let o = cmd
-        .args(["ingest", "fixtures/bad/good-small.parquet", "-o"])
-        .arg(&target)
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    let t = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
+    let t = run_expecting(
+        cmd.args(["ingest", "fixtures/bad/good-small.parquet", "-o"])
+            .arg(&target),
+        1,
+    );
     assert!(
         t.contains(&target.display().to_string()) && t.contains("Permission denied"),
         "{t}"
@@ -223,18 +196,15 @@ fn a_device_as_output_file_is_refused_not_replaced() {
     if !dev.exists() {
         return;
     }
-    let o = bin()
-        .args([
+    let t = run_expecting(
+        &mut bin().args([
             "ingest",
             "fixtures/bad/good-small.parquet",
             "-o",
             "/dev/full",
-        ])
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    let t = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
+        ]),
+        1,
+    );
     assert!(
         t.contains("/dev/full") && t.contains("not a regular file"),
         "{t}"
@@ -252,36 +222,25 @@ fn a_device_as_output_file_is_refused_not_replaced() {
 fn a_full_disk_fails_the_drives_it_hits_naming_the_file_and_leaves_nothing_half_written() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let pipeline = dir.path().join("p.toml");
-    let nightly = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    std::fs::write(
-        &pipeline,
-        nightly.replace(
-            "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
-        ),
-    )
-    .unwrap();
+    let pipeline = nightly_with_default_vehicle(dir.path(), "p.toml");
     // `ulimit -f` counts 512-byte blocks in POSIX sh (dash) and 1024-byte blocks in bash: 64
     // blocks is 32 or 64 KB, above every output of the small drive and below the fixture
     // drive's drive_log (hundreds of KB).
-    let o = Command::new("sh")
-        .current_dir(fixture(""))
-        .args(["-c", "trap '' XFSZ; ulimit -f 64; exec \"$0\" \"$@\""])
-        .arg(env!("CARGO_BIN_EXE_fleetdyn"))
-        .args(["run", pipeline.to_str().unwrap(), "--jobs", "1", "--out"])
-        .arg(&out)
-        .args([
-            "--input",
-            "fixtures/drives/truck-0001.mcap",
-            "--input",
-            "fixtures/bad/good-small.parquet",
-        ])
-        .output()
-        .unwrap();
-    assert_no_panic(&o);
-    let t = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
+    let t = run_expecting(
+        &mut Command::new("sh")
+            .current_dir(fixture(""))
+            .args(["-c", "trap '' XFSZ; ulimit -f 64; exec \"$0\" \"$@\""])
+            .arg(env!("CARGO_BIN_EXE_fleetdyn"))
+            .args(["run", pipeline.to_str().unwrap(), "--jobs", "1", "--out"])
+            .arg(&out)
+            .args([
+                "--input",
+                "fixtures/drives/truck-0001.mcap",
+                "--input",
+                "fixtures/bad/good-small.parquet",
+            ]),
+        1,
+    );
     assert!(
         t.contains("FAILED")
             && t.contains(&format!("truck-0001 at write: writing {}", out.display()))
