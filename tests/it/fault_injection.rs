@@ -197,7 +197,7 @@ fn a_device_as_output_file_is_refused_not_replaced() {
         return;
     }
     let t = run_expecting(
-        &mut bin().args([
+        bin().args([
             "ingest",
             "fixtures/bad/good-small.parquet",
             "-o",
@@ -227,7 +227,7 @@ fn a_full_disk_fails_the_drives_it_hits_naming_the_file_and_leaves_nothing_half_
     // blocks is 32 or 64 KB, above every output of the small drive and below the fixture
     // drive's drive_log (hundreds of KB).
     let t = run_expecting(
-        &mut Command::new("sh")
+        Command::new("sh")
             .current_dir(fixture(""))
             .args(["-c", "trap '' XFSZ; ulimit -f 64; exec \"$0\" \"$@\""])
             .arg(env!("CARGO_BIN_EXE_fleetdyn"))
