@@ -113,6 +113,50 @@ fn projected(
         })
 }
 
+thread_local! {
+    /// Set while this thread decodes Parquet inside [`guarded`].
+    static DECODING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs a Parquet read, turning a panic of the decoder into [`IngestError::Parquet`].
+///
+/// parquet 60.1 and arrow-buffer assert on some corrupt pages (e.g. definition levels that
+/// run past their buffer: `offset + len out of bounds`, found by `cargo fuzz`, target
+/// `ingest_parquet`; docs/fuzzing.md) instead of returning an error. A corrupt file must fail
+/// its drive with a typed error, not abort the process, so the read is unwound and reported.
+/// The panic message is kept out of stderr by a hook that stays silent only while this
+/// thread is inside a guarded read (other panics reach the previous hook).
+fn guarded<T>(
+    path: &Path,
+    read: impl FnOnce() -> Result<T, IngestError>,
+) -> Result<T, IngestError> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !DECODING.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    let outer = DECODING.with(|d| d.replace(true));
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read));
+    DECODING.with(|d| d.set(outer));
+    r.unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        Err(IngestError::Parquet {
+            file: path.into(),
+            source: parquet::errors::ParquetError::General(format!(
+                "corrupt data: the decoder failed ({what})"
+            )),
+        })
+    })
+}
+
 /// Column names of a Parquet file (for mapping detection).
 ///
 /// # Errors
@@ -245,6 +289,10 @@ fn field_unit(schema: &Schema, name: &str) -> Option<String> {
 /// # Errors
 /// I/O, Parquet, dtype and unit errors, naming the file and column.
 pub fn read_wide(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, IngestError> {
+    guarded(path, || read_wide_unguarded(path, mapping))
+}
+
+fn read_wide_unguarded(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, IngestError> {
     let builder = open(path)?;
     let schema = builder.schema().clone();
     let kv = kv_metadata(&builder);
@@ -362,6 +410,10 @@ pub fn read_wide(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, 
 /// # Errors
 /// I/O, Parquet and dtype errors.
 pub fn read_long(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestError> {
+    guarded(path, || read_long_unguarded(path, mapping))
+}
+
+fn read_long_unguarded(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestError> {
     debug_assert_eq!(mapping.format, SourceFormat::ParquetLong);
     let long = mapping.long.as_ref().expect("checked by Mapping::resolve");
     let builder = open(path)?;
