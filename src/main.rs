@@ -359,6 +359,9 @@ enum SynthCommand {
         /// Standstill time at the start, at each planned stop and at the road end, s.
         #[arg(long, default_value_t = 8.0, allow_negative_numbers = true)]
         stop_dwell_s: f64,
+        /// Longest drive before giving up, s (default 4 h; raise it for long-drive tests).
+        #[arg(long, default_value_t = 4.0 * 3600.0, allow_negative_numbers = true)]
+        max_duration_s: f64,
         /// Hide an effect of the diagnosis catalogue in the truth: `ID` (magnitude drawn from
         /// the seed), `ID=VALUE` (the parameter's truth value in its SI unit), `random` (one of
         /// the catalogue or none, by the seed) or `none`. The vehicle file written stays the
@@ -1266,6 +1269,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             road_speed_limits,
             stop_every_km,
             stop_dwell_s,
+            max_duration_s,
             effect,
             answer,
             slope_resolution_percent,
@@ -1304,6 +1308,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 )));
             }
             cfg.driver.stop_dwell_s = stop_dwell_s;
+            cfg.max_duration_s = max_duration_s;
             cfg.road_speed_limits = road_speed_limits;
             let p = dropout_start_probability;
             if !(0.0..=1.0).contains(&p) {
@@ -1547,7 +1552,11 @@ fn run_pipeline(
         shard,
         force,
     };
-    let report = run_plan(&plan, &opts, &on_drive).map_err(drive)?;
+    let report = run_plan(&plan, &opts, &on_drive).map_err(|e| match e {
+        // the environment, not a drive: a configuration error like a bad output path
+        e @ fleetdyn::pipeline::run::RunError::OutputFolder { .. } => usage(e),
+        e => drive(e),
+    })?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }

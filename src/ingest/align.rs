@@ -45,7 +45,9 @@ pub struct Aligned {
 ///
 /// # Errors
 /// [`IngestError::NoData`] when the required channels do not overlap in time or no channel has
-/// two samples.
+/// two samples; [`IngestError::GridTooLarge`] when the grid would hold more than
+/// [`GRID_ROWS_PER_SAMPLE`] rows per sample of the densest channel (and over
+/// [`GRID_ROWS_FLOOR`]).
 pub fn align(
     file: &Path,
     channels: &[Channel],
@@ -67,30 +69,21 @@ pub fn align(
             ((fastest + PERIOD_ROUNDING_NS / 2) / PERIOD_ROUNDING_NS).max(1) * PERIOD_ROUNDING_NS
         }
     };
-    let spanning: Vec<&Channel> = channels
-        .iter()
-        .filter(|c| required.contains(&c.column.as_str()) && !c.is_empty())
-        .collect();
-    let spanning = if spanning.is_empty() {
-        channels.iter().filter(|c| !c.is_empty()).collect()
-    } else {
-        spanning
-    };
-    let start = spanning.iter().map(|c| c.t_ns[0]).max();
-    let end = spanning
-        .iter()
-        .map(|c| *c.t_ns.last().expect("non-empty"))
-        .min();
-    let (start, end) = match (start, end) {
-        (Some(s), Some(e)) if e > s => (s, e),
-        _ => {
-            return Err(IngestError::NoData {
-                file: file.into(),
-                what: "the required signals do not overlap in time".into(),
-            })
-        }
-    };
-    let n = ((end - start) / period_ns) as usize + 1;
+    let (start, end) = span(file, channels, required)?;
+    let rows = end.saturating_sub(start) / period_ns + 1;
+    let samples = channels.iter().map(Channel::len).max().unwrap_or(0) as u64;
+    let limit = (GRID_ROWS_PER_SAMPLE * samples).max(GRID_ROWS_FLOOR);
+    if rows as u64 > limit {
+        return Err(IngestError::GridTooLarge {
+            file: file.into(),
+            period_ns,
+            seconds: end.saturating_sub(start) as f64 * 1e-9,
+            rows: rows as u64,
+            samples,
+            limit,
+        });
+    }
+    let n = rows as usize;
     let t_ns: Vec<i64> = (0..n as i64).map(|k| start + k * period_ns).collect();
     let signals = channels
         .iter()
@@ -105,6 +98,86 @@ pub fn align(
         signals,
         period_ns,
     })
+}
+
+/// The grid may hold at most this many rows per sample of the densest channel (or
+/// [`GRID_ROWS_FLOOR`]); beyond it the grid would be invented data, and its memory is refused.
+pub const GRID_ROWS_PER_SAMPLE: u64 = 64;
+/// Grids up to this many rows are always accepted (10 h at 100 Hz is 3.6 M rows).
+pub const GRID_ROWS_FLOOR: u64 = 1 << 22;
+
+/// The interval every required (non-empty) channel covers, ns: latest first sample to earliest
+/// last sample; all non-empty channels when no required one has samples.
+///
+/// # Errors
+/// [`IngestError::NoData`] when that interval is empty.
+pub fn span(
+    file: &Path,
+    channels: &[Channel],
+    required: &[&str],
+) -> Result<(i64, i64), IngestError> {
+    let spanning: Vec<&Channel> = channels
+        .iter()
+        .filter(|c| required.contains(&c.column.as_str()) && !c.is_empty())
+        .collect();
+    let spanning = if spanning.is_empty() {
+        channels.iter().filter(|c| !c.is_empty()).collect()
+    } else {
+        spanning
+    };
+    let start = spanning.iter().map(|c| c.t_ns[0]).max();
+    let end = spanning
+        .iter()
+        .map(|c| *c.t_ns.last().expect("non-empty"))
+        .min();
+    match (start, end) {
+        (Some(s), Some(e)) if e > s => Ok((s, e)),
+        _ => Err(IngestError::NoData {
+            file: file.into(),
+            what: "the required signals do not overlap in time".into(),
+        }),
+    }
+}
+
+/// Rejects a hole in a required channel (two samples further apart than 2.5 median periods, so
+/// [`resample_channel`] leaves the grid NaN between them) whose part inside the grid's [`span`]
+/// is longer than `limit_s` plus that 2.5-period margin (the grid's edge rows may sit up to a
+/// period inside the span). Such a hole would fail the NaN-run rule after alignment anyway;
+/// checking the channel first keeps a year-long hole from allocating a year of grid.
+///
+/// # Errors
+/// [`IngestError::TimeGap`] naming the channel, the source row after the hole and its length.
+pub fn check_gaps(
+    file: &Path,
+    channels: &[Channel],
+    required: &[&str],
+    limit_s: f64,
+) -> Result<(), IngestError> {
+    let Ok((start, end)) = span(file, channels, required) else {
+        return Ok(()); // align reports it
+    };
+    for c in channels
+        .iter()
+        .filter(|c| required.contains(&c.column.as_str()))
+    {
+        let max_gap = (c.median_period_ns() as f64 * 2.5) as i64;
+        for (k, w) in c.t_ns.windows(2).enumerate() {
+            let (t0, t1) = (w[0], w[1]);
+            let inside = t1.min(end).saturating_sub(t0.max(start)) as f64 * 1e-9;
+            if t1.saturating_sub(t0) > max_gap && inside > limit_s + max_gap as f64 * 1e-9 {
+                return Err(IngestError::TimeGap {
+                    file: file.into(),
+                    column: c.column.clone(),
+                    row: c.rows[k + 1],
+                    time_ns: t1,
+                    previous_ns: t0,
+                    seconds: t1.saturating_sub(t0) as f64 * 1e-9,
+                    limit_s,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Samples one channel at the (sorted) grid times, per the rules in the module doc.

@@ -195,6 +195,48 @@ pub enum IngestError {
         /// Configured limit.
         limit_s: f64,
     },
+    /// No sample of a required column for longer than the missing-value limit: a hole in a
+    /// channel's time stamps (the aligned grid would be NaN there), or between two rows of a
+    /// wide table. Checked before any grid is built, so a year-long hole costs no memory.
+    #[error(
+        "{file}: {column}: no sample for {seconds:.2} s before row {row} ({}, previous sample {}), limit {limit_s} s (--max-nan-run-s)",
+        t(time_ns),
+        t(previous_ns)
+    )]
+    TimeGap {
+        /// Input file.
+        file: PathBuf,
+        /// Canonical column (`timestamp` for a wide table's rows).
+        column: String,
+        /// Source row after the hole (Parquet row, or message index within the MCAP topic).
+        row: u64,
+        /// Time of that row.
+        time_ns: i64,
+        /// Time of the sample before the hole.
+        previous_ns: i64,
+        /// Length of the hole, s.
+        seconds: f64,
+        /// Configured limit, s.
+        limit_s: f64,
+    },
+    /// The aligned time base would hold far more rows than the file has samples (a channel
+    /// sampled much faster than the rest for a moment, or a hostile time-base rate): refused
+    /// before allocation.
+    #[error("{file}: a {period_ns} ns time base over {seconds:.1} s would make {rows} rows from at most {samples} samples per channel (limit {limit} rows); set --time-base-hz")]
+    GridTooLarge {
+        /// Input file.
+        file: PathBuf,
+        /// Grid period, ns.
+        period_ns: i64,
+        /// Span of the grid, s.
+        seconds: f64,
+        /// Rows the grid would have.
+        rows: u64,
+        /// Samples of the densest channel.
+        samples: u64,
+        /// Largest grid accepted for that many samples.
+        limit: u64,
+    },
     /// Nothing usable in the file.
     #[error("{file}: {what}")]
     NoData {

@@ -185,6 +185,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     }
 
     let kv;
+    let mut wide_rows: Option<Vec<u64>> = None;
     let (t_ns, mut signals) = match mapping.as_ref().map(|m| m.format) {
         None | Some(SourceFormat::ParquetWide) => {
             report.format = "parquet-wide".into();
@@ -218,6 +219,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
                 .into_iter()
                 .map(|(name, unit, values)| Signal { name, unit, values })
                 .collect();
+            wide_rows = Some(w.rows);
             (w.t_ns, signals)
         }
         Some(fmt) => {
@@ -239,7 +241,16 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
         }
     };
 
+    if t_ns.is_empty() {
+        return Err(IngestError::NoData {
+            file: path.into(),
+            what: "no rows: the source holds no samples".into(),
+        });
+    }
     check_nan_runs(path, &t_ns, &signals, &required, opts.max_nan_run_s)?;
+    if let (Some(rows), false) = (&wide_rows, required.is_empty()) {
+        check_row_gaps(path, &t_ns, rows, opts.max_nan_run_s)?;
+    }
     let file_stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -390,9 +401,36 @@ pub(crate) fn align_channels(
         })
         .collect();
     let req: Vec<&str> = required.iter().map(|r| r.0).collect();
+    align::check_gaps(path, &channels, &req, opts.max_nan_run_s)?;
     let a = align::align(path, &channels, &req, opts.time_base)?;
     report.time_base_hz = Some(1e9 / a.period_ns as f64);
     Ok((a.t_ns, a.signals))
+}
+
+/// Rejects a wide table whose consecutive rows are more than `limit_s` apart: every column is
+/// missing over such a hole, as in a NaN run, and distance resampling must not integrate speed
+/// across it (a year between two rows would make a year of distance grid).
+fn check_row_gaps(
+    path: &Path,
+    t_ns: &[i64],
+    rows: &[u64],
+    limit_s: f64,
+) -> Result<(), IngestError> {
+    for (k, w) in t_ns.windows(2).enumerate() {
+        let seconds = w[1].saturating_sub(w[0]) as f64 * 1e-9;
+        if seconds > limit_s {
+            return Err(IngestError::TimeGap {
+                file: path.into(),
+                column: "timestamp".into(),
+                row: rows[k + 1],
+                time_ns: w[1],
+                previous_ns: w[0],
+                seconds,
+                limit_s,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Rejects runs of missing values in required columns longer than `limit_s`.

@@ -53,10 +53,47 @@ fn open(path: &Path) -> Result<ParquetRecordBatchReaderBuilder<File>, IngestErro
         file: path.into(),
         source: e,
     })?;
-    ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| IngestError::Parquet {
+    let len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let builder =
+        ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| IngestError::Parquet {
+            file: path.into(),
+            source: e,
+        })?;
+    check_chunks(builder.metadata(), len).map_err(|message| IngestError::Parquet {
         file: path.into(),
-        source: e,
-    })
+        source: parquet::errors::ParquetError::General(message),
+    })?;
+    Ok(builder)
+}
+
+/// Every column chunk the footer declares must lie inside the file: the parquet crate asserts
+/// (panics) on a negative offset or length while reading (found by `cargo fuzz`, target
+/// `ingest_parquet`; docs/fuzzing.md), so a corrupt footer is refused here instead.
+fn check_chunks(
+    meta: &parquet::file::metadata::ParquetMetaData,
+    file_len: u64,
+) -> Result<(), String> {
+    for (r, rg) in meta.row_groups().iter().enumerate() {
+        for (c, col) in rg.columns().iter().enumerate() {
+            let start = col
+                .dictionary_page_offset()
+                .unwrap_or(col.data_page_offset());
+            let len = col.compressed_size();
+            let inside = u64::try_from(start)
+                .ok()
+                .zip(u64::try_from(len).ok())
+                .and_then(|(s, l)| s.checked_add(l))
+                .is_some_and(|end| end <= file_len);
+            if !inside {
+                return Err(format!(
+                    "row group {r}, column {} ({}): chunk at byte {start}, length {len}, is outside the file ({file_len} bytes)",
+                    c,
+                    col.column_path()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A batch reader over the root columns `roots` only.
@@ -74,6 +111,50 @@ fn projected(
             file: path.into(),
             source: e,
         })
+}
+
+thread_local! {
+    /// Set while this thread decodes Parquet inside [`guarded`].
+    static DECODING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs a Parquet read, turning a panic of the decoder into [`IngestError::Parquet`].
+///
+/// parquet 60.1 and arrow-buffer assert on some corrupt pages (e.g. definition levels that
+/// run past their buffer: `offset + len out of bounds`, found by `cargo fuzz`, target
+/// `ingest_parquet`; docs/fuzzing.md) instead of returning an error. A corrupt file must fail
+/// its drive with a typed error, not abort the process, so the read is unwound and reported.
+/// The panic message is kept out of stderr by a hook that stays silent only while this
+/// thread is inside a guarded read (other panics reach the previous hook).
+fn guarded<T>(
+    path: &Path,
+    read: impl FnOnce() -> Result<T, IngestError>,
+) -> Result<T, IngestError> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !DECODING.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    let outer = DECODING.with(|d| d.replace(true));
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read));
+    DECODING.with(|d| d.set(outer));
+    r.unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        Err(IngestError::Parquet {
+            file: path.into(),
+            source: parquet::errors::ParquetError::General(format!(
+                "corrupt data: the decoder failed ({what})"
+            )),
+        })
+    })
 }
 
 /// Column names of a Parquet file (for mapping detection).
@@ -208,6 +289,10 @@ fn field_unit(schema: &Schema, name: &str) -> Option<String> {
 /// # Errors
 /// I/O, Parquet, dtype and unit errors, naming the file and column.
 pub fn read_wide(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, IngestError> {
+    guarded(path, || read_wide_unguarded(path, mapping))
+}
+
+fn read_wide_unguarded(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, IngestError> {
     let builder = open(path)?;
     let schema = builder.schema().clone();
     let kv = kv_metadata(&builder);
@@ -325,6 +410,10 @@ pub fn read_wide(path: &Path, mapping: Option<&Mapping>) -> Result<ParquetRead, 
 /// # Errors
 /// I/O, Parquet and dtype errors.
 pub fn read_long(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestError> {
+    guarded(path, || read_long_unguarded(path, mapping))
+}
+
+fn read_long_unguarded(path: &Path, mapping: &Mapping) -> Result<ParquetRead, IngestError> {
     debug_assert_eq!(mapping.format, SourceFormat::ParquetLong);
     let long = mapping.long.as_ref().expect("checked by Mapping::resolve");
     let builder = open(path)?;

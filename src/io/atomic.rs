@@ -32,9 +32,22 @@ impl AtomicFile {
     /// Creates `.<name>.tmp-<pid>-<n>` in the target's folder (creating the folder if needed).
     ///
     /// # Errors
-    /// Any I/O error creating the folder or the file.
+    /// Any I/O error creating the folder or the file; [`io::ErrorKind::InvalidInput`] when the
+    /// target exists and is not a regular file (a folder, or a device such as `/dev/full`,
+    /// which the final rename would otherwise replace).
     pub fn create(target: &Path) -> io::Result<Self> {
         static COUNTER: AtomicU64 = AtomicU64::new(0);
+        if let Ok(m) = std::fs::metadata(target) {
+            if !m.is_file() {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "{} exists and is not a regular file; not replaced",
+                        target.display()
+                    ),
+                ));
+            }
+        }
         let dir = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
@@ -110,5 +123,18 @@ mod tests {
         f.commit().unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"whole");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_target_that_is_not_a_regular_file_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = AtomicFile::create(dir.path()).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        if Path::new("/dev/null").exists() {
+            let e = AtomicFile::write_all(Path::new("/dev/null"), b"x").unwrap_err();
+            assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 }

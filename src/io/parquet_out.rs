@@ -28,6 +28,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use thiserror::Error;
 
+/// Rows converted to Arrow and handed to the Parquet writer at a time.
+const WRITE_SLICE_ROWS: usize = 64 * 1024;
+
 /// Column data to write.
 #[derive(Debug, Clone, PartialEq)]
 pub enum OutData {
@@ -286,16 +289,7 @@ fn write_table_full(
         schema.check(&described)?;
     }
     let n = cols.first().map(|c| c.data.len()).unwrap_or(0);
-    let extra: Vec<OutColumn> = constants
-        .iter()
-        .map(|(name, value)| OutColumn {
-            name: (*name).to_string(),
-            unit: "1".into(),
-            data: OutData::Str(vec![(*value).to_string(); n]),
-        })
-        .collect();
-    let cols: Vec<&OutColumn> = cols.iter().chain(extra.iter()).collect();
-    for c in &cols {
+    for c in cols {
         if c.data.len() != n {
             return Err(OutputError::Ragged {
                 table: meta.table.clone(),
@@ -306,41 +300,55 @@ fn write_table_full(
         }
     }
 
-    let fields: Vec<Field> = cols
-        .iter()
-        .map(|c| {
-            let dt = match c.data {
-                OutData::Timestamp(_) => {
-                    DataType::Timestamp(TimeUnit::Nanosecond, Some("UTC".into()))
+    let unit_meta = |u: &str| HashMap::from([("unit".to_string(), u.to_string())]);
+    let fields: Vec<Field> =
+        cols.iter()
+            .map(|c| {
+                let dt = match c.data {
+                    OutData::Timestamp(_) => {
+                        DataType::Timestamp(TimeUnit::Nanosecond, Some("UTC".into()))
+                    }
+                    OutData::F64(_) => DataType::Float64,
+                    OutData::I16(_) => DataType::Int16,
+                    OutData::Str(_) => DataType::Utf8,
+                    OutData::U64(_) => DataType::UInt64,
+                };
+                let nullable = !matches!(c.data, OutData::Timestamp(_));
+                Field::new(&c.name, dt, nullable).with_metadata(unit_meta(&c.unit))
+            })
+            .chain(constants.iter().map(|(name, _)| {
+                Field::new(*name, DataType::Utf8, true).with_metadata(unit_meta("1"))
+            }))
+            .collect();
+    // Arrow arrays of rows `r` of every column (constants repeated): built one slice at a time,
+    // so writing holds one slice of Arrow data beside the columns, not a second whole table.
+    let slice = |r: std::ops::Range<usize>| -> Vec<ArrayRef> {
+        cols.iter()
+            .map(|c| -> ArrayRef {
+                match &c.data {
+                    OutData::Timestamp(v) => Arc::new(
+                        TimestampNanosecondArray::from(v[r.clone()].to_vec()).with_timezone("UTC"),
+                    ),
+                    OutData::F64(v) => Arc::new(Float64Array::from_iter(
+                        v[r.clone()].iter().map(|x| (!x.is_nan()).then_some(*x)),
+                    )),
+                    OutData::I16(v) => Arc::new(Int16Array::from_iter(
+                        v[r.clone()]
+                            .iter()
+                            .map(|x| (x.is_finite()).then(|| x.round() as i16)),
+                    )),
+                    OutData::Str(v) => Arc::new(StringArray::from_iter_values(v[r.clone()].iter())),
+                    OutData::U64(v) => Arc::new(UInt64Array::from(v[r.clone()].to_vec())),
                 }
-                OutData::F64(_) => DataType::Float64,
-                OutData::I16(_) => DataType::Int16,
-                OutData::Str(_) => DataType::Utf8,
-                OutData::U64(_) => DataType::UInt64,
-            };
-            let nullable = !matches!(c.data, OutData::Timestamp(_));
-            Field::new(&c.name, dt, nullable)
-                .with_metadata(HashMap::from([("unit".to_string(), c.unit.clone())]))
-        })
-        .collect();
-    let arrays: Vec<ArrayRef> = cols
-        .iter()
-        .map(|c| -> ArrayRef {
-            match &c.data {
-                OutData::Timestamp(v) => {
-                    Arc::new(TimestampNanosecondArray::from(v.clone()).with_timezone("UTC"))
-                }
-                OutData::F64(v) => Arc::new(Float64Array::from_iter(
-                    v.iter().map(|x| (!x.is_nan()).then_some(*x)),
-                )),
-                OutData::I16(v) => Arc::new(Int16Array::from_iter(
-                    v.iter().map(|x| (x.is_finite()).then(|| x.round() as i16)),
-                )),
-                OutData::Str(v) => Arc::new(StringArray::from_iter_values(v.iter())),
-                OutData::U64(v) => Arc::new(UInt64Array::from(v.clone())),
-            }
-        })
-        .collect();
+            })
+            .chain(constants.iter().map(|(_, value)| -> ArrayRef {
+                Arc::new(StringArray::from_iter_values(std::iter::repeat_n(
+                    *value,
+                    r.len(),
+                )))
+            }))
+            .collect()
+    };
     let io_err = |source| OutputError::Io {
         path: path.to_path_buf(),
         source,
@@ -385,7 +393,7 @@ fn write_table_full(
         .set_max_row_group_row_count(Some(1 << 20))
         .set_key_value_metadata(Some(kv));
     if encoding.split_floats {
-        for c in cols {
+        for c in cols.iter() {
             let col = ColumnPath::from(c.name.as_str());
             props = match c.data {
                 OutData::F64(_) => props
@@ -400,12 +408,23 @@ fn write_table_full(
     }
     let props = props.build();
 
-    let batch = RecordBatch::try_new(schema.clone(), arrays)
-        .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;
     let tmp = AtomicFile::create(path).map_err(io_err)?;
     let handle = tmp.try_clone_file().map_err(io_err)?;
-    let mut writer = ArrowWriter::try_new(handle, schema, Some(props)).map_err(pq_err)?;
-    writer.write(&batch).map_err(pq_err)?;
+    let mut writer = ArrowWriter::try_new(handle, schema.clone(), Some(props)).map_err(pq_err)?;
+    // One empty batch for an empty table (its schema still written), else slices of
+    // WRITE_SLICE_ROWS: a multiple of the writer's 1024-row mini-batches, so pages and row
+    // groups fall where one whole batch would put them.
+    let mut start = 0;
+    loop {
+        let end = (start + WRITE_SLICE_ROWS).min(n);
+        let batch = RecordBatch::try_new(schema.clone(), slice(start..end))
+            .map_err(|e| pq_err(parquet::errors::ParquetError::General(e.to_string())))?;
+        writer.write(&batch).map_err(pq_err)?;
+        start = end;
+        if start >= n {
+            break;
+        }
+    }
     writer.close().map_err(pq_err)?;
     tmp.commit().map_err(io_err)
 }

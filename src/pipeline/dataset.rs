@@ -91,6 +91,18 @@ pub struct Dataset {
 }
 
 impl Dataset {
+    /// Checks, before any drive is read, that files can be created in the output root (creating
+    /// the root if needed): a hidden probe file is created and removed. A read-only or
+    /// unwritable root then fails the run once, naming the folder, instead of failing every
+    /// drive at its write stage. (A full disk is only seen when data is written: those drives
+    /// fail at `write`, naming the file, and leave nothing behind.)
+    ///
+    /// # Errors
+    /// The I/O error of creating the root or the probe.
+    pub fn check_writable(&self) -> std::io::Result<()> {
+        crate::io::AtomicFile::create(&self.root.join(".fleetdyn-write-probe")).map(drop)
+    }
+
     /// Path of a drive's table, relative to the root.
     pub fn table_rel(&self, table: &str, vehicle_id: &str, date: &str, drive_id: &str) -> PathBuf {
         PathBuf::from(table)

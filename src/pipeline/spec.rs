@@ -492,8 +492,16 @@ impl PipelineSpec {
             file: file.clone(),
             problems: vec![e.to_string()],
         })?;
-        toml::from_str(&text).map_err(|e| PlanError {
-            file,
+        Self::parse(&text, &file)
+    }
+
+    /// Parses pipeline-file text; `file` names it in errors.
+    ///
+    /// # Errors
+    /// [`PlanError`] for malformed text (unknown keys included).
+    pub fn parse(text: &str, file: &str) -> Result<Self, PlanError> {
+        toml::from_str(text).map_err(|e| PlanError {
+            file: file.into(),
             problems: vec![e.to_string()],
         })
     }

@@ -17,7 +17,7 @@ fn fleetdyn(args: &[&str], extra: &[&Path]) -> Output {
         .unwrap()
 }
 
-fn walk(dir: &Path) -> Vec<PathBuf> {
+pub fn walk(dir: &Path) -> Vec<PathBuf> {
     let mut v = Vec::new();
     let Ok(rd) = std::fs::read_dir(dir) else {
         return v;
@@ -36,7 +36,7 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
 
 /// Files of a run that are a function of inputs and configuration only (everything but the
 /// two report files holding wall-clock times), relative to the root.
-fn deterministic_files(root: &Path) -> Vec<PathBuf> {
+pub fn deterministic_files(root: &Path) -> Vec<PathBuf> {
     walk(root)
         .into_iter()
         .map(|p| p.strip_prefix(root).unwrap().to_path_buf())
@@ -47,7 +47,7 @@ fn deterministic_files(root: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
-fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
+pub fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
     for rel in files {
         let (x, y) = (a.join(rel), b.join(rel));
         assert!(y.is_file(), "{rel:?} missing in {}", b.display());
@@ -60,7 +60,7 @@ fn assert_same_bytes(a: &Path, b: &Path, files: &[PathBuf]) {
     }
 }
 
-fn report(root: &Path, pipeline: &str, model: &str) -> serde_json::Value {
+pub fn report(root: &Path, pipeline: &str, model: &str) -> serde_json::Value {
     let p = root
         .join("_reports")
         .join(pipeline)
@@ -259,7 +259,7 @@ fn shards_in_separate_processes_union_to_the_unsharded_run() {
 
 /// `n` canonical drives of `rows` samples at 10 Hz, each with its own slope profile, and a
 /// manifest naming their vehicles.
-fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
+pub fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
     let inputs = dir.join("in");
     std::fs::create_dir_all(&inputs).unwrap();
     let mut manifest = String::from("path,vehicle_id\n");
@@ -277,7 +277,45 @@ fn synthetic_fleet(dir: &Path, n: usize, rows: usize) -> PathBuf {
     m
 }
 
-fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
+/// Done-markers (committed drives) under an output root.
+pub fn markers(root: &Path) -> usize {
+    walk(&root.join("_state"))
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .count()
+}
+
+/// What a reader of the output root may see: only whole Parquet files, and no temporary file
+/// under a visible name (temporaries are hidden names that do not end in .parquet).
+pub fn assert_only_whole_files(root: &Path) {
+    for f in walk(root) {
+        let name = f.file_name().unwrap().to_string_lossy().into_owned();
+        if name.ends_with(".parquet") {
+            SerializedFileReader::new(std::fs::File::open(&f).unwrap())
+                .unwrap_or_else(|e| panic!("{f:?} is visible but not whole: {e}"));
+        } else if name.contains(".tmp-") {
+            assert!(name.starts_with('.'), "visible temporary {f:?}");
+        }
+    }
+}
+
+/// `pipelines/nightly.toml` with a default vehicle file (`truck-40t.toml`), written to
+/// `dir/name`: drives without a vehicle id then reach their own stages.
+pub fn nightly_with_default_vehicle(dir: &Path, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
+    let p = dir.join(name);
+    std::fs::write(
+        &p,
+        text.replace(
+            "[vehicles]",
+            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
+        ),
+    )
+    .unwrap();
+    p
+}
+
+pub fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
     let p = dir.join("fleet.toml");
     std::fs::write(
         &p,
@@ -308,12 +346,6 @@ fn a_killed_run_resumes_to_the_bytes_of_a_clean_run() {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    let markers = |root: &Path| {
-        walk(&root.join("_state"))
-            .iter()
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .count()
-    };
     // wait for the first finished drive, then kill -9 mid-run
     loop {
         if markers(&killed) >= 1 || child.try_wait().unwrap().is_some() {
@@ -325,17 +357,8 @@ fn a_killed_run_resumes_to_the_bytes_of_a_clean_run() {
     child.wait().unwrap();
     let done = markers(&killed);
     assert!(done < 16, "the run finished before it could be killed");
-    // what a reader sees meanwhile: only whole Parquet files (temporaries are hidden names that
-    // do not end in .parquet)
-    for f in walk(&killed) {
-        let name = f.file_name().unwrap().to_string_lossy().into_owned();
-        if name.ends_with(".parquet") {
-            SerializedFileReader::new(std::fs::File::open(&f).unwrap())
-                .unwrap_or_else(|e| panic!("{f:?} is not whole: {e}"));
-        } else if name.contains(".tmp-") {
-            assert!(name.starts_with('.'), "visible temporary {f:?}");
-        }
-    }
+    // what a reader sees meanwhile: only whole Parquet files
+    assert_only_whole_files(&killed);
     let o = run_ok(&["run", p, "--jobs", "2"], &killed);
     let r = report(&killed, "fleet", "t1");
     assert_eq!(
@@ -416,16 +439,7 @@ fn a_corrupt_drive_fails_alone_with_its_stage_and_exit_1() {
     assert!(md.contains("Failures (2)"), "{md}");
 
     // with a default vehicle file the parked drive gets to resample, and fails there
-    let p = dir.path().join("with-default.toml");
-    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
-    std::fs::write(
-        &p,
-        text.replace(
-            "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
-        ),
-    )
-    .unwrap();
+    let p = nightly_with_default_vehicle(dir.path(), "with-default.toml");
     let o = fleetdyn(
         &["run", p.to_str().unwrap(), "--input"],
         &[&inputs.join("sub/parked.parquet"), Path::new("--out"), &out],

@@ -122,7 +122,7 @@ fn committed_mcap_fixture_truncated_and_corrupted() {
 /// magic, records are opcode u8 + length u64 LE; a Chunk (0x06) holds start/end time u64,
 /// uncompressed size u64, CRC u32, compression string (u32 length + bytes), then the records
 /// (u64 length + bytes)).
-fn chunk_payload_offsets(b: &[u8]) -> Vec<(usize, usize)> {
+pub fn chunk_payload_offsets(b: &[u8]) -> Vec<(usize, usize)> {
     let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
     let mut out = Vec::new();
     let mut i = 8;
