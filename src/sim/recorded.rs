@@ -110,15 +110,30 @@ pub(crate) fn slope_input(
 }
 
 /// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says.
+///
+/// Consecutive constant pieces of the same value (bit for bit) are stored as one: a closed
+/// clutch, a released brake, a gear held for minutes or a whole-percent slope cost one piece per
+/// stretch instead of 32 B per row (a 10-hour drive's scenario held ~290 MB; docs/memory.md).
+/// Every evaluation gives the same value as the unmerged pieces (`v0 + (v1 − v0)·w = v` for
+/// `v0 = v1 = v`); only piece boundaries inside such a stretch disappear, which matters solely to
+/// integrators that restart at breakpoints — recorded scenarios go to the fixed-step
+/// exponential integrator, which evaluates values only.
 pub(crate) fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
-    let p = t
-        .windows(2)
-        .zip(v.windows(2))
-        .map(|(tw, vw)| match interp {
-            Interpolation::Linear => (tw[0], tw[1], vw[0], vw[1]),
-            _ => (tw[0], tw[1], vw[0], vw[0]),
-        })
-        .collect();
+    let mut p: Vec<(f64, f64, f64, f64)> = Vec::new();
+    for (tw, vw) in t.windows(2).zip(v.windows(2)) {
+        let (v0, v1) = match interp {
+            Interpolation::Linear => (vw[0], vw[1]),
+            _ => (vw[0], vw[0]),
+        };
+        if let Some(last) = p.last_mut() {
+            let constant = |a: f64, b: f64| a.to_bits() == b.to_bits();
+            if constant(last.2, last.3) && constant(last.3, v0) && constant(v0, v1) {
+                last.1 = tw[1];
+                continue;
+            }
+        }
+        p.push((tw[0], tw[1], v0, v1));
+    }
     Piecewise::new(p).expect("strictly increasing times and filled values")
 }
 
@@ -205,6 +220,41 @@ pub fn scenario_from_log(
 mod tests {
     use super::*;
     use crate::table::{DriveMeta, Signal};
+
+    #[test]
+    fn merged_constant_pieces_evaluate_exactly_as_the_samples() {
+        // runs of equal samples (a closed clutch, a held gear, ±0.0) between changing ones:
+        // the merged signal must give the bits of the one-piece-per-sample signal everywhere
+        let v = [
+            0.0, 0.0, 0.0, 1.5, 1.5, 2.0, -0.0, -0.0, 0.0, 0.0, 0.0, 3.0, 3.0, 3.0,
+        ];
+        let t: Vec<f64> = (0..v.len())
+            .map(|k| k as f64 * 0.02 + 0.003 * (k % 3) as f64)
+            .collect();
+        for interp in [Interpolation::Linear, Interpolation::Hold] {
+            let merged = pieces(&t, &v, interp);
+            let plain = Piecewise::new(
+                t.windows(2)
+                    .zip(v.windows(2))
+                    .map(|(tw, vw)| match interp {
+                        Interpolation::Linear => (tw[0], tw[1], vw[0], vw[1]),
+                        _ => (tw[0], tw[1], vw[0], vw[0]),
+                    })
+                    .collect(),
+            )
+            .unwrap();
+            assert!(merged.pieces().len() < plain.pieces().len(), "{interp:?}");
+            let end = *t.last().unwrap();
+            for k in 0..=4000 {
+                let x = end * k as f64 / 4000.0;
+                assert_eq!(
+                    merged.eval(x).to_bits(),
+                    plain.eval(x).to_bits(),
+                    "{interp:?} t = {x}"
+                );
+            }
+        }
+    }
 
     fn log(n: usize, gear: f64) -> DriveLog {
         let sig = |name: &str, v: f64| Signal {
