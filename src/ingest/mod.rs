@@ -186,7 +186,7 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
 
     let kv;
     let mut wide_rows: Option<Vec<u64>> = None;
-    let (t_ns, mut signals) = match mapping.as_ref().map(|m| m.format) {
+    let (t_ns, signals) = match mapping.as_ref().map(|m| m.format) {
         None | Some(SourceFormat::ParquetWide) => {
             report.format = "parquet-wide".into();
             let mut read = parquet_source::read_wide(path, mapping.as_ref())?;
@@ -268,14 +268,25 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             .or_else(|| mapping.as_ref().and_then(|m| m.vehicle_id.clone())),
         source_file: path.display().to_string(),
     };
+    Ok(assemble(meta, t_ns, signals, report))
+}
+
+/// The canonical log from aligned signals: unnamed (unmapped) signals dropped, columns in
+/// schema order.
+pub(crate) fn assemble(
+    meta: DriveMeta,
+    timestamp_ns: Vec<i64>,
+    mut signals: Vec<Signal>,
+    report: IngestReport,
+) -> Ingested {
     signals.retain(|s| !s.name.is_empty());
     let mut log = DriveLog {
         meta,
-        timestamp_ns: t_ns,
+        timestamp_ns,
         signals,
     };
     log.sort_columns();
-    Ok(Ingested { log, report })
+    Ingested { log, report }
 }
 
 /// (column, stage) of every column the stages require.

@@ -14,10 +14,10 @@ use super::mapping::decode_channels;
 use super::{j1939, mcap_frames, mdf4, CanError, CanFrame};
 use crate::ingest::mapping::{Mapping, SourceFormat};
 use crate::ingest::{
-    align_channels, check_nan_runs, required_columns, IngestError, IngestOptions, IngestReport,
-    Ingested,
+    align_channels, assemble, check_nan_runs, required_columns, IngestError, IngestOptions,
+    IngestReport, Ingested,
 };
-use crate::table::{DriveLog, DriveMeta};
+use crate::table::DriveMeta;
 use std::path::{Path, PathBuf};
 
 /// Frames of a session, time-sorted, with J1939 multi-packet groups reassembled.
@@ -207,7 +207,7 @@ pub fn ingest_session(
         ignored: decoded.ignored,
         ..Default::default()
     };
-    let (t_ns, mut signals) = align_channels(
+    let (t_ns, signals) = align_channels(
         first,
         decoded.channels,
         &required,
@@ -229,12 +229,5 @@ pub fn ingest_session(
             .or_else(|| mapping.vehicle_id.clone()),
         source_file: names,
     };
-    signals.retain(|s| !s.name.is_empty());
-    let mut log = DriveLog {
-        meta,
-        timestamp_ns: t_ns,
-        signals,
-    };
-    log.sort_columns();
-    Ok(Ingested { log, report })
+    Ok(assemble(meta, t_ns, signals, report))
 }
