@@ -9,7 +9,7 @@
 
 use super::butterworth::Sos;
 use super::error::{check_finite, SignalError};
-use super::sos::{sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi};
+use super::sos::{sosfilt_from, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi};
 
 /// Relative impulse-response level below which the transient counts as
 /// decayed; sets the default `Matched` padding ([`impulse_decay_len`]).
@@ -127,9 +127,6 @@ pub fn sosfiltfilt(sos: &Sos, x: &[f64], edge: &EdgeMode) -> Result<Vec<f64>, Si
         }
     }
 }
-
-/// Samples checked per block while copying: the block is still in L1 when it is copied.
-const CHECK_BLOCK: usize = 2048;
 
 /// scipy's default `padlen` for `sosfiltfilt`:
 /// `3·(2·n_sections + 1 − min(#sections with b2 == 0, #sections with a2 == 0))`.
@@ -249,25 +246,22 @@ fn filtfilt_scipy(sos: &Sos, x: &[f64], padlen: Option<usize>) -> Result<Vec<f64
     // moves the forward state (the backward pass reaches it last, and its outputs there are
     // cut), so it is filtered in a scratch buffer and the work buffer is [x, right extension]:
     // the result ends up at the buffer's start, with no copy after the backward pass.
+    // The forward pass reads x where it is and writes the work buffer (one pass over memory
+    // instead of a copy and a pass); it also reports whether x is finite, and only then is
+    // its output used.
     let mut left: Vec<f64> = (1..=edge).rev().map(|j| 2.0 * x[0] - x[j]).collect();
-    let mut ext = Vec::with_capacity(n + edge);
-    for (k, block) in x.chunks(CHECK_BLOCK).enumerate() {
-        check_finite(block).map_err(|e| match e {
-            SignalError::NonFinite { index, value } => SignalError::NonFinite {
-                index: k * CHECK_BLOCK + index,
-                value,
-            },
-            other => other,
-        })?;
-        ext.extend_from_slice(block);
-    }
-    ext.extend((1..=edge).map(|j| 2.0 * x[n - 1] - x[n - 1 - j]));
-
+    let mut ext = vec![0.0; n + edge];
     let zi = sosfilt_zi(sos);
-    let x0 = left.first().copied().unwrap_or(ext[0]);
+    let x0 = left.first().copied().unwrap_or(x[0]);
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * x0, z[1] * x0]).collect();
     sosfilt_in_place(sos, &mut left, &mut state);
-    sosfilt_in_place(sos, &mut ext, &mut state);
+    if !sosfilt_from(sos, x, &mut ext[..n], &mut state) {
+        check_finite(x)?;
+    }
+    for (j, e) in ext[n..].iter_mut().enumerate() {
+        *e = 2.0 * x[n - 1] - x[n - 2 - j];
+    }
+    sosfilt_in_place(sos, &mut ext[n..], &mut state);
     let y0 = ext[ext.len() - 1];
     let mut state: Vec<[f64; 2]> = zi.iter().map(|z| [z[0] * y0, z[1] * y0]).collect();
     sosfilt_in_place_rev(sos, &mut ext, &mut state);
@@ -350,23 +344,36 @@ mod tests {
 
     #[test]
     fn non_finite_input_names_its_index_in_both_modes() {
-        // the scipy path checks block by block while copying: an index past the first block,
-        // and one in the short-input path, must come out as the input's own index
+        // the scipy path detects non-finite samples inside its forward pass (four lanes over
+        // long inputs, then a tail of n mod 4 samples): the error must still name the
+        // input's first non-finite index, whichever lane or the tail it falls in
         let sos = slope();
-        let mut x: Vec<f64> = (0..3 * CHECK_BLOCK)
-            .map(|i| (i as f64 * 0.01).sin())
-            .collect();
-        x[CHECK_BLOCK + 7] = f64::NAN;
-        x[2 * CHECK_BLOCK] = f64::INFINITY;
-        for edge in [EdgeMode::Scipy { padlen: None }, EdgeMode::default()] {
-            match sosfiltfilt(&sos, &x, &edge) {
-                Err(SignalError::NonFinite { index, value }) => {
-                    assert_eq!(index, CHECK_BLOCK + 7, "{edge:?}");
-                    assert!(value.is_nan());
+        let n = 2 * crate::signal::LOCKSTEP_MIN + 3;
+        let clean: Vec<f64> = (0..n).map(|i| (i as f64 * 0.01).sin()).collect();
+        let lane = n / crate::signal::LANES;
+        for (bad, at) in [
+            (
+                vec![(2 * lane + 7, f64::NAN), (3 * lane + 1, f64::INFINITY)],
+                2 * lane + 7,
+            ),
+            (vec![(n - 1, f64::NEG_INFINITY)], n - 1),
+            (vec![(0, f64::NAN)], 0),
+        ] {
+            let mut x = clean.clone();
+            for &(i, v) in &bad {
+                x[i] = v;
+            }
+            for edge in [EdgeMode::Scipy { padlen: None }, EdgeMode::default()] {
+                match sosfiltfilt(&sos, &x, &edge) {
+                    Err(SignalError::NonFinite { index, value }) => {
+                        assert_eq!(index, at, "{edge:?}");
+                        assert_eq!(value.to_bits(), x[at].to_bits());
+                    }
+                    other => panic!("{edge:?}: {other:?}"),
                 }
-                other => panic!("{edge:?}: {other:?}"),
             }
         }
+        assert!(sosfiltfilt(&sos, &clean, &EdgeMode::Scipy { padlen: None }).is_ok());
         match sosfiltfilt(
             &sos,
             &[1.0, f64::NEG_INFINITY],
