@@ -362,6 +362,74 @@ pub fn verdict(findings: &[Finding], significant_mismatch: bool) -> Verdict {
     }
 }
 
+/// The acceptance rule's data tests at a known parameter value, without a fit: what the
+/// proof asks of a hidden effect to call it *visible* to the rule on its drive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct OracleCheck {
+    /// Relative fall of the held-out weighted RMSE of the effect's own model from the nominal
+    /// parameters to the known value (rule 1's quantity).
+    pub heldout_gain: f64,
+    /// Held-out non-white power of the own model's residual at the nominal parameters.
+    pub nonwhite_before: f64,
+    /// The same at the known value.
+    pub nonwhite_after: f64,
+    /// Rule 1 holds at the known value.
+    pub passes_heldout: bool,
+    /// Rule 2 holds at the known value.
+    pub passes_whiteness: bool,
+}
+
+impl OracleCheck {
+    /// Rules 1 and 2 both hold: a fit that found the known value exactly would pass them.
+    pub fn visible(&self) -> bool {
+        self.passes_heldout && self.passes_whiteness
+    }
+}
+
+/// Evaluates rules 1 and 2 of [`AcceptanceRule::FIXED`] with `e`'s parameter set to `value`
+/// (all others nominal), weighted as the first round of [`explain`] weights (`noise_floor`):
+/// the best any fit of `e` could do on the held-out blocks if it found `value` exactly. Rule
+/// 3 (the interval) needs a fit and is not evaluated. Only the effect's own model is
+/// simulated (the explain step also fits on the other models an effect reaches; rule 1 and
+/// this check score the own model alone). `None` when the effect's model is not in use.
+///
+/// The proof calls this with the hidden truth, after the blind diagnosis, to separate
+/// effects the recorded signals cannot show under the fixed rule from misses of the
+/// diagnosis itself; the diagnosis never calls it.
+///
+/// # Errors
+/// [`ExplainError`] when a model fails at the nominal parameters or at `value`.
+pub fn oracle_check(
+    problem: &Problem<'_>,
+    noise_floor: Option<&BTreeMap<String, f64>>,
+    e: Effect,
+    value: f64,
+) -> Result<Option<OracleCheck>, ExplainError> {
+    let theta = *problem.nominal();
+    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+        .nominal_outputs()
+        .iter()
+        .map(|y| Arc::new(y.clone()))
+        .collect();
+    let ev = Evaluator::new(problem, theta, &bases, noise_floor, row_dt(problem));
+    let Some(own) = ev.model(e.domain()) else {
+        return Ok(None);
+    };
+    let base = ev.eval_outputs(f64::NAN, bases);
+    let active: Vec<bool> = (0..ev.models.len()).map(|m| m == own).collect();
+    let at = ev.eval(&base, &active, e, value)?;
+    let gain = 1.0 - (at.heldout[own] / base.heldout[own]).sqrt();
+    let (wb, wa) = (ev.whiteness(&base, &active), ev.whiteness(&at, &active));
+    let rule = AcceptanceRule::FIXED;
+    Ok(Some(OracleCheck {
+        heldout_gain: gain,
+        nonwhite_before: wb.nonwhite_power,
+        nonwhite_after: wa.nonwhite_power,
+        passes_heldout: gain >= rule.min_heldout_gain,
+        passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
+    }))
+}
+
 fn row_dt(problem: &Problem<'_>) -> f64 {
     let t = problem.times();
     if t.len() > 1 {

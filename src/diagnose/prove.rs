@@ -31,10 +31,12 @@
 
 use super::catalogue::{Domain, Effect};
 use super::contract::{Diagnosis, Verdict};
+use crate::model::vehicle::VehicleFile;
 use crate::road::rng::Xoshiro256StarStar;
 use crate::synth::can::Dropouts;
 use crate::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
 use crate::synth::effects::{EffectChoice, Injection, ResistanceStretch};
+use crate::table::DriveLog;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -265,6 +267,13 @@ pub struct CaseScore {
     pub out_of_catalogue_located: Option<bool>,
     /// Diagnosis wall time, s.
     pub seconds: f64,
+    /// Catalogue effects: the held-out gain of the effect's own model with the hidden truth
+    /// set, nothing fitted ([`super::explain::oracle_check`], computed after the blind
+    /// diagnosis, outside its time).
+    pub oracle_heldout_gain: Option<f64>,
+    /// Catalogue effects: rules 1 and 2 of the acceptance rule hold at the truth — the
+    /// recorded signals show the effect to the rule on this drive.
+    pub oracle_visible: Option<bool>,
     /// Generator attempts (more than 1 when the drive was drawn again, see [`run_proof`]).
     pub attempts: u32,
 }
@@ -341,6 +350,8 @@ pub fn score(
         out_of_catalogue_ok,
         out_of_catalogue_located,
         seconds,
+        oracle_heldout_gain: None,
+        oracle_visible: None,
         attempts: 1,
     }
 }
@@ -371,6 +382,15 @@ pub struct ProofSummary {
     pub named_correct: f64,
     /// Catalogue drives whose truth was only in the ambiguity set, share.
     pub ambiguous_correct: f64,
+    /// Catalogue drives whose hidden effect, set to its truth with nothing fitted, passes
+    /// rules 1 and 2 of the acceptance rule ([`CaseScore::oracle_visible`]).
+    pub visible: usize,
+    /// Catalogue drives in all (the denominator of `visible`).
+    pub catalogue: usize,
+    /// Share of the visible ones named correctly.
+    pub named_correct_visible: f64,
+    /// Share of the not visible ones named correctly.
+    pub named_correct_invisible: f64,
     /// No-effect drives with a finding, share.
     pub false_positive_rate: f64,
     /// No-effect drives with the verdict `unexplained`, share.
@@ -445,6 +465,14 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
         .collect();
     let n_ooc = ooc.len() + failed_of(&|h| h == "out_of_catalogue");
     let correct: Vec<&&CaseScore> = catalogue.iter().filter(|s| s.correct).collect();
+    let visible: Vec<&&CaseScore> = catalogue
+        .iter()
+        .filter(|s| s.oracle_visible == Some(true))
+        .collect();
+    let invisible: Vec<&&CaseScore> = catalogue
+        .iter()
+        .filter(|s| s.oracle_visible == Some(false))
+        .collect();
     ProofSummary {
         drives: scores.len() + failed.len(),
         failed: failed.len(),
@@ -453,6 +481,13 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
         ambiguous_correct: share(
             catalogue.iter().filter(|s| s.ambiguous_correct).count(),
             n_catalogue,
+        ),
+        visible: visible.len(),
+        catalogue: n_catalogue,
+        named_correct_visible: share(visible.iter().filter(|s| s.correct).count(), visible.len()),
+        named_correct_invisible: share(
+            invisible.iter().filter(|s| s.correct).count(),
+            invisible.len(),
         ),
         false_positive_rate: share(
             clean.iter().filter(|s| !s.findings.is_empty()).count(),
@@ -547,6 +582,17 @@ impl ProofSummary {
         );
         let _ = writeln!(
             s,
+            "| catalogue drives whose effect, at its truth, passes the rule's held-out and whiteness tests | {} of {} |",
+            self.visible, self.catalogue
+        );
+        let _ = writeln!(
+            s,
+            "| named correctly among those / among the others | {} / {} |",
+            pct(self.named_correct_visible),
+            pct(self.named_correct_invisible)
+        );
+        let _ = writeln!(
+            s,
             "| false positives on no-effect drives | {} |",
             pct(self.false_positive_rate)
         );
@@ -602,9 +648,9 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| case | seed | road | km | min | hidden | truth (nominal) | named | findings | verdict | fitted | param. error | held-out ratio | diagnosis s |"
+        "| case | seed | road | km | min | hidden | truth (nominal) | named | findings | verdict | fitted | param. error | held-out ratio | oracle gain | diagnosis s |"
     );
-    let _ = writeln!(s, "|{}", "---|".repeat(14));
+    let _ = writeln!(s, "|{}", "---|".repeat(15));
     let num = |x: Option<f64>, d: usize| x.map_or(String::new(), |v| format!("{v:.d$}"));
     for c in scores {
         let truth = match (c.truth_value, c.nominal_value) {
@@ -613,7 +659,7 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |",
+            "| {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |",
             c.index,
             c.seed,
             c.rules,
@@ -627,13 +673,17 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
             num(c.fitted_value, 4),
             num(c.parameter_error, 2),
             num(c.heldout_ratio, 2),
+            match (c.oracle_heldout_gain, c.oracle_visible) {
+                (Some(g), Some(v)) => format!("{g:.2}{}", if v { "" } else { " (not visible)" }),
+                _ => String::new(),
+            },
             c.seconds
         );
     }
     for f in failed {
         let _ = writeln!(
             s,
-            "| {} | | | | | {} | | failed ({}) | {} | | | | | |",
+            "| {} | | | | | {} | | failed ({}) | {} | | | | | | |",
             f.index,
             f.hidden,
             f.stage,
@@ -722,8 +772,8 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
     };
     // blind from here: the drive file and the nominal vehicle file beside it
     let t0 = std::time::Instant::now();
-    let diagnosed = (|| -> Result<(Diagnosis, f64), String> {
-        let vf = crate::model::vehicle::VehicleFile::load(&g.vehicle).map_err(|e| e.to_string())?;
+    let diagnosed = (|| -> Result<(Diagnosis, DriveLog, VehicleFile), String> {
+        let vf = VehicleFile::load(&g.vehicle).map_err(|e| e.to_string())?;
         let opts = crate::pipeline::ingest_stage::IngestConfig::default()
             .options(&[], Some(&vf))
             .map_err(|e| e.to_string())?;
@@ -735,16 +785,63 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
             .join("diagnoses")
             .join(format!("case-{:04}", case.index));
         write_outputs(&dir, &d, &log, "fleetdyn prove").map_err(|e| e.to_string())?;
-        Ok((d.diagnosis, log.duration_s()))
+        Ok((d.diagnosis, log, vf))
     })();
     let seconds = t0.elapsed().as_secs_f64();
     match diagnosed {
-        Ok((d, drive_s)) => CaseOutcome::Scored(CaseScore {
-            attempts: attempt + 1,
-            ..score(&g.case, &g.truth, &d, drive_s, seconds)
-        }),
+        Ok((d, log, vf)) => {
+            // the scorer's own look, with the answer: could the rule see the hidden effect?
+            let oracle = match g.truth.injection {
+                Some(inj) => oracle(&log, &vf, &d, inj.effect, inj.truth)
+                    .map_err(|e| fail("oracle", e))
+                    .map(Some),
+                None => Ok(None),
+            };
+            match oracle {
+                Ok(oracle) => CaseOutcome::Scored(CaseScore {
+                    attempts: attempt + 1,
+                    oracle_heldout_gain: oracle.map(|o| o.heldout_gain),
+                    oracle_visible: oracle.map(|o| o.visible()),
+                    ..score(&g.case, &g.truth, &d, log.duration_s(), seconds)
+                }),
+                Err(failed) => failed,
+            }
+        }
         Err(e) => fail("diagnose", e),
     }
+}
+
+/// [`super::explain::oracle_check`] of `effect` at `truth` on the drive `log`, weighted by the
+/// diagnosis' noise floor, with the problem the diagnosis built (same setup, same split);
+/// `slope_quantization` is checked with its cure switched on.
+fn oracle(
+    log: &DriveLog,
+    vf: &VehicleFile,
+    d: &Diagnosis,
+    effect: Effect,
+    truth: f64,
+) -> Result<super::explain::OracleCheck, String> {
+    let setup = super::setup::Setup::new(log, vf).map_err(|e| e.to_string())?;
+    let problem = super::problem::Problem::new(
+        log,
+        &setup.nominal_truth,
+        &setup.ratios,
+        setup.nominal,
+        super::extended::LongitudinalConfig::default(),
+        None,
+    )
+    .map_err(|e| e.to_string())?;
+    // slope_quantization's parameter is a switch, on above the recording's own resolution
+    // (extended.rs); its truth is the sensor's step, which the recording shows as that very
+    // resolution, so the truth is not above it: the check switches the cure on instead
+    let value = if effect == Effect::SlopeQuantization {
+        2.0 * problem.nominal().get(effect).max(truth)
+    } else {
+        truth
+    };
+    super::explain::oracle_check(&problem, Some(&d.noise_floor), effect, value)
+        .map_err(|e| e.to_string())?
+        .ok_or_else(|| format!("{}: its model is not in use on this drive", effect.id()))
 }
 
 /// Runs the proof of `cfg` with the vehicle file `vehicle` into `out` on `jobs` threads:
@@ -906,6 +1003,12 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
             name: "out_of_catalogue_located".into(),
             unit: "1".into(),
             data: OutData::I16(f(&|c| c.out_of_catalogue_located.map_or(f64::NAN, b))),
+        },
+        OutColumn::f64("oracle_heldout_gain", "1", f(&|c| o(c.oracle_heldout_gain))),
+        OutColumn {
+            name: "oracle_visible".into(),
+            unit: "1".into(),
+            data: OutData::I16(f(&|c| c.oracle_visible.map_or(f64::NAN, b))),
         },
         OutColumn::f64("diagnosis_s", "s", f(&|c| c.seconds)),
     ];
