@@ -325,7 +325,13 @@ impl Default for TableEncoding {
 /// (`drive_log` checks against the canonical schema); [`OutputError::Ragged`] for unequal
 /// lengths; I/O and encoder errors. On any error no file is left at `path`.
 pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<(), OutputError> {
-    write_table_full(path, meta, &column_refs(cols), &[], TableEncoding::default())
+    write_table_full(
+        path,
+        meta,
+        &column_refs(cols),
+        &[],
+        TableEncoding::default(),
+    )
 }
 
 /// [`write_table`] with the page encoding and compression chosen.
@@ -448,9 +454,10 @@ fn write_table_full(
                     DataRef::Str(v) => Arc::new(StringArray::from_iter_values(v[r.clone()].iter())),
                     DataRef::U64(v) => Arc::new(UInt64Array::from(v[r.clone()].to_vec())),
                     // built as the NaN columns they stand for are, so the bytes are the same
-                    DataRef::NullF64(_) => Arc::new(Float64Array::from_iter(
-                        std::iter::repeat_n(None::<f64>, r.len()),
-                    )),
+                    DataRef::NullF64(_) => Arc::new(Float64Array::from_iter(std::iter::repeat_n(
+                        None::<f64>,
+                        r.len(),
+                    ))),
                     DataRef::NullI16(_) => Arc::new(Int16Array::from_iter(std::iter::repeat_n(
                         None::<i16>,
                         r.len(),

@@ -2,7 +2,9 @@
 //! mapped back onto the drive's time axis (`slope_time.parquet`), with the filter's measured
 //! gains and the sensor's quantisation step in the file metadata.
 
-use crate::io::{config_hash, write_column_refs_with_constants, ColumnRef, DataRef, OutputError, TableMeta};
+use crate::io::{
+    config_hash, write_column_refs_with_constants, ColumnRef, DataRef, OutputError, TableMeta,
+};
 use crate::road::slope_filter::{SlopeFilterConfig, SlopeFiltered};
 use crate::signal::distance::DistanceLog;
 use crate::table::DriveLog;

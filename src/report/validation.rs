@@ -38,10 +38,7 @@ pub fn tables<'a>(
     log: &'a DriveLog,
     v: &'a ShuffleValidation,
     fp: &str,
-) -> (
-    (TableMeta, Vec<ColumnRef<'a>>),
-    (TableMeta, Vec<OutColumn>),
-) {
+) -> ((TableMeta, Vec<ColumnRef<'a>>), (TableMeta, Vec<OutColumn>)) {
     let meas = |c: &'a str, unit: &'a str| ColumnRef {
         name: c,
         unit,
