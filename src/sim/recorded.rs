@@ -24,8 +24,9 @@
 use super::hybrid::{EngineInput, Scenario};
 use super::inputs::{Between, Piecewise};
 use crate::schema::Interpolation;
-use crate::signal::distance::fill_gaps;
+use crate::signal::distance::{fill_gaps, fill_gaps_borrowed};
 use crate::table::DriveLog;
+use std::borrow::Cow;
 use std::sync::Arc;
 
 /// What a recording could not provide.
@@ -93,20 +94,20 @@ pub(crate) fn relative_times(log: &DriveLog) -> Result<Arc<[f64]>, RecordedError
 
 /// The slope input of a log: the named column, else `road_slope`, else a flat road (`None`),
 /// gaps filled by holding.
-pub(crate) fn slope_input(
-    log: &DriveLog,
+pub(crate) fn slope_input<'a>(
+    log: &'a DriveLog,
     slope_column: Option<&str>,
-) -> (Option<String>, Vec<f64>) {
+) -> (Option<String>, Cow<'a, [f64]>) {
     let column = |name: &str| {
         log.signal(name)
-            .and_then(|v| fill_gaps(v, Interpolation::Hold))
+            .and_then(|v| fill_gaps_borrowed(v, Interpolation::Hold))
     };
     match slope_column
         .and_then(|c| column(c).map(|v| (c.to_string(), v)))
         .or_else(|| column("road_slope").map(|v| ("road_slope".to_string(), v)))
     {
         Some((n, v)) => (Some(n), v),
-        None => (None, vec![0.0; log.len()]),
+        None => (None, Cow::Owned(vec![0.0; log.len()])),
     }
 }
 
@@ -143,22 +144,26 @@ pub fn scenario_from_log(
     let t = relative_times(log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
+    // read only: borrowed from the log when complete
+    let column_ref = |name: &str, interp: Interpolation| {
+        log.signal(name).and_then(|v| fill_gaps_borrowed(v, interp))
+    };
     let missing = |c: &str| RecordedError::Missing {
         file: file.clone(),
         column: c.into(),
     };
-    let torque =
-        column("engine_torque", Interpolation::Linear).ok_or_else(|| missing("engine_torque"))?;
-    let gear_raw = column("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
+    let torque = column_ref("engine_torque", Interpolation::Linear)
+        .ok_or_else(|| missing("engine_torque"))?;
+    let gear_raw = column_ref("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
     let mut clutch =
         column("clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
     let mut brake =
         column("brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
     if let (Some(k), Some(ret)) = (
         retarder_n_per_nm,
-        column("retarder_torque", Interpolation::Linear),
+        column_ref("retarder_torque", Interpolation::Linear),
     ) {
-        for (b, r) in brake.iter_mut().zip(ret) {
+        for (b, &r) in brake.iter_mut().zip(ret.iter()) {
             *b += k * r;
         }
     }
