@@ -266,7 +266,7 @@ impl DistanceMap {
                     file: file.clone(),
                     column: "vehicle_speed".into(),
                 })?;
-            let v = fill_gaps(v, Interpolation::Linear).expect("has a finite value");
+            let v = fill_gaps_borrowed(v, Interpolation::Linear).expect("has a finite value");
             let mut eff = vec![0.0; n];
             for i in 0..n {
                 if v[i] < -cfg.reverse_speed_mps {
