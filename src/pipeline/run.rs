@@ -495,7 +495,8 @@ fn run_spectrum(
 
 /// The canonical columns in schema order, each present (null where the drive has none): one
 /// schema for every file of a dataset table. Pass-through columns stay in the source. The
-/// columns are borrowed from `signals`, not copied (a 10-hour drive's log is ~290 MB of them).
+/// columns are borrowed from `signals`, not copied (copied and NaN-filled, a 10-hour drive's
+/// `drive_log` table took ~290 MB).
 fn conformed(signals: &[Signal], n: usize) -> Vec<ColumnRef<'_>> {
     drive_log()
         .columns
@@ -840,7 +841,7 @@ fn compute(
     ]
     .contains(&Some(SlopeInput::Filtered));
     // The column is lent to the log for the simulations and handed back after them: the log is
-    // not copied (a 10-hour drive's log is ~160 MB) and the filtered slope not duplicated.
+    // not copied (a 10-hour drive's log is ~170 MB) and the filtered slope not duplicated.
     let mut lent = false;
     if let (true, Some(f)) = (wants_filtered, &mut slope) {
         if log.signal("road_slope").is_some() {
@@ -981,8 +982,8 @@ fn write_drive(
     };
     let meta = |t: &str| base_meta(t, log, hash, &vehicle_id);
     // Each table is built just before it is written and dropped after: one table's columns
-    // in memory at a time, not every table of the drive (a 10-hour drive's drive_log alone
-    // is ~300 MB).
+    // in memory at a time, not every table of the drive; the long tables borrow their columns
+    // from the drive's results instead of copying them (docs/memory.md).
     let build = |t: DatasetTable| -> Option<(TableMeta, TableColumns<'_>)> {
         use TableColumns::{Borrowed, Built};
         match t {
