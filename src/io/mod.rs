@@ -5,6 +5,7 @@ mod parquet_out;
 
 pub use atomic::AtomicFile;
 pub use parquet_out::{
-    config_hash, drive_log_columns, write_table, write_table_with, write_table_with_constants,
-    OutColumn, OutData, OutputError, TableEncoding, TableMeta,
+    config_hash, drive_log_columns, write_column_refs_with_constants, write_table,
+    write_table_with, write_table_with_constants, ColumnRef, DataRef, OutColumn, OutData,
+    OutputError, TableEncoding, TableMeta,
 };

@@ -46,22 +46,91 @@ pub enum OutData {
     U64(Vec<u64>),
 }
 
-impl OutData {
+/// Column data borrowed for writing: what [`OutData`] holds, without owning it, plus columns of
+/// nulls that need no values at all. Writing from borrowed data lets a large table (a 10-hour
+/// drive's `drive_log` is ~290 MB of columns) go to disk without a copy (docs/memory.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DataRef<'a> {
+    /// ns since the Unix epoch, written as `timestamp[ns, UTC]`.
+    Timestamp(&'a [i64]),
+    /// Floats; NaN is written as null.
+    F64(&'a [f64]),
+    /// Integers held as floats (NaN → null), written as `int16`; values are rounded.
+    I16(&'a [f64]),
+    /// Labels, written as `utf8`.
+    Str(&'a [String]),
+    /// Unsigned integers, written as `uint64`.
+    U64(&'a [u64]),
+    /// A float column of this many rows, every one null (as an `F64` of NaN).
+    NullF64(usize),
+    /// An `int16` column of this many rows, every one null (as an `I16` of NaN).
+    NullI16(usize),
+}
+
+impl DataRef<'_> {
     fn len(&self) -> usize {
         match self {
-            OutData::Timestamp(v) => v.len(),
-            OutData::F64(v) | OutData::I16(v) => v.len(),
-            OutData::Str(v) => v.len(),
-            OutData::U64(v) => v.len(),
+            DataRef::Timestamp(v) => v.len(),
+            DataRef::F64(v) | DataRef::I16(v) => v.len(),
+            DataRef::Str(v) => v.len(),
+            DataRef::U64(v) => v.len(),
+            DataRef::NullF64(n) | DataRef::NullI16(n) => *n,
         }
     }
     fn dtype(&self) -> Dtype {
         match self {
-            OutData::Timestamp(_) => Dtype::TimestampNsUtc,
-            OutData::F64(_) => Dtype::F64,
-            OutData::I16(_) => Dtype::I16,
-            OutData::Str(_) => Dtype::Str,
-            OutData::U64(_) => Dtype::U64,
+            DataRef::Timestamp(_) => Dtype::TimestampNsUtc,
+            DataRef::F64(_) | DataRef::NullF64(_) => Dtype::F64,
+            DataRef::I16(_) | DataRef::NullI16(_) => Dtype::I16,
+            DataRef::Str(_) => Dtype::Str,
+            DataRef::U64(_) => Dtype::U64,
+        }
+    }
+}
+
+/// One named column with its unit, its data borrowed ([`OutColumn`] owns its data).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ColumnRef<'a> {
+    /// Column name.
+    pub name: &'a str,
+    /// Unit for the `unit` field metadata.
+    pub unit: &'a str,
+    /// Values.
+    pub data: DataRef<'a>,
+}
+
+impl<'a> ColumnRef<'a> {
+    /// A float column.
+    pub fn f64(name: &'a str, unit: &'a str, values: &'a [f64]) -> Self {
+        Self {
+            name,
+            unit,
+            data: DataRef::F64(values),
+        }
+    }
+    /// A `timestamp[ns, UTC]` column named `timestamp`.
+    pub fn timestamp(values: &'a [i64]) -> Self {
+        Self {
+            name: "timestamp",
+            unit: "ns",
+            data: DataRef::Timestamp(values),
+        }
+    }
+    /// The column with its data copied (null columns as NaN).
+    pub fn to_owned_column(&self) -> OutColumn {
+        let data = match self.data {
+            DataRef::Timestamp(v) => OutData::Timestamp(v.to_vec()),
+            DataRef::F64(v) => OutData::F64(v.to_vec()),
+            DataRef::I16(v) => OutData::I16(v.to_vec()),
+            DataRef::Str(v) => OutData::Str(v.to_vec()),
+            DataRef::U64(v) => OutData::U64(v.to_vec()),
+            DataRef::NullF64(n) => OutData::F64(vec![f64::NAN; n]),
+            DataRef::NullI16(n) => OutData::I16(vec![f64::NAN; n]),
+        };
+        OutColumn {
+            name: self.name.to_string(),
+            unit: self.unit.to_string(),
+            data,
         }
     }
 }
@@ -106,6 +175,25 @@ impl OutColumn {
             data: OutData::Timestamp(values),
         }
     }
+    /// The column borrowed.
+    pub fn as_column_ref(&self) -> ColumnRef<'_> {
+        let data = match &self.data {
+            OutData::Timestamp(v) => DataRef::Timestamp(v),
+            OutData::F64(v) => DataRef::F64(v),
+            OutData::I16(v) => DataRef::I16(v),
+            OutData::Str(v) => DataRef::Str(v),
+            OutData::U64(v) => DataRef::U64(v),
+        };
+        ColumnRef {
+            name: &self.name,
+            unit: &self.unit,
+            data,
+        }
+    }
+}
+
+fn column_refs(cols: &[OutColumn]) -> Vec<ColumnRef<'_>> {
+    cols.iter().map(OutColumn::as_column_ref).collect()
 }
 
 /// Table-level metadata.
@@ -237,7 +325,13 @@ impl Default for TableEncoding {
 /// (`drive_log` checks against the canonical schema); [`OutputError::Ragged`] for unequal
 /// lengths; I/O and encoder errors. On any error no file is left at `path`.
 pub fn write_table(path: &Path, meta: &TableMeta, cols: &[OutColumn]) -> Result<(), OutputError> {
-    write_table_full(path, meta, cols, &[], TableEncoding::default())
+    write_table_full(
+        path,
+        meta,
+        &column_refs(cols),
+        &[],
+        TableEncoding::default(),
+    )
 }
 
 /// [`write_table`] with the page encoding and compression chosen.
@@ -250,7 +344,7 @@ pub fn write_table_with(
     cols: &[OutColumn],
     encoding: TableEncoding,
 ) -> Result<(), OutputError> {
-    write_table_full(path, meta, cols, &[], encoding)
+    write_table_full(path, meta, &column_refs(cols), &[], encoding)
 }
 
 /// [`write_table`], then `constants` appended as `utf8` columns holding one value on every row
@@ -265,19 +359,39 @@ pub fn write_table_with_constants(
     cols: &[OutColumn],
     constants: &[(&str, &str)],
 ) -> Result<(), OutputError> {
+    write_table_full(
+        path,
+        meta,
+        &column_refs(cols),
+        constants,
+        TableEncoding::default(),
+    )
+}
+
+/// [`write_table_with_constants`] from borrowed columns: the same file, written without copying
+/// the columns first.
+///
+/// # Errors
+/// As [`write_table`]; nothing is left at `path` on error.
+pub fn write_column_refs_with_constants(
+    path: &Path,
+    meta: &TableMeta,
+    cols: &[ColumnRef<'_>],
+    constants: &[(&str, &str)],
+) -> Result<(), OutputError> {
     write_table_full(path, meta, cols, constants, TableEncoding::default())
 }
 
 fn write_table_full(
     path: &Path,
     meta: &TableMeta,
-    cols: &[OutColumn],
+    cols: &[ColumnRef<'_>],
     constants: &[(&str, &str)],
     encoding: TableEncoding,
 ) -> Result<(), OutputError> {
     let described: Vec<(&str, Dtype, &str)> = cols
         .iter()
-        .map(|c| (c.name.as_str(), c.data.dtype(), c.unit.as_str()))
+        .map(|c| (c.name, c.data.dtype(), c.unit))
         .collect();
     if meta.table == "drive_log" {
         check_drive_log(&described)?;
@@ -293,7 +407,7 @@ fn write_table_full(
         if c.data.len() != n {
             return Err(OutputError::Ragged {
                 table: meta.table.clone(),
-                column: c.name.clone(),
+                column: c.name.to_string(),
                 len: c.data.len(),
                 expected: n,
             });
@@ -304,17 +418,17 @@ fn write_table_full(
     let fields: Vec<Field> =
         cols.iter()
             .map(|c| {
-                let dt = match c.data {
-                    OutData::Timestamp(_) => {
+                let dt = match c.data.dtype() {
+                    Dtype::TimestampNsUtc => {
                         DataType::Timestamp(TimeUnit::Nanosecond, Some("UTC".into()))
                     }
-                    OutData::F64(_) => DataType::Float64,
-                    OutData::I16(_) => DataType::Int16,
-                    OutData::Str(_) => DataType::Utf8,
-                    OutData::U64(_) => DataType::UInt64,
+                    Dtype::F64 => DataType::Float64,
+                    Dtype::I16 => DataType::Int16,
+                    Dtype::Str => DataType::Utf8,
+                    Dtype::U64 => DataType::UInt64,
                 };
-                let nullable = !matches!(c.data, OutData::Timestamp(_));
-                Field::new(&c.name, dt, nullable).with_metadata(unit_meta(&c.unit))
+                let nullable = !matches!(c.data, DataRef::Timestamp(_));
+                Field::new(c.name, dt, nullable).with_metadata(unit_meta(c.unit))
             })
             .chain(constants.iter().map(|(name, _)| {
                 Field::new(*name, DataType::Utf8, true).with_metadata(unit_meta("1"))
@@ -325,20 +439,29 @@ fn write_table_full(
     let slice = |r: std::ops::Range<usize>| -> Vec<ArrayRef> {
         cols.iter()
             .map(|c| -> ArrayRef {
-                match &c.data {
-                    OutData::Timestamp(v) => Arc::new(
+                match c.data {
+                    DataRef::Timestamp(v) => Arc::new(
                         TimestampNanosecondArray::from(v[r.clone()].to_vec()).with_timezone("UTC"),
                     ),
-                    OutData::F64(v) => Arc::new(Float64Array::from_iter(
+                    DataRef::F64(v) => Arc::new(Float64Array::from_iter(
                         v[r.clone()].iter().map(|x| (!x.is_nan()).then_some(*x)),
                     )),
-                    OutData::I16(v) => Arc::new(Int16Array::from_iter(
+                    DataRef::I16(v) => Arc::new(Int16Array::from_iter(
                         v[r.clone()]
                             .iter()
                             .map(|x| (x.is_finite()).then(|| x.round() as i16)),
                     )),
-                    OutData::Str(v) => Arc::new(StringArray::from_iter_values(v[r.clone()].iter())),
-                    OutData::U64(v) => Arc::new(UInt64Array::from(v[r.clone()].to_vec())),
+                    DataRef::Str(v) => Arc::new(StringArray::from_iter_values(v[r.clone()].iter())),
+                    DataRef::U64(v) => Arc::new(UInt64Array::from(v[r.clone()].to_vec())),
+                    // built as the NaN columns they stand for are, so the bytes are the same
+                    DataRef::NullF64(_) => Arc::new(Float64Array::from_iter(std::iter::repeat_n(
+                        None::<f64>,
+                        r.len(),
+                    ))),
+                    DataRef::NullI16(_) => Arc::new(Int16Array::from_iter(std::iter::repeat_n(
+                        None::<i16>,
+                        r.len(),
+                    ))),
                 }
             })
             .chain(constants.iter().map(|(_, value)| -> ArrayRef {
@@ -394,12 +517,12 @@ fn write_table_full(
         .set_key_value_metadata(Some(kv));
     if encoding.split_floats {
         for c in cols.iter() {
-            let col = ColumnPath::from(c.name.as_str());
-            props = match c.data {
-                OutData::F64(_) => props
+            let col = ColumnPath::from(c.name);
+            props = match c.data.dtype() {
+                Dtype::F64 => props
                     .set_column_dictionary_enabled(col.clone(), false)
                     .set_column_encoding(col, Encoding::BYTE_STREAM_SPLIT),
-                OutData::Timestamp(_) | OutData::I16(_) => props
+                Dtype::TimestampNsUtc | Dtype::I16 => props
                     .set_column_dictionary_enabled(col.clone(), false)
                     .set_column_encoding(col, Encoding::DELTA_BINARY_PACKED),
                 _ => props,

@@ -136,7 +136,7 @@ pub fn run(
             })?;
             let rec = RecordedAxleInputs {
                 inputs,
-                t_s: t,
+                t_s: t.into(),
                 accel_mps2: accel,
                 accel_source: "driveline simulation (d v_sim / dt)",
                 slope_column: sc.slope_column,

@@ -23,7 +23,8 @@ use super::spec::{DatasetTable, LongitudinalSpec, MissingPolicy, PipelineStage, 
 use super::vehicles::LoadedVehicle;
 use super::{axle_stage, resample_stage, slope_stage};
 use crate::io::{
-    config_hash, write_table_with_constants, AtomicFile, OutColumn, OutData, OutputError, TableMeta,
+    config_hash, write_column_refs_with_constants, AtomicFile, ColumnRef, DataRef, OutColumn,
+    OutData, OutputError, TableMeta,
 };
 use crate::model::axle::Axle;
 use crate::report::axle_sim::{axle_sim_columns, AxleSimExtra, TimeAxis};
@@ -492,28 +493,36 @@ fn run_spectrum(
     }
 }
 
-/// The canonical columns in schema order, each present (null-filled where the drive has none):
-/// one schema for every file of a dataset table. Pass-through columns stay in the source.
-fn conformed(signals: &[Signal], n: usize) -> Vec<OutColumn> {
+/// The canonical columns in schema order, each present (null where the drive has none): one
+/// schema for every file of a dataset table. Pass-through columns stay in the source. The
+/// columns are borrowed from `signals`, not copied (copied and NaN-filled, a 10-hour drive's
+/// `drive_log` table took ~290 MB).
+fn conformed(signals: &[Signal], n: usize) -> Vec<ColumnRef<'_>> {
     drive_log()
         .columns
         .iter()
         .skip(1)
         .map(|c| {
-            let values = signals
-                .iter()
-                .find(|s| s.name == c.name)
-                .map_or_else(|| vec![f64::NAN; n], |s| s.values.clone());
-            OutColumn {
-                name: c.name.clone(),
-                unit: c.unit.clone(),
-                data: match c.dtype {
-                    Dtype::I16 => OutData::I16(values),
-                    _ => OutData::F64(values),
+            let values = signals.iter().find(|s| s.name == c.name);
+            ColumnRef {
+                name: &c.name,
+                unit: &c.unit,
+                data: match (c.dtype, values) {
+                    (Dtype::I16, Some(s)) => DataRef::I16(&s.values),
+                    (Dtype::I16, None) => DataRef::NullI16(n),
+                    (_, Some(s)) => DataRef::F64(&s.values),
+                    (_, None) => DataRef::NullF64(n),
                 },
             }
         })
         .collect()
+}
+
+/// The columns of one table of a drive: borrowed from the drive's results where they are
+/// long, built where they are small.
+enum TableColumns<'a> {
+    Borrowed(Vec<ColumnRef<'a>>),
+    Built(Vec<OutColumn>),
 }
 
 fn base_meta(table: &str, log: &DriveLog, hash: &str, vehicle_id: &str) -> TableMeta {
@@ -805,7 +814,7 @@ fn process_inner(
 
 fn compute(
     plan: &Plan,
-    log: DriveLog,
+    mut log: DriveLog,
     vehicle: Option<&LoadedVehicle>,
 ) -> Result<(Computed, Vec<StageNote>), Fail> {
     let mut notes = vec![ran(PipelineStage::Ingest)];
@@ -817,7 +826,7 @@ fn compute(
     } else {
         None
     };
-    let slope = match (&dist, plan.has(PipelineStage::Slope)) {
+    let mut slope = match (&dist, plan.has(PipelineStage::Slope)) {
         (Some(d), true) => {
             let f = filter_slope(d, &plan.spec.slope).map_err(|e| fail(PipelineStage::Slope, e))?;
             notes.push(ran(PipelineStage::Slope));
@@ -831,21 +840,21 @@ fn compute(
         plan.axle.as_ref().map(|s| s.slope),
     ]
     .contains(&Some(SlopeInput::Filtered));
-    let mut sim_log = None;
-    if let (true, Some(f)) = (wants_filtered, &slope) {
+    // The column is lent to the log for the simulations and handed back after them: the log is
+    // not copied (a 10-hour drive's log is ~170 MB) and the filtered slope not duplicated.
+    let mut lent = false;
+    if let (true, Some(f)) = (wants_filtered, &mut slope) {
         if log.signal("road_slope").is_some() {
-            let mut l = log.clone();
-            l.signals.push(Signal {
+            log.signals.push(Signal {
                 name: "road_slope_filtered".into(),
                 unit: "1".into(),
-                values: f.zero_phase_time.clone(),
+                values: std::mem::take(&mut f.zero_phase_time),
             });
-            sim_log = Some(l);
+            lent = true;
         }
     }
-    let slog = sim_log.as_ref().unwrap_or(&log);
     let col = |s: Option<SlopeInput>| {
-        (s == Some(SlopeInput::Filtered) && sim_log.is_some()).then_some("road_slope_filtered")
+        (s == Some(SlopeInput::Filtered) && lent).then_some("road_slope_filtered")
     };
     let (sh_col, ax_col) = (
         col(plan.shuffle.as_ref().map(|s| s.slope)),
@@ -854,11 +863,15 @@ fn compute(
     let (mut sh_notes, mut ax_notes) = (Vec::new(), Vec::new());
     let (shuffle, axle) = match vehicle {
         Some(v) => rayon::join(
-            || run_shuffle(plan, slog, v, sh_col, &mut sh_notes),
-            || run_axle(plan, slog, v, ax_col, &mut ax_notes),
+            || run_shuffle(plan, &log, v, sh_col, &mut sh_notes),
+            || run_axle(plan, &log, v, ax_col, &mut ax_notes),
         ),
         None => (Ok(None), Ok(None)),
     };
+    if let (true, Some(f)) = (lent, &mut slope) {
+        let s = log.signals.pop().expect("the lent column is the last");
+        f.zero_phase_time = s.values;
+    }
     let (shuffle, axle) = (shuffle?, axle?);
     notes.extend(sh_notes);
     notes.extend(ax_notes);
@@ -969,14 +982,15 @@ fn write_drive(
     };
     let meta = |t: &str| base_meta(t, log, hash, &vehicle_id);
     // Each table is built just before it is written and dropped after: one table's columns
-    // in memory at a time, not every table of the drive (a 10-hour drive's drive_log alone
-    // is ~300 MB).
-    let build = |t: DatasetTable| -> Option<(TableMeta, Vec<OutColumn>)> {
+    // in memory at a time, not every table of the drive; the long tables borrow their columns
+    // from the drive's results instead of copying them (docs/memory.md).
+    let build = |t: DatasetTable| -> Option<(TableMeta, TableColumns<'_>)> {
+        use TableColumns::{Borrowed, Built};
         match t {
             DatasetTable::DriveLog => {
-                let mut cols = vec![OutColumn::timestamp(log.timestamp_ns.clone())];
+                let mut cols = vec![ColumnRef::timestamp(&log.timestamp_ns)];
                 cols.extend(conformed(&log.signals, log.len()));
-                return Some((meta("drive_log"), cols));
+                return Some((meta("drive_log"), Borrowed(cols)));
             }
             DatasetTable::DistanceLog => {
                 if let Some(d) = &c.dist {
@@ -984,11 +998,11 @@ fn write_drive(
                     m.config_hash = hash.into();
                     m.vehicle_id = Some(vehicle_id.clone());
                     let mut cols = vec![
-                        OutColumn::f64("distance", "m", d.distance_m.clone()),
-                        OutColumn::timestamp(d.timestamp_ns.clone()),
+                        ColumnRef::f64("distance", "m", &d.distance_m),
+                        ColumnRef::timestamp(&d.timestamp_ns),
                     ];
                     cols.extend(conformed(&d.signals, d.distance_m.len()));
-                    return Some((m, cols));
+                    return Some((m, Borrowed(cols)));
                 }
             }
             DatasetTable::SlopeDistance | DatasetTable::SlopeTime => {
@@ -1002,16 +1016,16 @@ fn write_drive(
                     let mut m = slope_stage::meta(name, d, f, &plan.spec.slope, "");
                     m.config_hash = hash.into();
                     m.vehicle_id = Some(vehicle_id.clone());
-                    return Some((m, cols));
+                    return Some((m, Borrowed(cols)));
                 }
             }
             DatasetTable::ShuffleSim | DatasetTable::ShuffleValidation => {
                 if let Some(s) = &c.shuffle {
-                    let [(ma, a), (mb, b)] = crate::report::validation::tables(log, &s.val, "");
+                    let ((ma, a), (mb, b)) = crate::report::validation::tables(log, &s.val, "");
                     let (mut m, cols) = if t == DatasetTable::ShuffleSim {
-                        (ma, a)
+                        (ma, Borrowed(a))
                     } else {
-                        (mb, b)
+                        (mb, Built(b))
                     };
                     m.config_hash = hash.into();
                     m.vehicle_id = Some(vehicle_id.clone());
@@ -1039,7 +1053,7 @@ fn write_drive(
                     } else {
                         axle_validation_columns(a)
                     };
-                    return Some((m, cols));
+                    return Some((m, Built(cols)));
                 }
             }
             DatasetTable::RoadSpectrum => {
@@ -1052,11 +1066,11 @@ fn write_drive(
                         ("nperseg".into(), sp.psd.nperseg.to_string()),
                         ("step_m".into(), sp.step_m.to_string()),
                     ];
-                    return Some((m, spectrum_columns(sp)));
+                    return Some((m, Built(spectrum_columns(sp))));
                 }
             }
             DatasetTable::DriveSummary => {
-                return Some((meta("drive_summary"), summary_columns(&rec)));
+                return Some((meta("drive_summary"), Built(summary_columns(&rec))));
             }
         }
         None
@@ -1078,9 +1092,15 @@ fn write_drive(
             .table_rel(t.name(), &vehicle_id, &rec.date, &rec.drive_id);
         let path = root.join(&rel);
         sweep_temps(&path);
-        if let Err(e) =
-            write_table_with_constants(&path, &m, &cols, &[("drive_id", rec.drive_id.as_str())])
-        {
+        let constants = [("drive_id", rec.drive_id.as_str())];
+        let written_or = match &cols {
+            TableColumns::Borrowed(c) => write_column_refs_with_constants(&path, &m, c, &constants),
+            TableColumns::Built(c) => {
+                let refs: Vec<ColumnRef<'_>> = c.iter().map(OutColumn::as_column_ref).collect();
+                write_column_refs_with_constants(&path, &m, &refs, &constants)
+            }
+        };
+        if let Err(e) = written_or {
             undo(&written);
             return Err(fail(wst, e));
         }

@@ -2,7 +2,9 @@
 //! mapped back onto the drive's time axis (`slope_time.parquet`), with the filter's measured
 //! gains and the sensor's quantisation step in the file metadata.
 
-use crate::io::{config_hash, write_table, OutColumn, OutputError, TableMeta};
+use crate::io::{
+    config_hash, write_column_refs_with_constants, ColumnRef, DataRef, OutputError, TableMeta,
+};
 use crate::road::slope_filter::{SlopeFilterConfig, SlopeFiltered};
 use crate::signal::distance::DistanceLog;
 use crate::table::DriveLog;
@@ -55,30 +57,30 @@ pub fn meta(
     }
 }
 
-/// The two slope tables, ready to write: (distance-domain columns, time-domain columns).
-pub fn tables(
-    log: &DriveLog,
-    d: &DistanceLog,
-    f: &SlopeFiltered,
-) -> (Vec<OutColumn>, Vec<OutColumn>) {
+/// The two slope tables, ready to write: (distance-domain columns, time-domain columns),
+/// borrowed from the stage's results (no copy of a long drive's columns).
+pub fn tables<'a>(
+    log: &'a DriveLog,
+    d: &'a DistanceLog,
+    f: &'a SlopeFiltered,
+) -> (Vec<ColumnRef<'a>>, Vec<ColumnRef<'a>>) {
     let dist = vec![
-        OutColumn::f64("distance", "m", d.distance_m.clone()),
-        OutColumn::timestamp(d.timestamp_ns.clone()),
-        OutColumn::f64("road_slope", "1", f.raw.clone()),
-        OutColumn::f64("road_slope_zero_phase", "1", f.zero_phase.clone()),
-        OutColumn::f64("road_slope_causal", "1", f.causal.clone()),
+        ColumnRef::f64("distance", "m", &d.distance_m),
+        ColumnRef::timestamp(&d.timestamp_ns),
+        ColumnRef::f64("road_slope", "1", &f.raw),
+        ColumnRef::f64("road_slope_zero_phase", "1", &f.zero_phase),
+        ColumnRef::f64("road_slope_causal", "1", &f.causal),
     ];
     let time = vec![
-        OutColumn::timestamp(log.timestamp_ns.clone()),
-        OutColumn::f64("distance", "m", d.map.x_m.clone()),
-        OutColumn::f64(
-            "road_slope",
-            "1",
-            log.signal("road_slope")
-                .map_or_else(Vec::new, <[f64]>::to_vec),
-        ),
-        OutColumn::f64("road_slope_zero_phase", "1", f.zero_phase_time.clone()),
-        OutColumn::f64("road_slope_causal", "1", f.causal_time.clone()),
+        ColumnRef::timestamp(&log.timestamp_ns),
+        ColumnRef::f64("distance", "m", &d.map.x_m),
+        ColumnRef {
+            name: "road_slope",
+            unit: "1",
+            data: DataRef::F64(log.signal("road_slope").unwrap_or_default()),
+        },
+        ColumnRef::f64("road_slope_zero_phase", "1", &f.zero_phase_time),
+        ColumnRef::f64("road_slope_causal", "1", &f.causal_time),
     ];
     (dist, time)
 }
@@ -97,8 +99,11 @@ pub fn write(
     fp: &str,
 ) -> Result<(), OutputError> {
     let (dist, time) = tables(log, d, f);
-    write_table(distance_path, &meta("slope_distance", d, f, cfg, fp), &dist)?;
-    write_table(time_path, &meta("slope_time", d, f, cfg, fp), &time).inspect_err(|_| {
+    let write = |path: &Path, table: &str, cols: &[ColumnRef<'_>]| {
+        write_column_refs_with_constants(path, &meta(table, d, f, cfg, fp), cols, &[])
+    };
+    write(distance_path, "slope_distance", &dist)?;
+    write(time_path, "slope_time", &time).inspect_err(|_| {
         let _ = std::fs::remove_file(distance_path);
     })
 }

@@ -1,7 +1,10 @@
 //! Writers of the driveline simulation of a recorded drive (`shuffle_sim`) and its validation
 //! table (`validation`), plus the printed summary.
 
-use crate::io::{config_hash, write_table, OutColumn, OutData, OutputError, TableMeta};
+use crate::io::{
+    config_hash, write_column_refs_with_constants, write_table, ColumnRef, DataRef, OutColumn,
+    OutData, OutputError, TableMeta,
+};
 use crate::sim::validate::{Metric, ShuffleValidation};
 use crate::table::DriveLog;
 use std::fmt::Write as _;
@@ -29,36 +32,40 @@ fn meta(table: &str, log: &DriveLog, fp: &str, v: &ShuffleValidation) -> TableMe
     }
 }
 
-/// The two tables of a shuffle validation, ready to write: (`shuffle_sim` metadata and
-/// columns, `validation` metadata and columns).
-pub fn tables(log: &DriveLog, v: &ShuffleValidation, fp: &str) -> [(TableMeta, Vec<OutColumn>); 2] {
-    let meas = |c: &str| {
-        log.signal(c)
-            .map_or_else(|| vec![f64::NAN; log.len()], <[f64]>::to_vec)
+/// The two tables of a shuffle validation, ready to write: (`shuffle_sim` metadata and columns,
+/// borrowed from `log` and `v`; `validation` metadata and columns).
+pub fn tables<'a>(
+    log: &'a DriveLog,
+    v: &'a ShuffleValidation,
+    fp: &str,
+) -> ((TableMeta, Vec<ColumnRef<'a>>), (TableMeta, Vec<OutColumn>)) {
+    let meas = |c: &'a str, unit: &'a str| ColumnRef {
+        name: c,
+        unit,
+        data: log
+            .signal(c)
+            .map_or(DataRef::NullF64(log.len()), DataRef::F64),
+    };
+    let i16 = |name: &'a str, values: &'a [f64]| ColumnRef {
+        name,
+        unit: "1",
+        data: DataRef::I16(values),
     };
     let sim = vec![
-        OutColumn::timestamp(v.timestamp_ns.clone()),
-        OutColumn::f64("vehicle_speed", "m/s", meas("vehicle_speed")),
-        OutColumn::f64("vehicle_speed_sim", "m/s", v.vehicle_speed.clone()),
-        OutColumn::f64("engine_speed", "rad/s", meas("engine_speed")),
-        OutColumn::f64("engine_speed_sim", "rad/s", v.engine_speed.clone()),
-        OutColumn::f64("clutch_torque_sim", "N*m", v.shaft_torques[0].clone()),
-        OutColumn::f64("propeller_torque_sim", "N*m", v.shaft_torques[1].clone()),
-        OutColumn::f64("drive_shaft_torque_sim", "N*m", v.shaft_torques[2].clone()),
-        OutColumn::f64("clutch_torsion_sim", "rad", v.torsions[0].clone()),
-        OutColumn::f64("propeller_torsion_sim", "rad", v.torsions[1].clone()),
-        OutColumn::f64("drive_shaft_torsion_sim", "rad", v.torsions[2].clone()),
-        OutColumn {
-            name: "clutch_locked".into(),
-            unit: "1".into(),
-            data: OutData::I16(v.clutch_locked.clone()),
-        },
-        OutColumn::f64("shuffle_indicator", "m/s", v.shuffle_indicator.clone()),
-        OutColumn {
-            name: "window".into(),
-            unit: "1".into(),
-            data: OutData::I16(v.window.clone()),
-        },
+        ColumnRef::timestamp(&v.timestamp_ns),
+        meas("vehicle_speed", "m/s"),
+        ColumnRef::f64("vehicle_speed_sim", "m/s", &v.vehicle_speed),
+        meas("engine_speed", "rad/s"),
+        ColumnRef::f64("engine_speed_sim", "rad/s", &v.engine_speed),
+        ColumnRef::f64("clutch_torque_sim", "N*m", &v.shaft_torques[0]),
+        ColumnRef::f64("propeller_torque_sim", "N*m", &v.shaft_torques[1]),
+        ColumnRef::f64("drive_shaft_torque_sim", "N*m", &v.shaft_torques[2]),
+        ColumnRef::f64("clutch_torsion_sim", "rad", &v.torsions[0]),
+        ColumnRef::f64("propeller_torsion_sim", "rad", &v.torsions[1]),
+        ColumnRef::f64("drive_shaft_torsion_sim", "rad", &v.torsions[2]),
+        i16("clutch_locked", &v.clutch_locked),
+        ColumnRef::f64("shuffle_indicator", "m/s", &v.shuffle_indicator),
+        i16("window", &v.window),
     ];
     let gears = gear_rows(&v.metrics);
     let pick = |signal: &str, g: usize, f: fn(&Metric) -> f64| -> f64 {
@@ -88,10 +95,10 @@ pub fn tables(log: &DriveLog, v: &ShuffleValidation, fp: &str) -> [(TableMeta, V
         col("engine_speed_mae", "rad/s", "engine_speed", |m| m.mae),
         col("engine_speed_fit", "%", "engine_speed", |m| m.fit_percent),
     ];
-    [
+    (
         (meta("shuffle_sim", log, fp, v), sim),
         (meta("validation", log, fp, v), table),
-    ]
+    )
 }
 
 /// Writes `shuffle_sim.parquet` and `validation.parquet` into `dir`; both or neither.
@@ -104,12 +111,12 @@ pub fn write(
     v: &ShuffleValidation,
     fp: &str,
 ) -> Result<(), OutputError> {
-    let [(ma, sim), (mb, table)] = tables(log, v, fp);
+    let ((ma, sim), (mb, table)) = tables(log, v, fp);
     let (a, b) = (
         dir.join("shuffle_sim.parquet"),
         dir.join("validation.parquet"),
     );
-    write_table(&a, &ma, &sim)?;
+    write_column_refs_with_constants(&a, &ma, &sim, &[])?;
     write_table(&b, &mb, &table).inspect_err(|_| {
         let _ = std::fs::remove_file(&a);
     })

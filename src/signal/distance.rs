@@ -33,6 +33,7 @@ use crate::schema::{drive_log, Interpolation};
 use crate::signal::quantization::estimate_quantization;
 use crate::table::{DriveLog, DriveMeta, Signal};
 use crate::time_fmt::rfc3339_ns;
+use std::borrow::Cow;
 use thiserror::Error;
 
 /// Where distance comes from.
@@ -169,19 +170,17 @@ pub struct DistanceMap {
 /// trailing gaps the last. `None` when no value is valid. Used where a stage allows filling the
 /// short gaps ingest accepted (the ingest NaN-run limit bounds their length).
 pub fn fill_gaps(values: &[f64], interpolation: Interpolation) -> Option<Vec<f64>> {
-    let valid: Vec<usize> = (0..values.len())
-        .filter(|&i| values[i].is_finite())
-        .collect();
-    let (&first, &last) = (valid.first()?, valid.last()?);
+    let first = values.iter().position(|v| v.is_finite())?;
+    let last = values.iter().rposition(|v| v.is_finite())?;
     let mut out = values.to_vec();
-    for v in &mut out[..first] {
-        *v = values[first];
-    }
-    for v in &mut out[last + 1..] {
-        *v = values[last];
-    }
-    for w in valid.windows(2) {
-        let (a, b) = (w[0], w[1]);
+    out[..first].fill(values[first]);
+    out[last + 1..].fill(values[last]);
+    // each gap between two valid samples a < b (no index list: a long drive's would be 8 B/row)
+    let mut a = first;
+    for b in first + 1..=last {
+        if !values[b].is_finite() {
+            continue;
+        }
         for (i, o) in out.iter_mut().enumerate().take(b).skip(a + 1) {
             *o = match interpolation {
                 Interpolation::Linear => {
@@ -191,8 +190,19 @@ pub fn fill_gaps(values: &[f64], interpolation: Interpolation) -> Option<Vec<f64
                 Interpolation::Hold | Interpolation::None => values[a],
             };
         }
+        a = b;
     }
     Some(out)
+}
+
+/// [`fill_gaps`], borrowing `values` when there is no gap to fill (no copy of a long drive's
+/// column that is already complete).
+pub fn fill_gaps_borrowed(values: &[f64], interpolation: Interpolation) -> Option<Cow<'_, [f64]>> {
+    if !values.is_empty() && values.iter().all(|v| v.is_finite()) {
+        Some(Cow::Borrowed(values))
+    } else {
+        fill_gaps(values, interpolation).map(Cow::Owned)
+    }
 }
 
 impl DistanceMap {
@@ -256,7 +266,7 @@ impl DistanceMap {
                     file: file.clone(),
                     column: "vehicle_speed".into(),
                 })?;
-            let v = fill_gaps(v, Interpolation::Linear).expect("has a finite value");
+            let v = fill_gaps_borrowed(v, Interpolation::Linear).expect("has a finite value");
             let mut eff = vec![0.0; n];
             for i in 0..n {
                 if v[i] < -cfg.reverse_speed_mps {
@@ -465,6 +475,57 @@ pub fn resample_to_distance(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gaps_are_filled_by_the_column_kind_and_complete_columns_are_borrowed() {
+        let nan = f64::NAN;
+        let v = [
+            nan,
+            nan,
+            1.0,
+            nan,
+            nan,
+            nan,
+            2.5,
+            f64::INFINITY,
+            -0.7,
+            nan,
+            3.0,
+            nan,
+        ];
+        // by hand: leading gap takes the first valid value, trailing gap the last, inner gaps
+        // linear from the valid sample before to the one after (or held)
+        let lin = fill_gaps(&v, Interpolation::Linear).unwrap();
+        let third = |a: f64, b: f64, k: f64| a + (k / 4.0) * (b - a);
+        let want = [
+            1.0,
+            1.0,
+            1.0,
+            third(1.0, 2.5, 1.0),
+            third(1.0, 2.5, 2.0),
+            third(1.0, 2.5, 3.0),
+            2.5,
+            2.5 + 0.5 * (-0.7 - 2.5),
+            -0.7,
+            -0.7 + 0.5 * (3.0 + 0.7),
+            3.0,
+            3.0,
+        ];
+        for (k, (a, b)) in lin.iter().zip(want).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "linear, sample {k}");
+        }
+        let held = fill_gaps(&v, Interpolation::Hold).unwrap();
+        let want = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.5, 2.5, -0.7, -0.7, 3.0, 3.0];
+        assert_eq!(held, want);
+        assert_eq!(fill_gaps(&[nan, nan], Interpolation::Linear), None);
+        assert_eq!(fill_gaps_borrowed(&[nan], Interpolation::Hold), None);
+        assert_eq!(fill_gaps_borrowed(&[], Interpolation::Hold), None);
+        let complete = [1.0, -2.0, 3.0];
+        let c = fill_gaps_borrowed(&complete, Interpolation::Linear).unwrap();
+        assert!(matches!(c, Cow::Borrowed(_)) && *c == complete);
+        let g = fill_gaps_borrowed(&v, Interpolation::Linear).unwrap();
+        assert!(matches!(g, Cow::Owned(_)) && *g == *lin);
+    }
 
     fn log(t_s: &[f64], v: &[f64], slope: &[f64]) -> DriveLog {
         DriveLog {

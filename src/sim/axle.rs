@@ -101,12 +101,12 @@ struct Cursor([usize; 5]);
 impl Cursor {
     #[inline]
     fn eval(&mut self, i: usize, s: &Piecewise, t: f64) -> f64 {
-        let pieces = s.pieces();
-        let mut k = self.0[i].min(pieces.len() - 1);
-        if pieces[k].0 > t {
+        let n = s.piece_count();
+        let mut k = self.0[i].min(n - 1);
+        if s.piece_start(k) > t {
             k = s.piece_index(t); // time went back: search again
         }
-        while k + 1 < pieces.len() && pieces[k + 1].0 <= t {
+        while k + 1 < n && s.piece_start(k + 1) <= t {
             k += 1;
         }
         self.0[i] = k;

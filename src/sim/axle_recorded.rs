@@ -104,8 +104,8 @@ impl Default for AxleRecordConfig {
 pub struct RecordedAxleInputs {
     /// The inputs.
     pub inputs: AxleInputs,
-    /// Sample times relative to the first row, s.
-    pub t_s: Vec<f64>,
+    /// Sample times relative to the first row, s (shared with the inputs' pieces).
+    pub t_s: std::sync::Arc<[f64]>,
     /// Acceleration used, m/s², per row.
     pub accel_mps2: Vec<f64>,
     /// Where it came from (`longitudinal_acceleration` or `d(vehicle_speed)/dt`).

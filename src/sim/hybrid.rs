@@ -343,7 +343,7 @@ impl<'a> HybridDriveline<'a> {
             b.extend(pw.breakpoints());
         }
         // kinks of M_k(t) where a clutch ramp crosses the ends of the effective range
-        for &(t0, t1, v0, v1) in sc.clutch_x.pieces() {
+        for (t0, t1, v0, v1) in sc.clutch_x.pieces() {
             if v1 != v0 {
                 for lim in [
                     p.clutch_l_lower * p.clutch_x_max,

@@ -22,10 +22,12 @@
 //!   1.4 m/s² (measured: 10 m/s within 7 s on a clean 5 km city-se synthetic drive).
 
 use super::hybrid::{EngineInput, Scenario};
-use super::inputs::Piecewise;
+use super::inputs::{Between, Piecewise};
 use crate::schema::Interpolation;
-use crate::signal::distance::fill_gaps;
+use crate::signal::distance::{fill_gaps, fill_gaps_borrowed};
 use crate::table::DriveLog;
+use std::borrow::Cow;
+use std::sync::Arc;
 
 /// What a recording could not provide.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,8 +67,8 @@ pub enum RecordedError {
 pub struct RecordedScenario {
     /// The inputs.
     pub scenario: Scenario,
-    /// Sample times relative to the first row, s.
-    pub t_s: Vec<f64>,
+    /// Sample times relative to the first row, s (shared with the inputs' pieces).
+    pub t_s: Arc<[f64]>,
     /// Which slope column was used (`None`: flat road).
     pub slope_column: Option<String>,
 }
@@ -75,7 +77,7 @@ pub struct RecordedScenario {
 ///
 /// # Errors
 /// [`RecordedError::TooShort`] for fewer than 2 rows.
-pub(crate) fn relative_times(log: &DriveLog) -> Result<Vec<f64>, RecordedError> {
+pub(crate) fn relative_times(log: &DriveLog) -> Result<Arc<[f64]>, RecordedError> {
     if log.len() < 2 {
         return Err(RecordedError::TooShort {
             file: log.meta.source_file.clone(),
@@ -92,49 +94,35 @@ pub(crate) fn relative_times(log: &DriveLog) -> Result<Vec<f64>, RecordedError> 
 
 /// The slope input of a log: the named column, else `road_slope`, else a flat road (`None`),
 /// gaps filled by holding.
-pub(crate) fn slope_input(
-    log: &DriveLog,
+pub(crate) fn slope_input<'a>(
+    log: &'a DriveLog,
     slope_column: Option<&str>,
-) -> (Option<String>, Vec<f64>) {
+) -> (Option<String>, Cow<'a, [f64]>) {
     let column = |name: &str| {
         log.signal(name)
-            .and_then(|v| fill_gaps(v, Interpolation::Hold))
+            .and_then(|v| fill_gaps_borrowed(v, Interpolation::Hold))
     };
     match slope_column
         .and_then(|c| column(c).map(|v| (c.to_string(), v)))
         .or_else(|| column("road_slope").map(|v| ("road_slope".to_string(), v)))
     {
         Some((n, v)) => (Some(n), v),
-        None => (None, vec![0.0; log.len()]),
+        None => (None, Cow::Owned(vec![0.0; log.len()])),
     }
 }
 
-/// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says.
-///
-/// Consecutive constant pieces of the same value (bit for bit) are stored as one: a closed
-/// clutch, a released brake, a gear held for minutes or a whole-percent slope cost one piece per
-/// stretch instead of 32 B per row (a 10-hour drive's scenario held ~290 MB; docs/memory.md).
-/// Every evaluation gives the same value as the unmerged pieces (`v0 + (v1 − v0)·w = v` for
-/// `v0 = v1 = v`); only piece boundaries inside such a stretch disappear, which matters solely to
-/// integrators that restart at breakpoints — recorded scenarios go to the fixed-step
-/// exponential integrator, which evaluates values only.
-pub(crate) fn pieces(t: &[f64], v: &[f64], interp: Interpolation) -> Piecewise {
-    let mut p: Vec<(f64, f64, f64, f64)> = Vec::new();
-    for (tw, vw) in t.windows(2).zip(v.windows(2)) {
-        let (v0, v1) = match interp {
-            Interpolation::Linear => (vw[0], vw[1]),
-            _ => (vw[0], vw[0]),
-        };
-        if let Some(last) = p.last_mut() {
-            let constant = |a: f64, b: f64| a.to_bits() == b.to_bits();
-            if constant(last.2, last.3) && constant(last.3, v0) && constant(v0, v1) {
-                last.1 = tw[1];
-                continue;
-            }
-        }
-        p.push((tw[0], tw[1], v0, v1));
-    }
-    Piecewise::new(p).expect("strictly increasing times and filled values")
+/// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says;
+/// runs of equal constant pieces stored as one and the time axis shared
+/// ([`Piecewise::through_samples`]). A 10-hour drive's scenario held ~290 MB as one 32-B tuple
+/// per row and input (docs/memory.md). Only piece boundaries inside a merged stretch
+/// disappear, which matters solely to integrators that restart at breakpoints — recorded
+/// scenarios go to the fixed-step exponential integrator, which evaluates values only.
+pub(crate) fn pieces(t: &Arc<[f64]>, v: &[f64], interp: Interpolation) -> Piecewise {
+    let between = match interp {
+        Interpolation::Linear => Between::Linear,
+        _ => Between::Held,
+    };
+    Piecewise::through_samples(t, v, between).expect("strictly increasing times and filled values")
 }
 
 /// Builds the scenario of a recorded drive (see the module rules). With
@@ -156,22 +144,26 @@ pub fn scenario_from_log(
     let t = relative_times(log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
+    // read only: borrowed from the log when complete
+    let column_ref = |name: &str, interp: Interpolation| {
+        log.signal(name).and_then(|v| fill_gaps_borrowed(v, interp))
+    };
     let missing = |c: &str| RecordedError::Missing {
         file: file.clone(),
         column: c.into(),
     };
-    let torque =
-        column("engine_torque", Interpolation::Linear).ok_or_else(|| missing("engine_torque"))?;
-    let gear_raw = column("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
+    let torque = column_ref("engine_torque", Interpolation::Linear)
+        .ok_or_else(|| missing("engine_torque"))?;
+    let gear_raw = column_ref("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
     let mut clutch =
         column("clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
     let mut brake =
         column("brake_force", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
     if let (Some(k), Some(ret)) = (
         retarder_n_per_nm,
-        column("retarder_torque", Interpolation::Linear),
+        column_ref("retarder_torque", Interpolation::Linear),
     ) {
-        for (b, r) in brake.iter_mut().zip(ret) {
+        for (b, &r) in brake.iter_mut().zip(ret.iter()) {
             *b += k * r;
         }
     }
@@ -228,7 +220,7 @@ mod tests {
         let v = [
             0.0, 0.0, 0.0, 1.5, 1.5, 2.0, -0.0, -0.0, 0.0, 0.0, 0.0, 3.0, 3.0, 3.0,
         ];
-        let t: Vec<f64> = (0..v.len())
+        let t: Arc<[f64]> = (0..v.len())
             .map(|k| k as f64 * 0.02 + 0.003 * (k % 3) as f64)
             .collect();
         for interp in [Interpolation::Linear, Interpolation::Hold] {
@@ -243,7 +235,7 @@ mod tests {
                     .collect(),
             )
             .unwrap();
-            assert!(merged.pieces().len() < plain.pieces().len(), "{interp:?}");
+            assert!(merged.piece_count() < plain.piece_count(), "{interp:?}");
             let end = *t.last().unwrap();
             for k in 0..=4000 {
                 let x = end * k as f64 / 4000.0;

@@ -19,8 +19,10 @@
 
 use super::fast::FastDriveline;
 use super::hybrid::{steady_state_locked, ClutchMode, SimError};
-use super::recorded::{scenario_from_log, RecordedError};
+use super::recorded::{scenario_from_log, RecordedError, RecordedScenario};
 use crate::model::driveline::DrivelineParams;
+use crate::schema::Interpolation;
+use crate::signal::distance::fill_gaps_borrowed;
 use crate::signal::{butter, sosfiltfilt, BandType, EdgeMode};
 use crate::table::DriveLog;
 use thiserror::Error;
@@ -116,10 +118,24 @@ pub struct ShuffleValidation {
 /// RMSE, MAE, fit % (`100 (1 − ‖y − ŷ‖/‖y − mean y‖)`, NaN for a constant y) of `yh` against
 /// `y` — the metrics every validation table of fleetdyn reports.
 pub fn error_metrics(y: &[f64], yh: &[f64]) -> (f64, f64, f64) {
-    let n = y.len().max(1) as f64;
-    let mean = y.iter().sum::<f64>() / n;
+    error_metrics_of(
+        || y.iter().copied(),
+        || y.iter().copied().zip(yh.iter().copied()),
+    )
+}
+
+/// [`error_metrics`] of the samples `ys()` and pairs `(y, ŷ)` `pairs()` yield, in that order
+/// (the same sums in the same order as on slices of them: the same bits), without collecting
+/// them.
+fn error_metrics_of<Y, P>(ys: impl Fn() -> Y, pairs: impl Fn() -> P) -> (f64, f64, f64)
+where
+    Y: Iterator<Item = f64>,
+    P: Iterator<Item = (f64, f64)>,
+{
+    let n = ys().count().max(1) as f64;
+    let mean = ys().sum::<f64>() / n;
     let (mut se, mut ae, mut ss) = (0.0, 0.0, 0.0);
-    for (a, b) in y.iter().zip(yh) {
+    for (a, b) in pairs() {
         se += (a - b) * (a - b);
         ae += (a - b).abs();
         ss += (a - mean) * (a - mean);
@@ -132,15 +148,25 @@ pub fn error_metrics(y: &[f64], yh: &[f64]) -> (f64, f64, f64) {
     ((se / n).sqrt(), ae / n, fit)
 }
 
-fn metric(signal: &'static str, gear: Option<usize>, y: &[f64], yh: &[f64]) -> Metric {
-    let (rmse, mae, fit_percent) = error_metrics(y, yh);
+/// The metric of `sim` against `meas` on the samples `rows()` yields (increasing indices).
+fn metric<R: Iterator<Item = usize>>(
+    signal: &'static str,
+    gear: Option<usize>,
+    meas: &[f64],
+    sim: &[f64],
+    rows: impl Fn() -> R,
+) -> Metric {
+    let (rmse, mae, fit_percent) = error_metrics_of(
+        || rows().map(|k| meas[k]),
+        || rows().map(|k| (meas[k], sim[k])),
+    );
     Metric {
         signal,
         gear,
         rmse,
         mae,
         fit_percent,
-        samples: y.len(),
+        samples: rows().count(),
     }
 }
 
@@ -220,28 +246,27 @@ pub fn validate_shuffle(
         slope_column,
         Some(p.final_drive_ratio / p.wheel_radius_m),
     )?;
-    let v_meas = log
-        .signal("vehicle_speed")
-        .and_then(|v| crate::signal::distance::fill_gaps(v, crate::schema::Interpolation::Linear))
-        .ok_or_else(|| RecordedError::Missing {
-            file: file.clone(),
-            column: "vehicle_speed".into(),
-        })?;
-    let w_meas = log
-        .signal("engine_speed")
-        .and_then(|v| crate::signal::distance::fill_gaps(v, crate::schema::Interpolation::Linear))
-        .ok_or_else(|| RecordedError::Missing {
-            file: file.clone(),
-            column: "engine_speed".into(),
-        })?;
+    let measured = |column: &str| {
+        log.signal(column)
+            .and_then(|v| fill_gaps_borrowed(v, Interpolation::Linear))
+            .ok_or_else(|| RecordedError::Missing {
+                file: file.clone(),
+                column: column.into(),
+            })
+    };
+    let v_meas = measured("vehicle_speed")?;
+    let w_meas = measured("engine_speed")?;
     if !v_meas.iter().any(|&v| v >= cfg.min_speed_mps) {
         return Err(ValidationError::NeverMoves {
             file,
             min_speed_mps: cfg.min_speed_mps,
         });
     }
-    let sc = &rec.scenario;
-    let t = &rec.t_s;
+    let RecordedScenario {
+        scenario: sc,
+        t_s: t,
+        slope_column,
+    } = rec;
     let mut fast = FastDriveline::new(p, ratios, cfg.dt_s);
     let n_win = (sc.t_end_s / cfg.window_s).ceil().max(1.0) as usize;
     // Each window's trajectory is interpolated onto the recording's times as soon as the
@@ -258,7 +283,7 @@ pub fn validate_shuffle(
         if tb - ta < cfg.dt_s {
             continue;
         }
-        let v0 = interp(t, &v_meas, ta).max(0.0);
+        let v0 = interp(&t, &v_meas, ta).max(0.0);
         let gear = sc.gear.eval(ta + 1e-9).round() as usize;
         let slope = sc.slope.eval(ta + 1e-9);
         let x = sc.clutch_x.eval(ta + 1e-9);
@@ -267,14 +292,14 @@ pub fn validate_shuffle(
         let mode = if engaged && v0 >= cfg.min_speed_mps {
             ClutchMode::Locked
         } else {
-            let we = interp(t, &w_meas, ta);
+            let we = interp(&t, &w_meas, ta);
             let sigma = if we >= y0[1] { 1.0 } else { -1.0 };
             y0[0] = we;
             ClutchMode::Slipping(sigma)
         };
         y0[8] = 0.0;
         let tr = fast
-            .simulate_span(sc, ta, tb, y0, mode)
+            .simulate_span(&sc, ta, tb, y0, mode)
             .map_err(|e| ValidationError::Sim {
                 file: file.clone(),
                 source: e,
@@ -309,18 +334,27 @@ pub fn validate_shuffle(
                 },
             ]);
         }
-        emit(t, &mut next, &bt, &bv, false, &mut out);
+        emit(&t, &mut next, &bt, &bv, false, &mut out);
     }
-    emit(t, &mut next, &bt, &bv, true, &mut out);
-    let [vehicle_speed, engine_speed, phi_c, phi_p, phi_d, m_c, m_p, m_d, locked] = out;
+    emit(&t, &mut next, &bt, &bv, true, &mut out);
+    drop((bt, bv));
+    let gears: Vec<usize> = t
+        .iter()
+        .map(|&tt| sc.gear.eval(tt).round() as usize)
+        .collect();
+    let t_end_s = sc.t_end_s;
+    drop(sc); // the inputs are not needed after this: freed before the tables are made
+    let [vehicle_speed, engine_speed, phi_c, phi_p, phi_d, m_c, m_p, m_d, mut clutch_locked] = out;
     let torsions = [phi_c, phi_p, phi_d];
     let shaft_torques = [m_c, m_p, m_d];
-    let clutch_locked: Vec<f64> = locked.iter().map(|x| x.round()).collect();
+    for x in &mut clutch_locked {
+        *x = x.round();
+    }
     let window: Vec<f64> = t
         .iter()
         .map(|&tt| (tt / cfg.window_s).floor().min((n_win - 1) as f64))
         .collect();
-    let fs = (t.len() - 1) as f64 / sc.t_end_s;
+    let fs = (t.len() - 1) as f64 / t_end_s;
     let shuffle_indicator = if fs > 10.0 && t.len() > 64 {
         let hp = butter(2, 1.0, fs, BandType::Highpass).expect("valid band");
         let lp = butter(2, 5.0, fs, BandType::Lowpass).expect("valid band");
@@ -331,32 +365,24 @@ pub fn validate_shuffle(
     } else {
         vec![f64::NAN; t.len()]
     };
-    // metrics on moving samples, overall and per gear
-    let moving: Vec<usize> = (0..t.len())
-        .filter(|&k| v_meas[k] >= cfg.min_speed_mps)
-        .collect();
-    let gears: Vec<usize> = t
-        .iter()
-        .map(|&tt| sc.gear.eval(tt).round() as usize)
-        .collect();
+    // metrics on moving samples, overall and per gear (the samples are visited where they lie,
+    // not gathered: a 10-hour drive's would be 14 MB per list)
+    let moving = |k: &usize| v_meas[*k] >= cfg.min_speed_mps;
+    let gears = &gears;
+    let in_gear = |g: usize| move |k: &usize| moving(k) && gears[*k] == g;
     let mut metrics = Vec::new();
     for (name, meas, sim) in [
-        ("vehicle_speed", &v_meas, &vehicle_speed),
-        ("engine_speed", &w_meas, &engine_speed),
+        ("vehicle_speed", &*v_meas, &vehicle_speed),
+        ("engine_speed", &*w_meas, &engine_speed),
     ] {
-        let pick = |idx: &[usize]| -> (Vec<f64>, Vec<f64>) {
-            (
-                idx.iter().map(|&k| meas[k]).collect(),
-                idx.iter().map(|&k| sim[k]).collect(),
-            )
-        };
-        let (a, b) = pick(&moving);
-        metrics.push(metric(name, None, &a, &b));
+        metrics.push(metric(name, None, meas, sim, || {
+            (0..t.len()).filter(moving)
+        }));
         for g in 1..=ratios.len() {
-            let idx: Vec<usize> = moving.iter().copied().filter(|&k| gears[k] == g).collect();
-            if idx.len() >= 10 {
-                let (a, b) = pick(&idx);
-                metrics.push(metric(name, Some(g), &a, &b));
+            if (0..t.len()).filter(in_gear(g)).count() >= 10 {
+                metrics.push(metric(name, Some(g), meas, sim, || {
+                    (0..t.len()).filter(in_gear(g))
+                }));
             }
         }
     }
@@ -370,6 +396,48 @@ pub fn validate_shuffle(
         shuffle_indicator,
         window,
         metrics,
-        slope_column: rec.slope_column,
+        slope_column,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_over_picked_rows_have_the_bits_of_metrics_over_gathered_copies() {
+        // uneven values (so sums round), a quarter of the rows left out, one run of a gear
+        let n = 997;
+        let meas: Vec<f64> = (0..n)
+            .map(|k| (k as f64 * 0.37).sin() * 20.0 + 0.1 * k as f64)
+            .collect();
+        let sim: Vec<f64> = meas
+            .iter()
+            .enumerate()
+            .map(|(k, y)| y + (k as f64 * 1.3).cos() * 0.7)
+            .collect();
+        let keep = |k: &usize| k % 4 != 1;
+        let m = metric("vehicle_speed", Some(3), &meas, &sim, || {
+            (0..n).filter(keep)
+        });
+        let (y, yh): (Vec<f64>, Vec<f64>) = (0..n).filter(keep).map(|k| (meas[k], sim[k])).unzip();
+        let (rmse, mae, fit) = error_metrics(&y, &yh);
+        assert_eq!(m.samples, y.len());
+        assert_eq!(m.rmse.to_bits(), rmse.to_bits());
+        assert_eq!(m.mae.to_bits(), mae.to_bits());
+        assert_eq!(m.fit_percent.to_bits(), fit.to_bits());
+        // and error_metrics itself against the definitions, written out independently here
+        // (relative 1e-12 / absolute 1e-9 %: rounding of a differently grouped formulation)
+        let mean = y.iter().sum::<f64>() / y.len() as f64;
+        let se: f64 = y.iter().zip(&yh).map(|(a, b)| (a - b) * (a - b)).sum();
+        let ss: f64 = y.iter().map(|a| (a - mean) * (a - mean)).sum();
+        assert!((rmse - (se / y.len() as f64).sqrt()).abs() <= 1e-12 * rmse);
+        assert!((fit - 100.0 * (1.0 - (se / ss).sqrt())).abs() <= 1e-9);
+        // no rows: NaN fit, zero errors, no division by zero
+        let e = metric("engine_speed", None, &meas, &sim, || {
+            (0..n).filter(|_| false)
+        });
+        assert_eq!((e.samples, e.rmse, e.mae), (0, 0.0, 0.0));
+        assert!(e.fit_percent.is_nan());
+    }
 }
