@@ -109,8 +109,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .filter(|e| e.simulated.is_ok())
             .count();
+        // engagements whose analysis window holds a re-initialisation of the windowed
+        // simulation (the simulated ringing restarts there)
+        let starts = fleetdyn::diagnose::extended::window_starts(&log, 20.0);
+        let n_restart = by_sim
+            .engagements
+            .iter()
+            .filter(|e| {
+                let a = e.engagement.t_close_s + cfg.window_start_s;
+                let b = e.engagement.t_close_s + cfg.window_end_s;
+                starts.iter().any(|&s| s > a && s < b)
+            })
+            .count();
         println!(
-            "{case} [{label}]: engagements {n_eng}, measured accepted {n_meas}, simulated accepted {n_sim}"
+            "{case} [{label}]: engagements {n_eng}, measured accepted {n_meas}, simulated accepted {n_sim}, simulation restarted inside the window {n_restart}"
         );
         let fmt_test = |c: &ModalComparison| {
             c.test.map_or("no test".to_string(), |t| {
@@ -154,7 +166,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let hidden = truth(&dir, case)
             .filter(|(id, _)| id == "driveline_compliance")
             .map(|(_, t)| t);
-        let kfit = fit_shaft_stiffness(&by_sim.engagements, dl, &setup.ratios);
+        let kfit = fit_shaft_stiffness(&by_sim.engagements, dl, &setup.ratios, &cfg);
         if let Some(k) = kfit {
             println!(
                 "  k_d (linearised modes): {:.0} N·m/rad ({:+.1} % of nominal {k0:.0}), 95 % CI {:.0}–{:.0}, n {}, rms ln residual {:.3}{}",
