@@ -89,6 +89,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let sim = model.simulate(&setup.nominal)?;
         let dl = &setup.nominal_truth.driveline;
+        let t_modal = std::time::Instant::now();
         let by_sim = compare_modes(
             &log,
             model.measured_engine_speed(),
@@ -98,6 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &cfg,
         );
         let by_lin = summarise(by_sim.engagements.clone(), Reference::Linearised, &cfg);
+        let modal_s = t_modal.elapsed().as_secs_f64();
         let n_eng = by_sim.engagements.len();
         let n_meas = by_sim
             .engagements
@@ -122,7 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             })
             .count();
         println!(
-            "{case} [{label}]: engagements {n_eng}, measured accepted {n_meas}, simulated accepted {n_sim}, simulation restarted inside the window {n_restart}"
+            "{case} [{label}]: engagements {n_eng}, measured accepted {n_meas}, simulated accepted {n_sim}, simulation restarted inside the window {n_restart}, modal step {modal_s:.3} s over {:.0} s of drive", log.duration_s()
         );
         let fmt_test = |c: &ModalComparison| {
             c.test.map_or("no test".to_string(), |t| {

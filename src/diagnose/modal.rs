@@ -44,11 +44,12 @@ use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
 use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 use std::ops::Range;
 
 /// Settings of the modal comparison.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ModalConfig {
     /// Clutch position at or below which the clutch counts as closed, fraction of travel
     /// (0.02: the 2 % the comparison uses for a clutch transition,
@@ -116,7 +117,7 @@ impl Default for ModalConfig {
 }
 
 /// One clutch closing with a usable analysis window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Engagement {
     /// Time of the first closed clutch sample, s from the first row.
     pub t_close_s: f64,
@@ -189,7 +190,7 @@ pub fn engagements(log: &DriveLog, cfg: &ModalConfig) -> Vec<Engagement> {
 }
 
 /// A damped sinusoid fitted to one window (see the module documentation for the model).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ModalFit {
     /// Observed frequency `ω/2π`, Hz.
     pub frequency_hz: f64,
@@ -211,7 +212,7 @@ pub struct ModalFit {
 }
 
 /// Why a window has no accepted mode.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub enum ModalReject {
     /// Fewer than 20 samples, or times and values of different lengths or not finite.
     TooShort,
@@ -400,7 +401,7 @@ pub fn fit_damped_sinusoid(
 }
 
 /// A mode of the linearised locked-clutch driveline ([`locked_mode`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LockedMode {
     /// Damped frequency `|Im λ|/2π`, Hz.
     pub frequency_hz: f64,
@@ -409,7 +410,7 @@ pub struct LockedMode {
 }
 
 /// What the measured modes are compared with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum Reference {
     /// The same fit on the nominal model's simulated engine speed on the same rows.
     Simulated,
@@ -419,7 +420,7 @@ pub enum Reference {
 }
 
 /// The modes of one engagement: measured, simulated and linearised.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EngagementModes {
     /// The engagement.
     pub engagement: Engagement,
@@ -460,7 +461,7 @@ impl EngagementModes {
 }
 
 /// Measured minus reference modes of one gear.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GearModes {
     /// Gear (1-based).
     pub gear: usize,
@@ -484,7 +485,7 @@ pub struct GearModes {
 }
 
 /// The drive-level test on the relative frequency shifts `r = Δf / f_reference`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DriveModalTest {
     /// Engagements in the test.
     pub n: usize,
@@ -501,7 +502,7 @@ pub struct DriveModalTest {
 }
 
 /// The modal comparison of one drive.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ModalComparison {
     /// What the measured modes were compared with.
     pub reference: Reference,
@@ -538,20 +539,6 @@ fn t_test(x: &[f64]) -> Option<(f64, f64, f64)> {
     let t = m / se;
     let dist = StudentsT::new(0.0, 1.0, (x.len() - 1) as f64).ok()?;
     Some((t, se, 2.0 * dist.cdf(-t.abs())))
-}
-
-/// Holm step-down adjusted p-values, in the input order.
-fn holm(p: &[f64]) -> Vec<f64> {
-    let m = p.len();
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&a, &b| p[a].total_cmp(&p[b]));
-    let mut out = vec![0.0; m];
-    let mut running: f64 = 0.0;
-    for (k, &i) in order.iter().enumerate() {
-        running = running.max(((m - k) as f64 * p[i]).min(1.0));
-        out[i] = running;
-    }
-    out
 }
 
 /// Fits the mode of every usable engagement of `log` ([`engagements`]) on the measured engine
@@ -629,7 +616,7 @@ pub fn summarise(
         });
     }
     let tested: Vec<usize> = (0..raw_p.len()).filter(|&i| raw_p[i].is_finite()).collect();
-    let adjusted = holm(&tested.iter().map(|&i| raw_p[i]).collect::<Vec<_>>());
+    let adjusted = super::locate::holm(&tested.iter().map(|&i| raw_p[i]).collect::<Vec<_>>());
     for (k, &i) in tested.iter().enumerate() {
         gears[i].p_holm = adjusted[k];
     }
@@ -661,6 +648,80 @@ pub fn summarise(
     }
 }
 
+impl ModalComparison {
+    /// The drive's modal mismatch as a located stretch of the engine speed, when the drive-level
+    /// test flags it (`None` otherwise): from the first to the last analysis window compared,
+    /// `band_hz` the range of the measured mode frequencies, the gears and the mean shift in
+    /// words, `rms_residual` the RMS of `measured − simulated` engine speed (rad/s) over those
+    /// windows, `significance` the test's p-value (its own test at [`ModalConfig::alpha`], not
+    /// in the Holm family of the window tests), `floor_rms` the mean RMS left around the fitted
+    /// modes, `windows` the engagements. `t_s`, `distance_m` (empty: NaN), `measured` and
+    /// `simulated` are on the log's rows.
+    pub fn mismatch(
+        &self,
+        cfg: &ModalConfig,
+        t_s: &[f64],
+        distance_m: &[f64],
+        measured: &[f64],
+        simulated: &[f64],
+    ) -> Option<super::locate::Mismatch> {
+        let test = self.test.filter(|t| t.flagged)?;
+        let used: Vec<(&Engagement, &ModalFit)> = self
+            .engagements
+            .iter()
+            .filter_map(|e| {
+                e.pair(self.reference, cfg.max_mode_ratio)
+                    .map(|(m, _)| (&e.engagement, m))
+            })
+            .collect();
+        let (first, last) = (used.first()?.0, used.last()?.0);
+        let (a, b) = (first.rows.start, last.rows.end - 1);
+        let dist = |i: usize| distance_m.get(i).copied().unwrap_or(f64::NAN);
+        let f_lo = used
+            .iter()
+            .map(|(_, m)| m.frequency_hz)
+            .fold(f64::INFINITY, f64::min);
+        let f_hi = used.iter().map(|(_, m)| m.frequency_hz).fold(0.0, f64::max);
+        let (mut ss, mut n) = (0.0, 0usize);
+        for (e, _) in &used {
+            for i in e.rows.clone() {
+                let r = measured[i] - simulated[i];
+                if r.is_finite() {
+                    ss += r * r;
+                    n += 1;
+                }
+            }
+        }
+        let mut gears: Vec<usize> = used.iter().map(|(e, _)| e.gear).collect();
+        gears.dedup();
+        gears.sort_unstable();
+        gears.dedup();
+        let gears: Vec<String> = gears.iter().map(|g| g.to_string()).collect();
+        let what = match self.reference {
+            Reference::Simulated => "the nominal model's simulated ringing",
+            Reference::Linearised => "the nominal driveline's linearised mode",
+        };
+        Some(super::locate::Mismatch {
+            signal: "engine_speed".into(),
+            start_s: t_s[a],
+            end_s: t_s[b],
+            start_m: dist(a),
+            end_m: dist(b),
+            band_hz: [f_lo, f_hi],
+            condition: format!(
+                "after clutch engagements in gear {}: the driveline shuffle rings {:+.1} % off {what} ({} engagements)",
+                gears.join(", "),
+                100.0 * test.mean_shift,
+                test.n
+            ),
+            rms_residual: if n > 0 { (ss / n as f64).sqrt() } else { f64::NAN },
+            significance: test.p_value,
+            floor_rms: used.iter().map(|(_, m)| m.residual_rms).sum::<f64>() / used.len() as f64,
+            windows: used.len(),
+        })
+    }
+}
+
 /// The first torsional mode of the locked-clutch driveline linearised in `gear` at `v0_mps`
 /// ([`crate::model::linear::linearize`], open loop): the complex eigenvalue pair of lowest
 /// frequency. `None` when the system has no oscillating mode.
@@ -686,7 +747,7 @@ pub fn locked_mode(
 }
 
 /// The drive-shaft stiffness that makes the linearised modes match the measured ones.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StiffnessFit {
     /// Fitted `k_d`, N·m/rad.
     pub k_d_nm_per_rad: f64,
@@ -1008,6 +1069,15 @@ mod tests {
         assert!(t.flagged && t.mean_shift > 0.09, "{t:?}");
         assert_eq!(s.gears.len(), 3);
         assert!(s.gears[0].p_holm.is_nan(), "gear 1 has one engagement");
+        // the flagged drive is a located engine-speed mismatch over its engagements
+        let m = s
+            .mismatch(&cfg, &[0.0], &[0.0], &[1.0], &[0.5])
+            .expect("flagged");
+        assert_eq!((m.signal.as_str(), m.windows), ("engine_speed", 5));
+        assert_eq!(m.band_hz, [1.90, 5.80]);
+        assert_eq!(m.significance, t.p_value);
+        assert!((m.rms_residual - 0.5).abs() < 1e-12);
+        assert!(m.condition.contains("gear 1, 7, 8"), "{}", m.condition);
         // ±0.05 Hz scatter around no shift: not flagged
         let clean = vec![
             e(7, 4.37, 4.32),
@@ -1023,12 +1093,9 @@ mod tests {
         assert!(clean[5]
             .pair(Reference::Simulated, cfg.max_mode_ratio)
             .is_none());
-        assert!(
-            !summarise(clean, Reference::Simulated, &cfg)
-                .test
-                .expect("five pairs")
-                .flagged
-        );
+        let c = summarise(clean, Reference::Simulated, &cfg);
+        assert!(!c.test.expect("five pairs").flagged);
+        assert!(c.mismatch(&cfg, &[0.0], &[0.0], &[1.0], &[0.5]).is_none());
         // a significant but tiny shift (1 %) stays below the practical margin
         let tiny = vec![
             e(7, 4.363, 4.32),
@@ -1040,14 +1107,6 @@ mod tests {
             .test
             .expect("four pairs");
         assert!(t.p_value < cfg.alpha && !t.flagged, "{t:?}");
-    }
-
-    #[test]
-    fn holm_adjusts_step_down() {
-        let p = holm(&[0.01, 0.04, 0.03]);
-        assert!((p[0] - 0.03).abs() < 1e-12);
-        assert!((p[2] - 0.06).abs() < 1e-12);
-        assert!((p[1] - 0.06).abs() < 1e-12, "monotone: max(0.04, 0.06)");
     }
 
     /// The proof's vehicle (seed 002 6×2 diesel): driveline parameters and gear ratios.
