@@ -77,10 +77,10 @@ pub struct ModalConfig {
     /// proof drives' engagements reach 0.8–0.99; a window with no ringing explains noise only
     /// (R² ≈ 4/n ≈ 0.05 for a 115-sample window).
     pub min_r2: f64,
-    /// Smallest amplitude at the window start, in the signal's unit (rad/s for the engine
-    /// speed). 0.3 rad/s: 3× the 1 rpm (0.105 rad/s) noise σ of a J1939 EEC1 engine speed; the
+    /// Smallest amplitude at the window start, rad/s (the engine speed's unit; a signal in
+    /// another unit needs its own value). 0.3 rad/s: 3× the 1 rpm (0.105 rad/s) noise σ of a J1939 EEC1 engine speed; the
     /// proof drives' engagements ring at 0.46–1.9 rad/s.
-    pub min_amplitude: f64,
+    pub min_amplitude_rad_s: f64,
     /// False-alarm rate of the drive-level test (and family-wise rate of the per-gear tests).
     pub alpha: f64,
     /// Smallest mean relative frequency shift the drive-level test reports, fraction: 0.03,
@@ -107,7 +107,7 @@ impl Default for ModalConfig {
             band_hz: (0.8, 12.0),
             max_decay_per_s: 20.0,
             min_r2: 0.6,
-            min_amplitude: 0.3,
+            min_amplitude_rad_s: 0.3,
             alpha: 0.01,
             min_relative_shift: 0.03,
             min_engagements: 3,
@@ -218,7 +218,7 @@ pub enum ModalReject {
     TooShort,
     /// The oscillation explains too little of the detrended variance (R² given).
     NoOscillation(f64),
-    /// The amplitude is below [`ModalConfig::min_amplitude`] (amplitude given).
+    /// The amplitude is below [`ModalConfig::min_amplitude_rad_s`] (amplitude given).
     TooSmall(f64),
     /// The refined frequency left the band (Hz given).
     OutOfBand(f64),
@@ -264,7 +264,7 @@ const GRID_STEP_HZ: f64 = 0.1;
 
 /// Fits `y(t) = c₀ + c₁τ + c₂τ² + A e^{−στ} sin(ωτ + φ)`, `τ = t − t[0]`, to one window and
 /// applies the acceptance rule of `cfg` (R² ≥ [`ModalConfig::min_r2`], amplitude ≥
-/// [`ModalConfig::min_amplitude`], frequency inside [`ModalConfig::band_hz`], decay in
+/// [`ModalConfig::min_amplitude_rad_s`], frequency inside [`ModalConfig::band_hz`], decay in
 /// [−0.5, [`ModalConfig::max_decay_per_s`]] 1/s).
 ///
 /// # Errors
@@ -388,7 +388,7 @@ pub fn fit_damped_sinusoid(
     if fit.r2.is_nan() || fit.r2 < cfg.min_r2 {
         return Err(ModalReject::NoOscillation(fit.r2));
     }
-    if fit.amplitude.is_nan() || fit.amplitude < cfg.min_amplitude {
+    if fit.amplitude.is_nan() || fit.amplitude < cfg.min_amplitude_rad_s {
         return Err(ModalReject::TooSmall(fit.amplitude));
     }
     if !(frequency_hz >= f_lo && frequency_hz <= f_hi) {
