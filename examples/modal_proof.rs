@@ -1,6 +1,7 @@
 //! Measures the modal comparison ([`fleetdyn::diagnose::modal`]) on the drives of a proof run
-//! (`fleetdyn prove`): per case the hidden effect (from `answers/`, read only to label the
-//! table), the per-gear measured and simulated shuffle frequencies, `Δf`, `Δσ`, the linearised
+//! (`fleetdyn prove`), read as the proof reads them (`drive.parquet`, the canonical log): per
+//! case the hidden effect (from `answers/`, read only to label the table), the per-gear
+//! measured and simulated shuffle frequencies, `Δf`, `Δσ`, the linearised
 //! locked-clutch mode of the gear, and the drive-level test.
 //!
 //! ```text
@@ -81,7 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let vf = fleetdyn::model::vehicle::VehicleFile::load(&d.join("vehicle.toml"))?;
         let opts =
             fleetdyn::pipeline::ingest_stage::IngestConfig::default().options(&[], Some(&vf))?;
-        let log = fleetdyn::ingest::ingest_file(&d.join("drive.mcap"), &opts)?.log;
+        let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
         let setup = Setup::new(&log, &vf)?;
         let Some(model) = setup.longitudinal_model(&log)? else {
             println!("{case} [{label}]: no longitudinal model");
@@ -156,6 +157,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
+        let list: Vec<String> = by_sim
+            .engagements
+            .iter()
+            .map(|e| format!("{:.1} s g{}", e.engagement.t_close_s, e.engagement.gear))
+            .collect();
+        println!("    engagements: {}", list.join(", "));
         for e in &by_sim.engagements {
             if let Err(m) = &e.measured {
                 println!(
