@@ -8,6 +8,7 @@ pub mod explain;
 pub mod extended;
 pub mod fit;
 pub mod locate;
+pub mod modal;
 pub mod noise;
 pub mod problem;
 pub mod prove;

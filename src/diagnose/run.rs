@@ -11,7 +11,10 @@
 //! 3. Noise floor ([`noise_floors`]): blind sensor-noise estimates from the recording's own
 //!    native samples, propagated through the model by Monte-Carlo copies.
 //! 4. Locate ([`locate`]): windows in time, stretches in distance, bands, coherence, lags,
-//!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule.
+//!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule. Then
+//!    the shuffle modes after clutch engagements ([`super::modal`]): when their drive-level test
+//!    flags (its own test at α = 0.01 with a 3 % margin), one more engine-speed mismatch
+//!    stretch, and the mismatch counts as significant.
 //! 5. Explain ([`explain`]) with the noise floors as the signal weights; the verdict
 //!    ([`verdict`]) from the findings and step 4's significance.
 //! 6. Show ([`write_outputs`]): `diagnosis.json`, `mismatch.parquet`, `findings.parquet`,
@@ -32,6 +35,7 @@ use super::extended::{window_starts, ExtendedError, LongitudinalConfig};
 use super::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
+use super::modal::{compare_modes, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::problem::{ExplainError, Problem};
 use super::setup::Setup;
@@ -127,6 +131,8 @@ pub struct Diagnosed {
     pub residuals: Vec<Residual>,
     /// Models used and why others were not.
     pub models: ModelsUsed,
+    /// Shuffle modes per clutch engagement (`None` without an engine-speed comparison).
+    pub modal: Option<ModalComparison>,
 }
 
 /// Which models the diagnosis used.
@@ -219,7 +225,32 @@ pub fn diagnose(
         reinit_times_s: window_starts(log, LongitudinalConfig::default().window_s),
         ..cfg.locate.clone()
     };
-    let location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
+    let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
+    // the shuffle modes after clutch engagements against the nominal driveline's linearised
+    // ones (docs/modal.md: the simulated ringing is restarted inside the analysis windows);
+    // a flagged drive is a located engine-speed mismatch
+    let modal = cmp
+        .signals
+        .iter()
+        .find(|c| c.name == "engine_speed")
+        .map(|es| {
+            let mcfg = ModalConfig::default();
+            let m = compare_modes(
+                log,
+                &es.measured,
+                &es.simulated,
+                Some((&setup.nominal_truth.driveline, &setup.ratios)),
+                Reference::Linearised,
+                &mcfg,
+            );
+            let c = &cmp.conditions;
+            if let Some(mm) = m.mismatch(&mcfg, &c.t_s, &c.distance_m, &es.measured, &es.simulated)
+            {
+                location.mismatch.push(mm);
+                location.any_significant = true;
+            }
+            m
+        });
     let problem = Problem::new(
         log,
         &setup.nominal_truth,
@@ -289,6 +320,7 @@ pub fn diagnose(
             axle_reason: setup.axle_reason.clone(),
             slope_resolution: setup.slope_resolution,
         },
+        modal,
     })
 }
 
@@ -300,6 +332,7 @@ struct Detail<'a> {
     models: &'a ModelsUsed,
     noise_floors: &'a NoiseFloors,
     location: &'a Location,
+    modal: &'a Option<ModalComparison>,
     explanation: &'a Explanation,
 }
 
@@ -451,6 +484,7 @@ fn write_staged(
         models: &d.models,
         noise_floors: &d.floors,
         location: &d.location,
+        modal: &d.modal,
         explanation: &d.explanation,
     };
     let mut text = serde_json::to_string_pretty(&detail).map_err(|e| DiagnoseError::Io {
