@@ -56,6 +56,18 @@ struct Key {
     gap: bool,
 }
 
+/// Search cursors of the scenario's inputs for one simulation: the steps move forward in
+/// time, so each lookup scans on from the last ([`super::inputs::Piecewise::piece_index_from`],
+/// the same pieces as a binary search).
+#[derive(Default)]
+struct Cursors {
+    engine: std::cell::Cell<usize>,
+    gear: std::cell::Cell<usize>,
+    slope: std::cell::Cell<usize>,
+    brake: std::cell::Cell<usize>,
+    clutch: std::cell::Cell<usize>,
+}
+
 /// The exponential integrator bound to one vehicle and step.
 pub struct FastDriveline<'a> {
     p: &'a DrivelineParams,
@@ -216,9 +228,13 @@ impl<'a> FastDriveline<'a> {
         self.p.clutch_capacity(x)
     }
 
-    fn road_force(&self, sc: &Scenario, t: f64, v: f64) -> f64 {
-        self.p
-            .road_force(v, sc.slope.eval(t), sc.brake_n.eval(t), sc.smoothing)
+    fn road_force(&self, sc: &Scenario, cur: &Cursors, t: f64, v: f64) -> f64 {
+        self.p.road_force(
+            v,
+            sc.slope.eval_from(&cur.slope, t),
+            sc.brake_n.eval_from(&cur.brake, t),
+            sc.smoothing,
+        )
     }
 
     /// (M_e, M_c, M_p, M_d) for state `y`; `me` is the engine torque in use.
@@ -286,6 +302,7 @@ impl<'a> FastDriveline<'a> {
             events: Vec::new(),
             stats: Stats::default(),
         };
+        let cur = Cursors::default();
         let mut y = y0;
         let mut mode = mode0;
         // vehicle held at standstill (only with `standstill_events`)
@@ -294,7 +311,7 @@ impl<'a> FastDriveline<'a> {
             y[1] = y[0];
         }
         let gear_at = |t: f64| -> Result<usize, SimError> {
-            let g = sc.gear.eval(t).round() as i64;
+            let g = sc.gear.eval_from(&cur.gear, t).round() as i64;
             if g < 1 || g as usize > self.ratios.len() {
                 return Err(SimError::Gear {
                     gear: g,
@@ -309,9 +326,9 @@ impl<'a> FastDriveline<'a> {
         let engine_torque = |t: f64, y: &[f64; N_STATES]| -> (f64, bool, f64) {
             // (M_e in use, PI active in the matrices, ω_ref)
             match &sc.engine {
-                EngineInput::Torque(m) => (m.eval(t), false, 0.0),
+                EngineInput::Torque(m) => (m.eval_from(&cur.engine, t), false, 0.0),
                 EngineInput::SpeedReference(r) => {
-                    let w_ref = r.eval(t);
+                    let w_ref = r.eval_from(&cur.engine, t);
                     let raw = p.pi_kp_nm_s_per_rad * (w_ref - y[0]) + p.pi_ki_nm_per_rad * y[8];
                     let lim = raw
                         .max(p.engine_min_torque_nm)
@@ -326,7 +343,9 @@ impl<'a> FastDriveline<'a> {
             let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
             let mtr = match mode {
                 ClutchMode::Locked => self.m_trans_locked(me, mc),
-                ClutchMode::Slipping(s) => s * self.clutch_capacity(sc.clutch_x.eval(t)),
+                ClutchMode::Slipping(s) => {
+                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
+                }
             };
             traj.t.push(t);
             traj.y.push(y);
@@ -347,12 +366,16 @@ impl<'a> FastDriveline<'a> {
             }
             let (me_start, pi_active, _) = engine_torque(t, &y);
             let (me_mid, _, w_ref) = match &sc.engine {
-                EngineInput::Torque(m) => (m.eval(tm), false, 0.0),
-                EngineInput::SpeedReference(r) => (me_start, pi_active, r.eval(tm)),
+                EngineInput::Torque(m) => (m.eval_from(&cur.engine, tm), false, 0.0),
+                EngineInput::SpeedReference(r) => {
+                    (me_start, pi_active, r.eval_from(&cur.engine, tm))
+                }
             };
             let m_trans_in = match mode {
                 ClutchMode::Locked => 0.0,
-                ClutchMode::Slipping(s) => s * self.clutch_capacity(sc.clutch_x.eval(tm)),
+                ClutchMode::Slipping(s) => {
+                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, tm))
+                }
             };
             let v_start = p.wheel_radius_m * y[7];
             let force = if stuck {
@@ -360,7 +383,7 @@ impl<'a> FastDriveline<'a> {
                 let [_, _, _, md0] = self.torques(gear, mode, &y, me_start);
                 md0 / p.wheel_radius_m
             } else {
-                self.road_force(sc, tm, v_start)
+                self.road_force(sc, &cur, tm, v_start)
             };
             let side = self.lash_side(y[6]);
             let key = Key {
@@ -386,9 +409,10 @@ impl<'a> FastDriveline<'a> {
                 let (me1, _, _) = engine_torque(t1, &y);
                 let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
                 let mg = p.mass_kg * p.gravity_m_per_s2;
-                let drive = md1 / p.wheel_radius_m - mg * sc.slope.eval(t1).atan().sin();
+                let drive =
+                    md1 / p.wheel_radius_m - mg * sc.slope.eval_from(&cur.slope, t1).atan().sin();
                 let f0 = if sc.smoothing { 0.0 } else { 1.0 };
-                let cap = f0 * p.c_r1 * mg + sc.brake_n.eval(t1);
+                let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
                 let v_end = p.wheel_radius_m * y[7];
                 if stuck {
                     if drive.abs() > cap {
@@ -416,7 +440,8 @@ impl<'a> FastDriveline<'a> {
                     let [_, mc1, _, _] = self.torques(gear, mode, &y, me1);
                     let mt = self.m_trans_locked(me1, mc1);
                     if mt.abs()
-                        > p.clutch_static_to_kinetic * self.clutch_capacity(sc.clutch_x.eval(t1))
+                        > p.clutch_static_to_kinetic
+                            * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
                     {
                         mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
                         traj.events.push(Event {
@@ -436,7 +461,7 @@ impl<'a> FastDriveline<'a> {
                         let mt = self.m_trans_locked(me1, mc1);
                         if mt.abs()
                             <= p.clutch_static_to_kinetic
-                                * self.clutch_capacity(sc.clutch_x.eval(t1))
+                                * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
                         {
                             mode = ClutchMode::Locked;
                             y = yt;

@@ -32,7 +32,7 @@
 //! `M_e = clamp(K_P(ω_ref − ω_e) + K_I x_I, M_min, M_max(ω_e))` (no anti-windup, as physics.md).
 
 use super::dopri::{hermite, integrate, DopriError, EventFn, Knot, Stats, Tolerances};
-use super::inputs::Piecewise;
+use super::inputs::{Piece, Piecewise};
 use crate::model::driveline::DrivelineParams;
 use thiserror::Error;
 
@@ -158,10 +158,10 @@ pub enum SimError {
 /// Inputs frozen on one integration interval (piece indices fixed, so values are smooth).
 struct Frozen {
     gear: usize,
-    x: usize,
-    s: usize,
-    fb: usize,
-    e: usize,
+    x: Piece,
+    s: Piece,
+    fb: Piece,
+    e: Piece,
 }
 
 /// The hybrid model bound to one vehicle.
@@ -189,13 +189,16 @@ impl<'a> HybridDriveline<'a> {
             });
         }
         let e = match &sc.engine {
-            EngineInput::Torque(p) | EngineInput::SpeedReference(p) => p.piece_index(tm),
+            EngineInput::Torque(p) | EngineInput::SpeedReference(p) => {
+                p.frozen_piece(p.piece_index(tm))
+            }
         };
+        let at = |p: &Piecewise| p.frozen_piece(p.piece_index(tm));
         Ok(Frozen {
             gear: g as usize,
-            x: sc.clutch_x.piece_index(tm),
-            s: sc.slope.piece_index(tm),
-            fb: sc.brake_n.piece_index(tm),
+            x: at(&sc.clutch_x),
+            s: at(&sc.slope),
+            fb: at(&sc.brake_n),
             e,
         })
     }
@@ -208,10 +211,9 @@ impl<'a> HybridDriveline<'a> {
     fn engine_torque(&self, fr: &Frozen, t: f64, w_e: f64, x_i: f64) -> f64 {
         let p = self.p;
         match &self.sc.engine {
-            EngineInput::Torque(m) => m.eval_piece(fr.e, t),
-            EngineInput::SpeedReference(r) => {
-                let raw =
-                    p.pi_kp_nm_s_per_rad * (r.eval_piece(fr.e, t) - w_e) + p.pi_ki_nm_per_rad * x_i;
+            EngineInput::Torque(_) => fr.e.eval(t),
+            EngineInput::SpeedReference(_) => {
+                let raw = p.pi_kp_nm_s_per_rad * (fr.e.eval(t) - w_e) + p.pi_ki_nm_per_rad * x_i;
                 raw.max(p.engine_min_torque_nm)
                     .min(p.engine_max_torque(w_e))
             }
@@ -242,8 +244,8 @@ impl<'a> HybridDriveline<'a> {
     /// Road force F = sign(v)(F_r + F_a + F_b) + F_g, N (positive resists forward motion); while
     /// rolling between standstill events the direction of motion replaces sign(v).
     fn road_force(&self, fr: &Frozen, t: f64, v: f64, wheel: Wheel) -> f64 {
-        let s = self.sc.slope.eval_piece(fr.s, t);
-        let fb = self.sc.brake_n.eval_piece(fr.fb, t);
+        let s = fr.s.eval(t);
+        let fb = fr.fb.eval(t);
         match wheel {
             Wheel::Rolling(sv) => {
                 let grade = self.p.road_force(0.0, s, 0.0, self.sc.smoothing);
@@ -259,14 +261,11 @@ impl<'a> HybridDriveline<'a> {
     fn static_balance(&self, fr: &Frozen, t: f64, y: &[f64]) -> (f64, f64) {
         let p = self.p;
         let [_, _, _, m_d] = self.torques(fr, ClutchMode::Slipping(1.0), t, y);
-        let s = self.sc.slope.eval_piece(fr.s, t);
+        let s = fr.s.eval(t);
         let mg = p.mass_kg * p.gravity_m_per_s2;
         let drive = m_d / p.wheel_radius_m - mg * s.atan().sin();
         let f0 = if self.sc.smoothing { 0.0 } else { 1.0 };
-        (
-            drive,
-            f0 * p.c_r1 * mg + self.sc.brake_n.eval_piece(fr.fb, t),
-        )
+        (drive, f0 * p.c_r1 * mg + fr.fb.eval(t))
     }
 
     fn rhs(&self, fr: &Frozen, mode: ClutchMode, wheel: Wheel, t: f64, y: &[f64], dy: &mut [f64]) {
@@ -288,7 +287,7 @@ impl<'a> HybridDriveline<'a> {
                 dy[1] = dy[0];
             }
             ClutchMode::Slipping(sigma) => {
-                let m_tr = sigma * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, t));
+                let m_tr = sigma * self.clutch_capacity(fr.x.eval(t));
                 dy[0] = (m_e - m_tr) / p.j_e_kg_m2;
                 dy[1] = (m_tr - m_c) / p.j_c_kg_m2;
             }
@@ -304,7 +303,7 @@ impl<'a> HybridDriveline<'a> {
             (m_d - p.wheel_radius_m * f) / p.j4()
         };
         dy[8] = match &self.sc.engine {
-            EngineInput::SpeedReference(r) => r.eval_piece(fr.e, t) - y[0],
+            EngineInput::SpeedReference(_) => fr.e.eval(t) - y[0],
             EngineInput::Torque(_) => 0.0,
         };
     }
@@ -312,8 +311,7 @@ impl<'a> HybridDriveline<'a> {
     fn unlock_margin(&self, fr: &Frozen, t: f64, y: &[f64]) -> f64 {
         let [m_e, m_c, _, _] = self.torques(fr, ClutchMode::Locked, t, y);
         self.m_trans_locked(m_e, m_c).abs()
-            - self.p.clutch_static_to_kinetic
-                * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, t))
+            - self.p.clutch_static_to_kinetic * self.clutch_capacity(fr.x.eval(t))
     }
 
     /// Unlocks the clutch at `t`: slip direction from the sign of the locked-clutch torque, the
@@ -473,9 +471,7 @@ impl<'a> HybridDriveline<'a> {
                         let [m_e, m_c, m_p, m_d] = self.torques(&fr, m, to, &yo);
                         let m_tr = match m {
                             ClutchMode::Locked => self.m_trans_locked(m_e, m_c),
-                            ClutchMode::Slipping(s) => {
-                                s * self.clutch_capacity(self.sc.clutch_x.eval_piece(fr.x, to))
-                            }
+                            ClutchMode::Slipping(s) => s * self.clutch_capacity(fr.x.eval(to)),
                         };
                         traj.t.push(to);
                         traj.y.push(yo);

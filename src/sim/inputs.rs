@@ -22,6 +22,23 @@ pub struct Piecewise {
     values: Values,
 }
 
+/// One linear piece from `(t0, v0)` to `(t1, v1)` ([`Piecewise::frozen_piece`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Piece {
+    t0: f64,
+    t1: f64,
+    v0: f64,
+    v1: f64,
+}
+
+impl Piece {
+    /// Value at `t` (also outside the piece: linear continuation).
+    #[inline]
+    pub fn eval(&self, t: f64) -> f64 {
+        self.v0 + (self.v1 - self.v0) * ((t - self.t0) / (self.t1 - self.t0))
+    }
+}
+
 /// The values of a [`Piecewise`]'s pieces.
 #[derive(Debug, Clone)]
 enum Values {
@@ -164,6 +181,7 @@ impl Piecewise {
     }
 
     /// Number of pieces.
+    #[inline]
     pub fn piece_count(&self) -> usize {
         self.knots.len() - 1
     }
@@ -198,13 +216,48 @@ impl Piecewise {
     /// Value of piece `k` at `t` (also outside the piece: linear continuation).
     #[inline]
     pub fn eval_piece(&self, k: usize, t: f64) -> f64 {
+        self.frozen_piece(k).eval(t)
+    }
+
+    /// Piece `k` copied out, for a caller that evaluates it many times (an integrator inside
+    /// one input interval): [`Piece::eval`] is [`Piecewise::eval_piece`], bit for bit, without
+    /// reading the storage again.
+    #[inline]
+    pub fn frozen_piece(&self, k: usize) -> Piece {
         let (t0, t1, v0, v1) = self.piece(k);
-        v0 + (v1 - v0) * ((t - t0) / (t1 - t0))
+        Piece { t0, t1, v0, v1 }
     }
 
     /// Value at `t`.
     pub fn eval(&self, t: f64) -> f64 {
         self.eval_piece(self.piece_index(t), t)
+    }
+
+    /// [`Piecewise::piece_index`] for times that mostly move forward: `cursor` holds the last
+    /// answer and the search scans on from it (amortised constant time over a simulation
+    /// that steps through the input), falling back to the binary search when `t` lies before
+    /// the cursor's piece. The same index as `piece_index(t)` for every `t`: knots increase,
+    /// so the last knot at or before `t` found from the cursor is the global one.
+    #[inline]
+    pub fn piece_index_from(&self, cursor: &std::cell::Cell<usize>, t: f64) -> usize {
+        let n = self.piece_count();
+        let mut k = cursor.get().min(n - 1);
+        if self.knots[k] <= t {
+            while k + 1 < n && self.knots[k + 1] <= t {
+                k += 1;
+            }
+        } else {
+            k = self.piece_index(t);
+        }
+        cursor.set(k);
+        k
+    }
+
+    /// [`Piecewise::eval`] with a [`Piecewise::piece_index_from`] cursor: the same value, bit
+    /// for bit.
+    #[inline]
+    pub fn eval_from(&self, cursor: &std::cell::Cell<usize>, t: f64) -> f64 {
+        self.eval_piece(self.piece_index_from(cursor, t), t)
     }
 
     /// Interior breakpoints (piece starts after the first).
@@ -397,5 +450,24 @@ mod tests {
         assert_eq!(bits(c.piece(0)), bits((0.0, 5.0, -3.5, -3.5)));
         assert_eq!(c.eval(7.0), -3.5);
         assert_eq!(c.breakpoints().count(), 0);
+    }
+
+    /// The cursor search gives the binary search's piece for every time — forwards in
+    /// steps, repeated, backwards, before the start, past the end, on knots and NaN — and the
+    /// cursor-based value has the same bits.
+    #[test]
+    fn cursor_search_equals_the_binary_search() {
+        let t: Arc<[f64]> = (0..50).map(|k| k as f64 * 0.1).collect();
+        let v: Vec<f64> = (0..50).map(|k| ((k * 7) % 5) as f64).collect();
+        let p = Piecewise::through_samples(&t, &v, Between::Linear).unwrap();
+        let cursor = std::cell::Cell::new(0);
+        let mut times: Vec<f64> = (0..700).map(|k| -0.3 + k as f64 * 0.0077).collect();
+        times.extend([2.0, 2.0, 0.1, 0.05, 4.9, 10.0, -1.0, f64::NAN, 3.3, 0.0, 4.8]);
+        for &x in &times {
+            let k = p.piece_index_from(&cursor, x);
+            assert_eq!(k, p.piece_index(x), "t = {x}");
+            let c = std::cell::Cell::new(cursor.get());
+            assert_eq!(p.eval_from(&c, x).to_bits(), p.eval(x).to_bits(), "t = {x}");
+        }
     }
 }
