@@ -462,7 +462,19 @@ mod tests {
         let p = Piecewise::through_samples(&t, &v, Between::Linear).unwrap();
         let cursor = std::cell::Cell::new(0);
         let mut times: Vec<f64> = (0..700).map(|k| -0.3 + k as f64 * 0.0077).collect();
-        times.extend([2.0, 2.0, 0.1, 0.05, 4.9, 10.0, -1.0, f64::NAN, 3.3, 0.0, 4.8]);
+        times.extend([
+            2.0,
+            2.0,
+            0.1,
+            0.05,
+            4.9,
+            10.0,
+            -1.0,
+            f64::NAN,
+            3.3,
+            0.0,
+            4.8,
+        ]);
         for &x in &times {
             let k = p.piece_index_from(&cursor, x);
             assert_eq!(k, p.piece_index(x), "t = {x}");
