@@ -119,7 +119,7 @@ impl Default for EdgeMode {
 /// [`SignalError::InputTooShort`] in scipy mode when `len ≤ padlen`.
 pub fn sosfiltfilt(sos: &Sos, x: &[f64], edge: &EdgeMode) -> Result<Vec<f64>, SignalError> {
     match *edge {
-        // checks the input while copying it (one pass over memory instead of two)
+        // checks the input inside its forward pass (no separate pass over memory)
         EdgeMode::Scipy { padlen } => filtfilt_scipy(sos, x, padlen),
         EdgeMode::Matched { padlen, fit_len } => {
             check_finite(x)?;
