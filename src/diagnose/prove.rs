@@ -822,15 +822,7 @@ fn oracle(
     truth: f64,
 ) -> Result<super::explain::OracleCheck, String> {
     let setup = super::setup::Setup::new(log, vf).map_err(|e| e.to_string())?;
-    let problem = super::problem::Problem::new(
-        log,
-        &setup.nominal_truth,
-        &setup.ratios,
-        setup.nominal,
-        super::extended::LongitudinalConfig::default(),
-        None,
-    )
-    .map_err(|e| e.to_string())?;
+    let problem = setup.problem(log).map_err(|e| e.to_string())?;
     // slope_quantization's parameter is a switch, on above the recording's own resolution
     // (extended.rs); its truth is the sensor's step, which the recording shows as that very
     // resolution, so the truth is not above it: the check switches the cure on instead

@@ -37,7 +37,7 @@ use super::locate::{
 };
 use super::modal::{compare_modes, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
-use super::problem::{ExplainError, Problem};
+use super::problem::ExplainError;
 use super::setup::Setup;
 use crate::diagnose::compare::Comparison;
 use crate::io::OutputError;
@@ -251,14 +251,7 @@ pub fn diagnose(
             }
             m
         });
-    let problem = Problem::new(
-        log,
-        &setup.nominal_truth,
-        &setup.ratios,
-        setup.nominal,
-        LongitudinalConfig::default(),
-        None,
-    )?;
+    let problem = setup.problem(log)?;
     let noise_floor = floors.summary();
     let explanation = explain(
         &problem,

@@ -52,6 +52,27 @@ fn column(log: &DriveLog, name: &str, interp: Interpolation) -> Option<Vec<f64>>
 }
 
 impl Setup {
+    /// The explain step's problem for `log` with this setup: the diagnosis' models, 20 s
+    /// windows and alternating split ([`super::problem::Problem::new`] with the default
+    /// [`LongitudinalConfig`]). The diagnosis and the proof's oracle check both build it here,
+    /// so they score the same split.
+    ///
+    /// # Errors
+    /// [`super::problem::ExplainError`] from [`super::problem::Problem::new`].
+    pub fn problem<'a>(
+        &'a self,
+        log: &'a DriveLog,
+    ) -> Result<super::problem::Problem<'a>, super::problem::ExplainError> {
+        super::problem::Problem::new(
+            log,
+            &self.nominal_truth,
+            &self.ratios,
+            self.nominal,
+            LongitudinalConfig::default(),
+            None,
+        )
+    }
+
     /// Sets up the diagnosis of `log` with the nominal `vehicle`.
     ///
     /// # Errors
