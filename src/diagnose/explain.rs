@@ -23,15 +23,22 @@
 //! An effect is fitted on the outputs of every model it changes: its own model, and for the
 //! longitudinal effects that also reach the axle model's inputs (mass, the slope and torque
 //! sensor effects) the bellow pressures as well — found from the screen's probe (outputs that
-//! change), not assumed. The cost is the mean over those models of each model's weighted mean
-//! square; within a model every signal counts alike (weights `σ_c`: step 2's noise floor when
-//! given, else the signal's train RMS residual at the round's parameters; [`super::problem`]).
+//! change), not assumed. The unit is a *view* of a model ([`super::problem::View`]): the
+//! longitudinal model's speeds, its shuffle modes (one sample per clutch engagement,
+//! [`super::modal_channel`]), the axle model's bellow pressures. An effect is fitted and scored
+//! on the views it changes, so the shuffle modes count for the shaft stiffness and the mass
+//! (which move them) and never dilute the speeds' figures for an effect that leaves them alone
+//! (drag, delay, lash, …). The cost is the mean over those views of each view's weighted mean
+//! square; within a view every signal counts alike (weights `σ_c`: step 2's noise floor when
+//! given, else the signal's train RMS residual at the round's parameters; an engagement's own
+//! standard error for the modes; [`super::problem`]).
 //!
 //! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
 //! advance holds")
 //! A fitted candidate is accepted only when all three hold:
 //! 1. **held-out error falls**: the held-out weighted RMSE of the signals of the effect's own
-//!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters;
+//!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters (over
+//!    the own model's views the effect changes: their weighted mean squares averaged);
 //! 2. **whiteness improves**: the held-out residual's non-white power
 //!    ([`super::problem::whiteness`]: the Ljung–Box statistic per sample `Q/n` of the
 //!    non-centred autocorrelation at lags 0.1…2 s, times the residual's weighted mean square)
@@ -412,13 +419,17 @@ pub fn oracle_check(
         .map(|y| Arc::new(y.clone()))
         .collect();
     let ev = Evaluator::new(problem, theta, &bases, noise_floor, row_dt(problem));
-    let Some(own) = ev.model(e.domain()) else {
+    let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
+    if !own.contains(&true) {
         return Ok(None);
-    };
+    }
     let base = ev.eval_outputs(f64::NAN, bases);
-    let active: Vec<bool> = (0..ev.models.len()).map(|m| m == own).collect();
-    let at = ev.eval(&base, &active, e, value)?;
-    let gain = 1.0 - (at.heldout[own] / base.heldout[own]).sqrt();
+    let at = ev.eval(&base, &own, e, value)?;
+    // the own model's views the effect changes, as the screen's probe finds them
+    let active: Vec<bool> = (0..ev.models.len())
+        .map(|m| own[m] && ev.changed(m, &at, &base))
+        .collect();
+    let gain = heldout_gain(&ev, e, &active, &base, &at);
     let (wb, wa) = (ev.whiteness(&base, &active), ev.whiteness(&at, &active));
     let rule = AcceptanceRule::FIXED;
     Ok(Some(OracleCheck {
@@ -428,6 +439,30 @@ pub fn oracle_check(
         passes_heldout: gain >= rule.min_heldout_gain,
         passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
     }))
+}
+
+/// Rule 1's figure: the relative fall from `before` to `after` of the held-out weighted RMSE of
+/// the views of `e`'s own model in `active` (the mean of their weighted mean squares; 0 when
+/// the effect changes none of them).
+fn heldout_gain(
+    ev: &Evaluator<'_, '_>,
+    e: Effect,
+    active: &[bool],
+    before: &Eval,
+    after: &Eval,
+) -> f64 {
+    let (mut b, mut a) = (0.0, 0.0);
+    for (m, v) in ev.models.iter().enumerate() {
+        if active[m] && v.domain == e.domain() {
+            b += before.heldout[m];
+            a += after.heldout[m];
+        }
+    }
+    if b > 0.0 {
+        1.0 - (a / b).sqrt()
+    } else {
+        0.0
+    }
 }
 
 fn row_dt(problem: &Problem<'_>) -> f64 {
@@ -545,7 +580,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         // accept: new parameters; the fit's simulation holds every model's new outputs
         let before = std::mem::replace(&mut bases, best.outputs.clone());
         theta.set(e, f.value);
-        let (fit, met) = signal_fits(problem, &domains, &before, &bases);
+        let (fit, met) = signal_fits(problem, &before, &bases);
         let evidence = Evidence {
             round,
             domain: f.domain,
@@ -617,15 +652,8 @@ fn candidate_fit(
     let n_acf = ev.n_eff(&best, active);
     let (n_eff, threshold) = deviance_threshold(n_acf, fr.cluster);
     let (wb, wa) = (ev.whiteness(base, active), ev.whiteness(&best, active));
-    let (jb, ja) = (
-        ev.cost(base, active, Part::Train),
-        ev.cost(&best, active, Part::Train),
-    );
-    let dev = n_eff.max(1.0) * (jb / ja).ln();
-    let own = ev
-        .model(e.domain())
-        .expect("applicable effects have their model");
-    let gain = 1.0 - (best.heldout[own] / base.heldout[own]).sqrt();
+    let dev = ev.deviance(base, &best, active, n_eff);
+    let gain = heldout_gain(ev, e, active, base, &best);
     let explained: f64 = (0..ev.models.len())
         .map(|m| 1.0 - best.heldout[m] / base.heldout[m])
         .sum();
@@ -668,14 +696,13 @@ fn candidate_fit(
 /// Per-signal fits of the signals whose simulation changed from `before` to `after`.
 fn signal_fits(
     problem: &Problem<'_>,
-    domains: &[Domain],
     before: &[Arc<Vec<Vec<f64>>>],
     after: &[Arc<Vec<Vec<f64>>>],
 ) -> (BTreeMap<String, SignalFit>, BTreeMap<String, SignalMetrics>) {
     let mut fit = BTreeMap::new();
     let mut met = BTreeMap::new();
-    for (k, d) in domains.iter().enumerate() {
-        for (slot, &c) in problem.channel_indices(*d).iter().enumerate() {
+    for (k, view) in problem.views().iter().enumerate() {
+        for (slot, &c) in view.chans.iter().enumerate() {
             let (yb, ya) = (&before[k][slot], &after[k][slot]);
             if yb == ya {
                 continue;

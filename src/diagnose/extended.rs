@@ -377,8 +377,17 @@ impl<'a> LongitudinalModel<'a> {
         &self.t
     }
 
-    /// The plant of `theta`: parameters, lash.
-    fn plant(&self, theta: &Theta) -> Result<TruthModel, ExtendedError> {
+    /// Gear ratios of the nominal vehicle (1st gear first).
+    pub fn ratios(&self) -> &[f64] {
+        self.ratios
+    }
+
+    /// The plant of `theta`: the nominal vehicle with `theta`'s longitudinal model effects
+    /// injected (the sensor effects are corrected on the inputs instead, [`corrected_log`]).
+    ///
+    /// # Errors
+    /// [`ExtendedError`] for a parameter outside its domain.
+    pub fn plant(&self, theta: &Theta) -> Result<TruthModel, ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
             if matches!(

@@ -191,15 +191,23 @@ pub fn applicable(problem: &Problem<'_>, e: Effect) -> bool {
     true
 }
 
-/// The compared outputs of one model with their weights.
+/// Weighted mean square of an output change below which a model view counts as unchanged
+/// ([`Evaluator::changed`]): an RMS change of 1 % of the channels' weights `σ_c`.
+pub const MATERIAL_CHANGE_MS: f64 = 1e-4;
+
+/// The compared outputs of one view of a model ([`super::problem::View`]) with their
+/// weights; "model" in the cost, screen and acceptance tests means such a view.
 #[derive(Debug, Clone)]
 pub struct ModelView {
     /// Model.
     pub domain: Domain,
-    /// Its channels ([`Problem::channel_indices`]).
+    /// Its channels ([`Problem::channels`] indices).
     pub chans: Vec<usize>,
     /// Their weights σ_c.
     pub sigmas: Vec<f64>,
+    /// A view of events channels ([`super::problem::Channel::events`]): its own term of the
+    /// deviance ([`Evaluator::deviance`]).
+    pub events: bool,
 }
 
 /// Simulated outputs of every model in use at one parameter value, with the weighted mean
@@ -244,13 +252,17 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         dt_s: f64,
     ) -> Self {
         let models = problem
-            .domains()
-            .into_iter()
+            .views()
+            .iter()
             .zip(base)
-            .map(|(d, y)| ModelView {
-                domain: d,
-                chans: problem.channel_indices(d),
-                sigmas: problem.sigmas(d, y, noise_floor),
+            .map(|(v, y)| ModelView {
+                domain: v.domain,
+                chans: v.chans.clone(),
+                sigmas: problem.sigmas(&v.chans, y, noise_floor),
+                events: v
+                    .chans
+                    .iter()
+                    .all(|&c| problem.channels()[c].events.is_some()),
             })
             .collect();
         Self {
@@ -259,11 +271,6 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             theta,
             dt_s,
         }
-    }
-
-    /// Position of `domain`'s model.
-    pub fn model(&self, domain: Domain) -> Option<usize> {
-        self.models.iter().position(|m| m.domain == domain)
     }
 
     fn ms(&self, m: usize, y: &[Vec<f64>], part: Part) -> f64 {
@@ -302,14 +309,80 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         let mut th = self.theta;
         th.set(e, value);
         let mut outputs = Vec::with_capacity(self.models.len());
-        for (m, v) in self.models.iter().enumerate() {
-            if active[m] {
-                outputs.push(Arc::new(self.problem.simulate(v.domain, &th)?));
+        for (m, on) in active.iter().enumerate().take(self.models.len()) {
+            if *on {
+                outputs.push(Arc::new(self.problem.simulate_view(m, &th)?));
             } else {
                 outputs.push(base.outputs[m].clone());
             }
         }
         Ok(self.eval_outputs(value, outputs))
+    }
+
+    /// Whether model view `m`'s outputs differ materially between `a` and `b`: the weighted
+    /// mean square of the change over all valid rows (the cost's weights) above
+    /// [`MATERIAL_CHANGE_MS`]. Why not any change: the shuffle modes are the linearised
+    /// driveline's, whose damping (not its stiffness) takes the road load's slope, so a drag
+    /// or rolling-resistance change moves them by parts per million — a view that would
+    /// otherwise count for every longitudinal effect and set its sample count.
+    pub fn changed(&self, m: usize, a: &Eval, b: &Eval) -> bool {
+        let v = &self.models[m];
+        let ch = self.problem.channels();
+        let mut ms = 0.0;
+        for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
+            let (ya, yb) = (&a.outputs[m][k], &b.outputs[m][k]);
+            let (mut s, mut n) = (0.0, 0usize);
+            for part in [Part::Train, Part::Heldout] {
+                for &i in ch[c].rows(part) {
+                    s += ch[c].weight(i) * (ya[i] - yb[i]).powi(2);
+                    n += 1;
+                }
+            }
+            ms += s / (n.max(1) as f64 * sg * sg);
+        }
+        ms / v.chans.len().max(1) as f64 > MATERIAL_CHANGE_MS
+    }
+
+    /// The time-series views of `active` (its events views switched off).
+    pub fn series(&self, active: &[bool]) -> Vec<bool> {
+        active
+            .iter()
+            .zip(&self.models)
+            .map(|(a, v)| *a && !v.events)
+            .collect()
+    }
+
+    /// Deviance of `x` against the reference `r` on the views of `active`,
+    /// `D = n_series ln(J_s(x)/J_s(r)) + Σ_events N_v ln(J_v(x)/J_v(r))` on the train part:
+    /// the time-series views pooled (`J_s` the mean of their weighted mean squares,
+    /// `n_series` their effective sample count — the fewest over their largely redundant
+    /// channels, [`Evaluator::n_eff`], or the cluster count), and each events view as an
+    /// independent Gaussian sample of its `N_v` train events with its own variance profiled
+    /// out. A group `x` and `r` both leave at zero cost adds nothing.
+    pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_series: f64) -> f64 {
+        let series = self.series(active);
+        let mut d = 0.0;
+        if series.contains(&true) {
+            let (jx, jr) = (
+                self.cost(x, &series, Part::Train),
+                self.cost(r, &series, Part::Train),
+            );
+            if jx > 0.0 && jr > 0.0 {
+                d += n_series.max(1.0) * (jx / jr).ln();
+            }
+        }
+        for (m, v) in self.models.iter().enumerate() {
+            if active[m] && v.events && x.train[m] > 0.0 && r.train[m] > 0.0 {
+                let n: usize = v
+                    .chans
+                    .iter()
+                    .map(|&c| self.problem.channels()[c].rows(Part::Train).len())
+                    .min()
+                    .unwrap_or(0);
+                d += n as f64 * (x.train[m] / r.train[m]).ln();
+            }
+        }
+        d
     }
 
     /// Cost of `x` over the models of `active`: the mean of their weighted mean squares.
@@ -347,9 +420,10 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
                 let rows = ch[c].rows(Part::Train);
                 let w = 1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
+                let chan = &ch[c];
                 let mut acc = 0.0;
                 for &i in rows {
-                    acc += a(m, k, i) * b(m, k, i);
+                    acc += chan.weight(i) * a(m, k, i) * b(m, k, i);
                 }
                 s += w * acc;
             }
@@ -390,11 +464,13 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         }
     }
 
-    /// Fewest effective train samples ([`effective_samples`]) over the channels of `active`.
+    /// Fewest effective train samples ([`effective_samples`]) over the channels of the time
+    /// series views of `active` (infinite when there is none; an events view has its own
+    /// count, [`Evaluator::deviance`]).
     pub fn n_eff(&self, x: &Eval, active: &[bool]) -> f64 {
         let mut n = f64::INFINITY;
         for (m, v) in self.models.iter().enumerate() {
-            if active[m] {
+            if active[m] && !v.events {
                 for (k, &c) in v.chans.iter().enumerate() {
                     n = n.min(effective_samples(
                         &self.problem.channels()[c],
@@ -419,22 +495,23 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         let ch = self.problem.channels();
         let block = &self.problem.split().block;
         let nb = block.iter().copied().max().map_or(0, |b| b + 1);
-        let n_act = active.iter().filter(|x| **x).count().max(1) as f64;
+        let series = self.series(active);
+        let n_act = series.iter().filter(|x| **x).count().max(1) as f64;
         let mut g = vec![0.0; nb];
         let mut used = vec![false; nb];
         let mut h = 0.0;
         for (m, v) in self.models.iter().enumerate() {
-            if !active[m] {
+            if !series[m] {
                 continue;
             }
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
                 let rows = ch[c].rows(Part::Train);
                 let w = 1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
                 for &i in rows {
-                    let ai = a(m, k, i);
+                    let (ai, wi) = (a(m, k, i), w * ch[c].weight(i));
                     let ri = ch[c].measured[i] - best.outputs[m][k][i];
-                    g[block[i]] += w * ai * ri;
-                    h += w * ai * ai;
+                    g[block[i]] += wi * ai * ri;
+                    h += wi * ai * ai;
                     used[block[i]] = true;
                 }
             }
@@ -444,7 +521,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             return None;
         }
         let v = b as f64 / (b - 1) as f64 * g.iter().map(|x| x * x).sum::<f64>() / (h * h);
-        let j = self.cost(best, active, Part::Train);
+        let j = self.cost(best, &series, Part::Train);
         let n = if v > 0.0 { j / (h * v) } else { f64::INFINITY };
         Some((n, b))
     }
@@ -456,9 +533,10 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
         for (m, v) in self.models.iter().enumerate() {
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
-                let w = 1.0 / (sg * sg);
+                let w0 = 1.0 / (sg * sg);
                 for part in [Part::Train, Part::Heldout] {
                     for &i in ch[c].rows(part) {
+                        let w = w0 * ch[c].weight(i);
                         let x = a.outputs[m][k][i] - base.outputs[m][k][i];
                         let y = b.outputs[m][k][i] - base.outputs[m][k][i];
                         ab += w * x * y;
@@ -595,7 +673,7 @@ pub fn screen(
                     if x.train.iter().all(|j| j.is_finite()) {
                         // the models whose outputs actually changed
                         let active: Active = (0..ev.models.len())
-                            .map(|m| may[m] && x.outputs[m] != base.outputs[m])
+                            .map(|m| may[m] && ev.changed(m, &x, base))
                             .collect();
                         if active.iter().any(|a| *a) {
                             return (
@@ -888,9 +966,12 @@ pub fn profile_interval(
             evaluations: 0,
         };
     }
-    let n_eff = n_eff.max(1.0);
+    let n_eff = if n_eff.is_finite() {
+        n_eff.max(1.0)
+    } else {
+        1.0
+    };
     let j_best = ev.cost(best, active, Part::Train);
-    let target = j_best.ln() + threshold / n_eff;
     let d0 = if curvature > 0.0 {
         (j_best * ((threshold / n_eff).exp() - 1.0) / curvature).sqrt()
     } else {
@@ -905,11 +986,12 @@ pub fn profile_interval(
     let side = |s: f64| -> (f64, usize) {
         let bound = if s > 0.0 { spec.hi } else { spec.lo };
         let f = |p: f64| -> f64 {
+            // the deviance above the threshold, on the scale of ln J
             match ev.eval(base, active, e, p) {
                 Ok(x) => {
-                    let j = ev.cost(&x, active, Part::Train);
-                    if j.is_finite() {
-                        j.ln() - target
+                    let d = ev.deviance(&x, best, active, n_eff);
+                    if d.is_finite() {
+                        (d - threshold) / n_eff
                     } else {
                         f64::INFINITY
                     }
@@ -919,7 +1001,7 @@ pub fn profile_interval(
         };
         let mut n = 0;
         // bracket: inner end (f < 0) from the estimate outwards, outer end where f ≥ 0
-        let (mut pin, mut fin) = (best.value, j_best.ln() - target);
+        let (mut pin, mut fin) = (best.value, -threshold / n_eff);
         let mut d = d0;
         let (mut pout, mut fout);
         loop {

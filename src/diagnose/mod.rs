@@ -9,6 +9,7 @@ pub mod extended;
 pub mod fit;
 pub mod locate;
 pub mod modal;
+pub mod modal_channel;
 pub mod noise;
 pub mod problem;
 pub mod prove;

@@ -7,6 +7,9 @@
 //! - longitudinal model ([`LongitudinalModel`], 20 s windows re-initialised from the measured
 //!   state): `vehicle_speed` (m/s) and `engine_speed` (rad/s), on rows where the sample is a real
 //!   one (not a filled gap) and the measured speed is at least the model's minimum (1 m/s);
+//!   and `shuffle_frequency`, an events channel: `ln f` of the ringing after each clutch
+//!   engagement against the linearised driveline's mode, one weighted sample per engagement
+//!   ([`super::modal_channel`]), when at least two engagements fall in each part;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
 //!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
@@ -35,11 +38,15 @@
 //! Every signal counts alike: the weighted mean square of a set of channels is the mean over the
 //! channels of `MSE_c / σ_c²`, with `σ_c` the noise floor of the channel when one is given
 //! (step 2, locate) and otherwise the channel's train RMS residual at the current parameters.
-//! The weighted RMSE is its square root. RMSE, MAE and fit % per signal are unweighted, in the
+//! The weighted RMSE is its square root. An events channel has `σ_c = 1` and weights each
+//! sample by its own `1/s_i²` ([`Channel::events`]), so its mean square is that of the
+//! standardised residuals. RMSE, MAE and fit % per signal are unweighted, in the
 //! signal's SI unit ([`metrics`]).
 
 use super::catalogue::Domain;
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use super::modal::ModalConfig;
+use super::modal_channel::{self, ModeSample};
 use crate::signal::quantization::estimate_quantization;
 use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
@@ -154,6 +161,9 @@ impl Split {
 /// One compared output.
 #[derive(Debug, Clone)]
 pub struct Channel {
+    /// Events channel: one sample per event (a clutch engagement) on the event's row, each
+    /// with its own weight; `None` for a time series sampled on every valid row.
+    pub events: Option<EventWeights>,
     /// Canonical column.
     pub name: String,
     /// SI unit.
@@ -170,6 +180,12 @@ pub struct Channel {
     pub held_idx: Vec<usize>,
 }
 
+/// The per-sample weights of an events channel ([`Channel::events`]): `w_i = 1/s_i²` for a
+/// sample with standard deviation `s_i` (0 on rows without a sample). The channel's own weight
+/// `σ_c` is 1, so `w_i r_i²` is the squared standardised residual.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventWeights(pub Vec<f64>);
+
 /// Which part of the split.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Part {
@@ -180,6 +196,12 @@ pub enum Part {
 }
 
 impl Channel {
+    /// Weight of row `i` within the channel: 1 for a time series, the sample's `1/s_i²` for
+    /// an events channel.
+    pub fn weight(&self, i: usize) -> f64 {
+        self.events.as_ref().map_or(1.0, |w| w.0[i])
+    }
+
     /// The valid rows of `part`.
     pub fn rows(&self, part: Part) -> &[usize] {
         match part {
@@ -202,6 +224,21 @@ pub struct Problem<'a> {
     slope_step: Option<f64>,
     left_out: Vec<String>,
     nominal_outputs: Vec<Vec<Vec<f64>>>,
+    modes: Vec<ModeSample>,
+    views: Vec<View>,
+}
+
+/// A group of one model's channels that the explain step scores together (module
+/// documentation, "Views"): the longitudinal model's speeds, its shuffle modes, the axle
+/// model's bellow pressures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct View {
+    /// Model whose outputs they are.
+    pub domain: Domain,
+    /// Name, in words.
+    pub name: &'static str,
+    /// Channels ([`Problem::channels`] indices).
+    pub chans: Vec<usize>,
 }
 
 fn long_channel_names() -> [(&'static str, &'static str); 2] {
@@ -265,9 +302,15 @@ impl<'a> Problem<'a> {
             },
         );
         let mut nominal_outputs = Vec::new();
+        let mut views = Vec::new();
         let long = match long {
             Ok((m, y)) => {
                 nominal_outputs.push(y);
+                views.push(View {
+                    domain: Domain::Longitudinal,
+                    name: "speeds",
+                    chans: vec![0, 1],
+                });
                 Some(m)
             }
             Err(e @ (ExtendedError::Missing { .. } | ExtendedError::Recorded(_))) => {
@@ -310,6 +353,7 @@ impl<'a> Problem<'a> {
                 }
             }
             Channel {
+                events: None,
                 name: name.into(),
                 unit,
                 domain,
@@ -319,6 +363,7 @@ impl<'a> Problem<'a> {
                 held_idx,
             }
         };
+        let mut modes = Vec::new();
         if let Some(m) = &long {
             let steady = super::compare::longitudinal_rows(log);
             let moving: Vec<bool> = m
@@ -339,8 +384,56 @@ impl<'a> Problem<'a> {
                     .collect();
                 channels.push(mk(name, unit, Domain::Longitudinal, meas.to_vec(), valid));
             }
+            // the shuffle modes (super::modal_channel), when enough engagements fall in each part
+            let samples = modal_channel::measure(
+                log,
+                m.measured_engine_speed(),
+                &nominal_truth.driveline,
+                ratios,
+                &ModalConfig::default(),
+            );
+            let held = samples.iter().filter(|s| split.heldout[s.row]).count();
+            let min = modal_channel::MIN_ENGAGEMENTS_PER_PART;
+            if held >= min && samples.len() - held >= min {
+                let n = log.len();
+                let (mut meas, mut valid, mut w) = (vec![0.0; n], vec![false; n], vec![0.0; n]);
+                for s in &samples {
+                    meas[s.row] = s.ln_frequency;
+                    valid[s.row] = true;
+                    w[s.row] = s.weight;
+                }
+                let mut ch = mk(
+                    modal_channel::NAME,
+                    modal_channel::UNIT,
+                    Domain::Longitudinal,
+                    meas,
+                    valid,
+                );
+                ch.events = Some(EventWeights(w));
+                views.push(View {
+                    domain: Domain::Longitudinal,
+                    name: "shuffle modes",
+                    chans: vec![channels.len()],
+                });
+                channels.push(ch);
+                nominal_outputs.insert(
+                    1,
+                    vec![modal_channel::simulate(
+                        &samples,
+                        &nominal_truth.driveline,
+                        ratios,
+                        n,
+                    )],
+                );
+                modes = samples;
+            }
         }
         if axle.is_some() {
+            views.push(View {
+                domain: Domain::Axle,
+                name: "bellow pressures",
+                chans: (channels.len()..channels.len() + PRESSURES.len()).collect(),
+            });
             let steady = super::compare::axle_rows(log);
             for name in PRESSURES {
                 let raw = log.signal(name).unwrap_or(&[]);
@@ -353,7 +446,7 @@ impl<'a> Problem<'a> {
                 channels.push(mk(name, "Pa", Domain::Axle, meas, valid));
             }
         }
-        for c in &channels {
+        for c in channels.iter().filter(|c| c.events.is_none()) {
             if c.train_idx.len() < MIN_SAMPLES_PER_PART || c.held_idx.len() < MIN_SAMPLES_PER_PART {
                 return Err(ExplainError::TooShort {
                     file,
@@ -379,12 +472,20 @@ impl<'a> Problem<'a> {
             slope_step,
             left_out,
             nominal_outputs,
+            modes,
+            views,
         })
     }
 
-    /// Outputs of every model in use at the nominal parameters ([`Problem::domains`] order).
+    /// Outputs of every view at the nominal parameters ([`Problem::views`] order; per view its
+    /// channels' simulations).
     pub fn nominal_outputs(&self) -> &[Vec<Vec<f64>>] {
         &self.nominal_outputs
+    }
+
+    /// The views (module documentation), longitudinal first.
+    pub fn views(&self) -> &[View] {
+        &self.views
     }
 
     /// The recording.
@@ -447,35 +548,61 @@ impl<'a> Problem<'a> {
     /// # Errors
     /// [`ExtendedError`] from the model.
     pub fn simulate(&self, domain: Domain, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
-        match domain {
-            Domain::Longitudinal => match &self.long {
-                Some(m) => {
-                    let o = m.simulate(theta)?;
-                    Ok(vec![o.vehicle_speed, o.engine_speed])
-                }
-                None => Ok(Vec::new()),
-            },
-            Domain::Axle => match &self.axle {
-                Some(m) => Ok(m.simulate(theta)?.into()),
-                None => Ok(Vec::new()),
-            },
+        let mut y = Vec::new();
+        for v in 0..self.views.len() {
+            if self.views[v].domain == domain {
+                y.extend(self.simulate_view(v, theta)?);
+            }
+        }
+        Ok(y)
+    }
+
+    /// Simulates view `v` ([`Problem::views`]) at `theta`: its channels' outputs. The shuffle
+    /// modes need only the linearised driveline of `theta`, not a simulation.
+    ///
+    /// # Errors
+    /// [`ExtendedError`] from the model.
+    pub fn simulate_view(&self, v: usize, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
+        let Some(view) = self.views.get(v) else {
+            return Ok(Vec::new());
+        };
+        match (view.domain, &self.long, &self.axle) {
+            (Domain::Longitudinal, Some(m), _) if self.channels[view.chans[0]].events.is_some() => {
+                let p = m.plant(theta)?.driveline;
+                Ok(vec![modal_channel::simulate(
+                    &self.modes,
+                    &p,
+                    m.ratios(),
+                    self.log.len(),
+                )])
+            }
+            (Domain::Longitudinal, Some(m), _) => {
+                let o = m.simulate(theta)?;
+                Ok(vec![o.vehicle_speed, o.engine_speed])
+            }
+            (Domain::Axle, _, Some(m)) => Ok(m.simulate(theta)?.into()),
+            _ => Ok(Vec::new()),
         }
     }
 
-    /// Per-channel weights `σ_c` of `domain`'s channels (module documentation): the noise floor
-    /// where `noise_floor` has a finite positive value for the channel, else its train RMS
-    /// residual against `outputs` (1 when that is 0).
+    /// Per-channel weights `σ_c` of the channels `chans` (module documentation; `outputs` one
+    /// per channel): 1 for an events channel; the noise floor where `noise_floor` has a finite
+    /// positive value for the channel; else its train RMS residual against `outputs` (1 when
+    /// that is 0).
     pub fn sigmas(
         &self,
-        domain: Domain,
+        chans: &[usize],
         outputs: &[Vec<f64>],
         noise_floor: Option<&BTreeMap<String, f64>>,
     ) -> Vec<f64> {
-        self.channel_indices(domain)
+        chans
             .iter()
             .zip(outputs)
             .map(|(&c, y)| {
                 let ch = &self.channels[c];
+                if ch.events.is_some() {
+                    return 1.0;
+                }
                 match noise_floor.and_then(|m| m.get(&ch.name)) {
                     Some(&s) if s.is_finite() && s > 0.0 => s,
                     _ => {
@@ -539,7 +666,10 @@ pub fn weighted_ms(
     for ((&c, s), y) in chans.iter().zip(sigmas).zip(outputs) {
         let ch = &channels[c];
         let rows = ch.rows(part);
-        let se: f64 = rows.iter().map(|&i| (ch.measured[i] - y[i]).powi(2)).sum();
+        let se: f64 = rows
+            .iter()
+            .map(|&i| ch.weight(i) * (ch.measured[i] - y[i]).powi(2))
+            .sum();
         j += se / (rows.len().max(1) as f64 * s * s);
     }
     j / chans.len().max(1) as f64
@@ -587,6 +717,11 @@ pub struct Whiteness {
 /// non-white power, `Q/n` scaled by the residual's weighted mean square: the normalised `Q/n`
 /// alone rises whenever a fit removes a fast structured error and leaves a smaller but slower
 /// one (the whole-percent slope sensor's drift), although less of the residual is structure.
+///
+/// An events channel ([`Channel::events`]; engagements tens of seconds apart, no time lags
+/// between them) is scored on its standardised residuals `z_i = r_i √w_i` in event order, at
+/// the lags of 1 … min(20, n − 1) events ([`event_whiteness`]): a shift common to the events
+/// (a wrong shaft stiffness moves every engagement's frequency) is non-white as a bias is.
 pub fn whiteness(
     channels: &[Channel],
     chans: &[usize],
@@ -600,6 +735,17 @@ pub fn whiteness(
     for ((&c, y), sg) in chans.iter().zip(outputs).zip(sigmas) {
         let ch = &channels[c];
         let rows = ch.rows(part);
+        if ch.events.is_some() {
+            let z: Vec<f64> = rows
+                .iter()
+                .map(|&i| (ch.measured[i] - y[i]) * ch.weight(i).sqrt())
+                .collect();
+            let q = event_whiteness(&z);
+            let ms = z.iter().map(|x| x * x).sum::<f64>() / z.len().max(1) as f64;
+            qn += q;
+            pw += q * ms / (sg * sg);
+            continue;
+        }
         let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - y[i]).collect();
         let e0: f64 = r.iter().map(|x| x * x).sum();
         if e0 <= 0.0 {
@@ -638,14 +784,38 @@ pub fn whiteness(
     }
 }
 
+/// `Q/n` of a sequence of event residuals `z` ([`whiteness`] for an events channel): the mean
+/// over the lags `k` = 1 … min([`WHITENESS_LAGS`], n − 1) of the squared non-centred
+/// autocorrelation `(Σ z_i z_{i+k} / Σ z_i²)²`; 0 for fewer than 2 events or a zero residual.
+pub fn event_whiteness(z: &[f64]) -> f64 {
+    let e0: f64 = z.iter().map(|x| x * x).sum();
+    let lags = WHITENESS_LAGS.min(z.len().saturating_sub(1));
+    if e0 <= 0.0 || lags == 0 {
+        return 0.0;
+    }
+    let q: f64 = (1..=lags)
+        .map(|k| {
+            let s: f64 = z[..z.len() - k]
+                .iter()
+                .zip(&z[k..])
+                .map(|(a, b)| a * b)
+                .sum();
+            (s / e0).powi(2)
+        })
+        .sum();
+    q / lags as f64
+}
+
 /// Effective number of independent samples of the residual of one channel on `part`:
 /// `N / τ` with `τ = 1 + 2 Σ_{k=1}^{M} ρ(k)` the integrated autocorrelation time of the
 /// (centred) residual, `ρ` pooled over the contiguous valid runs (computed by FFT), and `M`
-/// Sokal's automatic window (the smallest `M ≥ 5 τ(M)`), `τ ≥ 1`.
+/// Sokal's automatic window (the smallest `M ≥ 5 τ(M)`), `τ ≥ 1`. The samples of an events
+/// channel ([`Channel::events`]: engagements tens of seconds apart, each from its own fit)
+/// count as independent: `N`.
 pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
     let rows = ch.rows(part);
     let n = rows.len();
-    if n < 2 {
+    if n < 2 || ch.events.is_some() {
         return n as f64;
     }
     let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - sim[i]).collect();
@@ -701,6 +871,7 @@ mod tests {
     fn channel(measured: Vec<f64>) -> Channel {
         let n = measured.len();
         Channel {
+            events: None,
             name: "x".into(),
             unit: "1",
             domain: Domain::Longitudinal,
@@ -763,6 +934,57 @@ mod tests {
         let n = v.len() as f64;
         let ne = effective_samples(&channel(v), &vec![0.0; n as usize], Part::Train);
         assert!((n / ne / 19.0 - 1.0).abs() < 0.2, "τ = {}", n / ne);
+    }
+
+    #[test]
+    fn an_events_channel_is_weighted_per_sample_and_its_whiteness_is_over_events() {
+        // 6 events on rows 0, 10, …, 50 of 60; weights 1/s² with s = 0.01 and 0.02
+        let n = 60;
+        let mut measured = vec![0.0; n];
+        let mut valid = vec![false; n];
+        let mut w = vec![0.0; n];
+        for k in 0..6 {
+            let i = 10 * k;
+            measured[i] = 0.05; // a common shift of 5 %
+            valid[i] = true;
+            w[i] = if k % 2 == 0 { 1e4 } else { 2.5e3 };
+        }
+        let mut ch = channel(measured);
+        ch.valid = valid;
+        ch.train_idx = (0..6).map(|k| 10 * k).collect();
+        ch.events = Some(EventWeights(w));
+        let zero = vec![vec![0.0; n]];
+        // mean of w r²: (3·1e4 + 3·2.5e3)·0.0025 / 6 = 15.625
+        let ms = weighted_ms(std::slice::from_ref(&ch), &[0], &[1.0], &zero, Part::Train);
+        assert!((ms - 15.625).abs() < 1e-9, "{ms}");
+        // a common shift is non-white: lag-k autocorrelation of z = (5, 2.5, 5, 2.5, 5, 2.5)
+        let z = [5.0, 2.5, 5.0, 2.5, 5.0, 2.5];
+        let e0: f64 = z.iter().map(|x| x * x).sum();
+        let expect: f64 = (1..=5)
+            .map(|k| {
+                let s: f64 = z[..6 - k].iter().zip(&z[k..]).map(|(a, b)| a * b).sum();
+                (s / e0).powi(2)
+            })
+            .sum::<f64>()
+            / 5.0;
+        let wh = whiteness(
+            std::slice::from_ref(&ch),
+            &[0],
+            &[1.0],
+            &zero,
+            Part::Train,
+            0.02,
+        );
+        assert!(
+            (wh.q_per_n - expect).abs() < 1e-12 && wh.q_per_n > 0.2,
+            "{wh:?}"
+        );
+        assert!((wh.nonwhite_power - expect * 15.625).abs() < 1e-9);
+        // a single event has no lag at all, a zero residual no structure
+        assert_eq!(event_whiteness(&[3.0]), 0.0);
+        assert_eq!(event_whiteness(&[0.0, 0.0]), 0.0);
+        // events are independent samples
+        assert_eq!(effective_samples(&ch, &zero[0], Part::Train), 6.0);
     }
 
     #[test]

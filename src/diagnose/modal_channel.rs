@@ -1,0 +1,188 @@
+//! The shuffle modes as a compared output of the longitudinal model (issue 7, diagnosis.md
+//! step 3 for `driveline_compliance`): one sample per clutch engagement, scored by the same
+//! fixed acceptance rule as the speeds.
+//!
+//! Why: a drive-shaft stiffness change hides in the time-domain speed residual (the scorer's
+//! oracle check: with the hidden stiffness at its truth, the held-out weighted RMSE of the
+//! speeds changes by −1 % to +3.4 % on the proof's compliance drives) but moves the frequency of
+//! the ringing after every clutch closing by several per cent ([`super::modal`],
+//! docs/modal.md). As a channel of the longitudinal model the frequency is fitted, held out and
+//! tested like any other output, so no second rule decides.
+//!
+//! # The channel `shuffle_frequency`
+//! - **Measured** (per engagement, [`super::modal::engagements`] and
+//!   [`super::modal::fit_damped_sinusoid`] on the measured engine speed): `ln f`, `f` the
+//!   observed frequency of the ringing in Hz, on the row where the engagement's analysis window
+//!   starts; every other row is not valid. An engagement counts when its fit is accepted and
+//!   its frequency is within [`ModalConfig::max_mode_ratio`] of the nominal linearised mode
+//!   (a factor 1.6: a different mode, not a shifted one, otherwise).
+//! - **Simulated** at parameters θ: `ln f` of the first torsional mode of the locked-clutch
+//!   driveline of θ linearised in the engagement's gear at its measured speed
+//!   ([`super::modal::locked_mode`]). Only the parameters in the linearised model move it —
+//!   the shaft stiffness (`driveline_compliance`) and the mass (`vehicle_mass`, −1.4 % at
+//!   +19 %); every other effect leaves the channel unchanged, so it cannot help them.
+//! - **Residual** `ln f_measured − ln f_simulated`: the relative frequency error
+//!   (dimensionless, unit "1").
+//! - **Weight** of sample `i`: `1 / (s_i² + s_floor²)` with `s_i` the fit's own standard error
+//!   of `ln f` (`frequency_se / frequency`) and `s_floor` = [`LN_FREQUENCY_FLOOR`], the
+//!   precision of the linearised reference itself; the channel's `σ_c` is 1, so a residual
+//!   within its standard errors scores about 1 like a speed residual at its noise floor.
+//!
+//! The floor: on the 12 clean drives of `fleetdyn prove --seed 1` the per-gear mean shifts
+//! against the linearised mode lie mostly within ±0.03 Hz at 5–8 Hz (±0.5 %), single
+//! engagements up to −0.25 Hz (about −4 %, docs/modal.md), while the fit's own standard errors
+//! are often below 0.3 % (white-residual lower bounds). 1 % keeps a clean drive's standardised
+//! residual near 1 without hiding a 25 % stiffness change (a 5–12 % frequency shift).
+//!
+//! The channel is used when at least [`MIN_ENGAGEMENTS_PER_PART`] engagements fall in each
+//! part of the split; otherwise the longitudinal model is compared on the speeds alone (a drive
+//! with few engagements keeps its diagnosis).
+
+use super::modal::{engagements, fit_damped_sinusoid, locked_mode, ModalConfig};
+use crate::model::driveline::DrivelineParams;
+use crate::table::DriveLog;
+
+/// Name of the channel.
+pub const NAME: &str = "shuffle_frequency";
+/// Unit of its residual (relative frequency error).
+pub const UNIT: &str = "1";
+/// Precision of the linearised reference, as a standard deviation of `ln f` (module
+/// documentation).
+pub const LN_FREQUENCY_FLOOR: f64 = 0.01;
+/// Fewest engagements in each part of the split for the channel to be used.
+pub const MIN_ENGAGEMENTS_PER_PART: usize = 2;
+
+/// One engagement's sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModeSample {
+    /// Row of the analysis window's start.
+    pub row: usize,
+    /// Gear held (1-based).
+    pub gear: usize,
+    /// Measured vehicle speed at the window start, m/s.
+    pub speed_mps: f64,
+    /// Measured `ln f` (f in Hz).
+    pub ln_frequency: f64,
+    /// Weight `1 / (s_i² + s_floor²)`.
+    pub weight: f64,
+}
+
+/// The measured samples of `log` (module documentation) with the engine speed `engine_speed`
+/// (rad/s on the log's rows, gaps filled), against the nominal driveline `p` with gear ratios
+/// `ratios`.
+pub fn measure(
+    log: &DriveLog,
+    engine_speed: &[f64],
+    p: &DrivelineParams,
+    ratios: &[f64],
+    cfg: &ModalConfig,
+) -> Vec<ModeSample> {
+    let t = log.seconds_from_start();
+    if engine_speed.len() != t.len() {
+        return Vec::new();
+    }
+    engagements(log, cfg)
+        .into_iter()
+        .filter_map(|e| {
+            let r = e.rows.clone();
+            let fit = fit_damped_sinusoid(&t[r.clone()], &engine_speed[r], cfg).ok()?;
+            if !e.speed_mps.is_finite() || e.gear > ratios.len() {
+                return None;
+            }
+            let nominal = locked_mode(p, ratios, e.gear, e.speed_mps)?;
+            let ratio = fit.frequency_hz / nominal.frequency_hz;
+            if !(ratio <= cfg.max_mode_ratio && ratio * cfg.max_mode_ratio >= 1.0) {
+                return None;
+            }
+            let s = fit.frequency_se_hz / fit.frequency_hz;
+            let var =
+                if s.is_finite() { s * s } else { f64::INFINITY } + LN_FREQUENCY_FLOOR.powi(2);
+            Some(ModeSample {
+                row: e.rows.start,
+                gear: e.gear,
+                speed_mps: e.speed_mps,
+                ln_frequency: fit.frequency_hz.ln(),
+                weight: 1.0 / var,
+            })
+        })
+        .filter(|s| s.weight > 0.0 && s.ln_frequency.is_finite())
+        .collect()
+}
+
+/// The simulated channel on `n` rows for the driveline `p`: `ln f` of the linearised mode on
+/// each sample's row, 0 on every other row (not valid there). A sample whose linearised
+/// driveline has no oscillating mode gets `ln f` of 0 Hz's neighbour, −∞ replaced by the
+/// measured value minus 10 (a residual far outside any floor rather than a NaN that would
+/// poison the sums).
+pub fn simulate(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64], n: usize) -> Vec<f64> {
+    let mut out = vec![0.0; n];
+    for s in samples {
+        if let Some(v) = out.get_mut(s.row) {
+            *v = match locked_mode(p, ratios, s.gear, s.speed_mps) {
+                Some(m) if m.frequency_hz > 0.0 => m.frequency_hz.ln(),
+                _ => s.ln_frequency - 10.0,
+            };
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The proof's vehicle (seed 002 6×2 diesel): driveline parameters and gear ratios.
+    fn vehicle() -> (DrivelineParams, Vec<f64>) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fixtures/vehicles/seed002-6x2-diesel.toml");
+        let vf = crate::model::vehicle::VehicleFile::load(&path).expect("bundled vehicle");
+        (vf.driveline.expect("has a driveline"), vf.gearbox.ratios)
+    }
+
+    #[test]
+    fn the_simulated_channel_follows_stiffness_and_mass_on_its_rows_only() {
+        let (p, ratios) = vehicle();
+        let s = ModeSample {
+            row: 3,
+            gear: 8,
+            speed_mps: 12.0,
+            ln_frequency: 0.0,
+            weight: 1.0,
+        };
+        let a = simulate(&[s], &p, &ratios, 5);
+        let mut stiff = p.clone();
+        stiff.k_d_nm_per_rad *= 1.21;
+        let b = simulate(&[s], &stiff, &ratios, 5);
+        // other rows are not valid and hold 0
+        assert_eq!((a[0], a[4], b[0]), (0.0, 0.0, 0.0));
+        // a stiffer shaft raises ln f by at most ½ ln 1.21 (the shaft is one of the mode's
+        // springs in series) and by more than 0.5 %
+        let d = b[3] - a[3];
+        assert!(d > 0.005 && d <= 0.5 * 1.21f64.ln() + 1e-12, "{d}");
+        // a heavier truck lowers it, by far less than the stiffness raises it
+        let mut heavy = p.clone();
+        heavy.mass_kg *= 1.19;
+        let c = simulate(&[s], &heavy, &ratios, 5);
+        assert!(c[3] < a[3] && a[3] - c[3] < d, "{} {} {}", a[3], c[3], d);
+    }
+
+    #[test]
+    fn a_log_without_a_clutch_column_has_no_samples() {
+        use crate::table::Signal;
+        let (p, ratios) = vehicle();
+        let n = 500;
+        let log = DriveLog {
+            timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
+            signals: vec![Signal {
+                name: "engine_speed".into(),
+                unit: "rad/s".into(),
+                values: vec![140.0; n],
+            }],
+            ..DriveLog::default()
+        };
+        let w = vec![140.0; n];
+        assert!(measure(&log, &w, &p, &ratios, &ModalConfig::default()).is_empty());
+        // and a speed vector of the wrong length gives none either
+        assert!(measure(&log, &w[..10], &p, &ratios, &ModalConfig::default()).is_empty());
+    }
+}
