@@ -14,7 +14,7 @@
 //! | `rolling_resistance` | +30 % θ₀ | 0.25…4 θ₀ |
 //! | `vehicle_mass` | +15 % θ₀ | 0.5…2.5 θ₀ |
 //! | `grade_offset` | +0.01 rad | ±0.1 rad |
-//! | `slope_quantization` | switch to the filtered slope | — |
+//! | `slope_quantization` | switch to the dequantised slope at the recorded step | — |
 //! | `signal_delay` | +0.2 s | 0…2 s |
 //! | `driveline_backlash` | +0.03 rad | 0…0.2 rad |
 //! | `driveline_compliance` | −35 % θ₀ | 0.1…4 θ₀ |
@@ -73,12 +73,14 @@
 //! `c` up to it. The other parameters are held at their values: in one dimension the profile is
 //! the likelihood itself.
 //!
-//! `slope_quantization` has no continuous parameter in the model (a switch: the recorded slope
-//! or its zero-phase spatial filter). Its value is the measured lattice step of the recorded
-//! slope ([`crate::signal::quantization`]), its interval that estimate's lattice tolerance
-//! (±1 %), and its likelihood-ratio test (filter against raw slope) stands in for "the interval
-//! excludes the nominal". It applies only when the recorded slope's step is above 1.5 × the
-//! nominal resolution.
+//! `slope_quantization` is not fitted continuously (a switch: the recorded slope, or its
+//! consistent reconstruction from cells of the sensor's resolution,
+//! [`crate::signal::dequantise`]). Its value, the slope sensor's resolution, is the measured
+//! lattice step of the recorded slope ([`crate::signal::quantization`]), which is also the
+//! cell width the cure reconstructs with; its interval is that estimate's lattice tolerance
+//! (±1 %), and its likelihood-ratio test (reconstruction against raw slope) stands in for "the
+//! interval excludes the nominal". It applies only when the recorded slope's step is above
+//! 1.5 × the nominal resolution ([`super::setup::NOMINAL_SLOPE_RESOLUTION`]).
 
 use super::catalogue::{Domain, Effect};
 use super::extended::{ExtendedError, Theta};

@@ -812,8 +812,7 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
 }
 
 /// [`super::explain::oracle_check`] of `effect` at `truth` on the drive `log`, weighted by the
-/// diagnosis' noise floor, with the problem the diagnosis built (same setup, same split);
-/// `slope_quantization` is checked with its cure switched on.
+/// diagnosis' noise floor, with the problem the diagnosis built (same setup, same split).
 fn oracle(
     log: &DriveLog,
     vf: &VehicleFile,
@@ -823,15 +822,9 @@ fn oracle(
 ) -> Result<super::explain::OracleCheck, String> {
     let setup = super::setup::Setup::new(log, vf).map_err(|e| e.to_string())?;
     let problem = setup.problem(log).map_err(|e| e.to_string())?;
-    // slope_quantization's parameter is a switch, on above the recording's own resolution
-    // (extended.rs); its truth is the sensor's step, which the recording shows as that very
-    // resolution, so the truth is not above it: the check switches the cure on instead
-    let value = if effect == Effect::SlopeQuantization {
-        2.0 * problem.nominal().get(effect).max(truth)
-    } else {
-        truth
-    };
-    super::explain::oracle_check(&problem, Some(&d.noise_floor), effect, value)
+    // slope_quantization's parameter is the sensor resolution the cure reconstructs with
+    // (extended.rs), its nominal the model's assumed 0.1 % (setup.rs): the truth is a value
+    super::explain::oracle_check(&problem, Some(&d.noise_floor), effect, truth)
         .map_err(|e| e.to_string())?
         .ok_or_else(|| format!("{}: its model is not in use on this drive", effect.id()))
 }

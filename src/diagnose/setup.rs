@@ -24,6 +24,13 @@ use crate::table::DriveLog;
 /// Speed below which longitudinal rows do not count, m/s.
 pub const MIN_SPEED_MPS: f64 = 1.0;
 
+/// The slope resolution the nominal model assumes, tan α per step: 0.001 (0.1 %), the fine
+/// sensor of the proof's drives without `slope_quantization`. It is `slope_quantization`'s
+/// nominal value; the recording's own lattice step ([`Setup::slope_resolution`]) is what that
+/// effect's fit compares with it ([`super::fit::applicable`]). With the recorded step as the
+/// nominal, as before, the effect could never apply: a step is never above 1.5 × itself.
+pub const NOMINAL_SLOPE_RESOLUTION: f64 = 0.001;
+
 /// Which models apply, and what they need.
 #[derive(Debug, Clone)]
 pub struct Setup {
@@ -123,9 +130,9 @@ impl Setup {
         let slope_resolution = estimate_quantization(&slope)
             .map(|q| q.step)
             .filter(|q| *q > 0.0 && *q < 0.1)
-            .unwrap_or(0.001);
+            .unwrap_or(NOMINAL_SLOPE_RESOLUTION);
         let nominal_truth = TruthModel::nominal(d, vehicle.axles.as_ref());
-        let nominal = Theta::nominal(&nominal_truth, slope_resolution);
+        let nominal = Theta::nominal(&nominal_truth, NOMINAL_SLOPE_RESOLUTION);
         let conditions = Conditions::from_log(log);
         Ok(Setup {
             nominal_truth,

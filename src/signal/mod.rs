@@ -1,5 +1,5 @@
 //! Signal processing for fleet logs: resampling to distance ([`distance`]), sensor
-//! quantisation ([`quantization`]), Butterworth design in second-order
+//! quantisation ([`quantization`]) and its consistent reconstruction ([`dequantise`]), Butterworth design in second-order
 //! sections, causal and zero-phase filtering, Welch spectra, cross-spectra and coherence.
 //!
 //! The functions mirror scipy.signal (`butter(..., output='sos')`,
@@ -15,6 +15,7 @@
 //! (unit² per frequency unit).
 
 mod butterworth;
+pub mod dequantise;
 pub mod distance;
 mod error;
 mod filtfilt;
