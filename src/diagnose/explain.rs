@@ -820,7 +820,7 @@ fn sentence(
             if v >= 0.0 { "nose-up" } else { "nose-down" }
         ),
         SlopeQuantization => format!(
-            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: the quantised slope excites shuffle the recording lacks; its spatially filtered slope fits better",
+            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: the quantised slope excites shuffle the recording lacks; its dequantised slope (smoothed within the sensor's cells) fits better",
             100.0 * v,
             100.0 * nominal
         ),

@@ -207,9 +207,9 @@ pub struct ModelView {
     pub chans: Vec<usize>,
     /// Their weights σ_c.
     pub sigmas: Vec<f64>,
-    /// A view of events channels ([`super::problem::Channel::events`]): its own term of the
-    /// deviance ([`Evaluator::deviance`]).
-    pub events: bool,
+    /// A view with its own term of the deviance ([`Evaluator::deviance`],
+    /// [`super::problem::ViewKind::own_term`]).
+    pub own_term: bool,
 }
 
 /// Simulated outputs of every model in use at one parameter value, with the weighted mean
@@ -261,10 +261,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
                 domain: v.domain,
                 chans: v.chans.clone(),
                 sigmas: problem.sigmas(&v.chans, y, noise_floor),
-                events: v
-                    .chans
-                    .iter()
-                    .all(|&c| problem.channels()[c].events.is_some()),
+                own_term: v.kind.own_term(),
             })
             .collect();
         Self {
@@ -310,14 +307,12 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     ) -> Result<Eval, ExtendedError> {
         let mut th = self.theta;
         th.set(e, value);
-        let mut outputs = Vec::with_capacity(self.models.len());
-        for (m, on) in active.iter().enumerate().take(self.models.len()) {
-            if *on {
-                outputs.push(Arc::new(self.problem.simulate_view(m, &th)?));
-            } else {
-                outputs.push(base.outputs[m].clone());
-            }
-        }
+        let sims = self.problem.simulate_views(active, &th)?;
+        let outputs = sims
+            .into_iter()
+            .zip(&base.outputs)
+            .map(|(y, b)| y.map_or_else(|| b.clone(), Arc::new))
+            .collect();
         Ok(self.eval_outputs(value, outputs))
     }
 
@@ -345,22 +340,23 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         ms / v.chans.len().max(1) as f64 > MATERIAL_CHANGE_MS
     }
 
-    /// The time-series views of `active` (its events views switched off).
+    /// The pooled views of `active` (its own-term views switched off).
     pub fn series(&self, active: &[bool]) -> Vec<bool> {
         active
             .iter()
             .zip(&self.models)
-            .map(|(a, v)| *a && !v.events)
+            .map(|(a, v)| *a && !v.own_term)
             .collect()
     }
 
     /// Deviance of `x` against the reference `r` on the views of `active`,
-    /// `D = n_series ln(J_s(x)/J_s(r)) + Σ_events N_v ln(J_v(x)/J_v(r))` on the train part:
-    /// the time-series views pooled (`J_s` the mean of their weighted mean squares,
-    /// `n_series` their effective sample count — the fewest over their largely redundant
-    /// channels, [`Evaluator::n_eff`], or the cluster count), and each events view as an
-    /// independent Gaussian sample of its `N_v` train events with its own variance profiled
-    /// out. A group `x` and `r` both leave at zero cost adds nothing.
+    /// `D = n_pooled ln(J_p(x)/J_p(r)) + Σ_own N_v ln(J_v(x)/J_v(r))` on the train part: the
+    /// speeds and pressures pooled (`J_p` the mean of their weighted mean squares, `n_pooled`
+    /// their effective sample count — the fewest over their largely redundant channels,
+    /// [`Evaluator::n_eff`], or the cluster count), and each own-term view (the shuffle modes)
+    /// as an independent Gaussian sample with its own variance profiled out, `N_v` its
+    /// effective train samples at `r` ([`effective_samples`]: the engagements). A group `x` and
+    /// `r` both leave at zero cost adds nothing.
     pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_series: f64) -> f64 {
         let series = self.series(active);
         let mut d = 0.0;
@@ -374,14 +370,22 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             }
         }
         for (m, v) in self.models.iter().enumerate() {
-            if active[m] && v.events && x.train[m] > 0.0 && r.train[m] > 0.0 {
-                let n: usize = v
+            if active[m] && v.own_term && x.train[m] > 0.0 && r.train[m] > 0.0 {
+                let n = v
                     .chans
                     .iter()
-                    .map(|&c| self.problem.channels()[c].rows(Part::Train).len())
-                    .min()
-                    .unwrap_or(0);
-                d += n as f64 * (x.train[m] / r.train[m]).ln();
+                    .enumerate()
+                    .map(|(k, &c)| {
+                        effective_samples(
+                            &self.problem.channels()[c],
+                            &r.outputs[m][k],
+                            Part::Train,
+                        )
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                if n.is_finite() {
+                    d += n * (x.train[m] / r.train[m]).ln();
+                }
             }
         }
         d
@@ -472,7 +476,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     pub fn n_eff(&self, x: &Eval, active: &[bool]) -> f64 {
         let mut n = f64::INFINITY;
         for (m, v) in self.models.iter().enumerate() {
-            if active[m] && !v.events {
+            if active[m] && !v.own_term {
                 for (k, &c) in v.chans.iter().enumerate() {
                     n = n.min(effective_samples(
                         &self.problem.channels()[c],

@@ -7,14 +7,22 @@
 //! - longitudinal model ([`LongitudinalModel`], 20 s windows re-initialised from the measured
 //!   state): `vehicle_speed` (m/s) and `engine_speed` (rad/s), on rows where the sample is a real
 //!   one (not a filled gap) and the measured speed is at least the model's minimum (1 m/s);
-//!   and `shuffle_frequency`, an events channel: `ln f` of the ringing after each clutch
-//!   engagement against the linearised driveline's mode, one weighted sample per engagement
-//!   ([`super::modal_channel`]), when at least two engagements fall in each part;
+//!   and `shuffle_frequency`, an events channel: `ln f` of the ringing after each
+//!   clutch engagement against the linearised driveline's mode, one weighted sample per
+//!   engagement ([`super::modal_channel`]), when at least two engagements fall in each part;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
 //!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
 //! A model is used when the recording has its outputs and inputs; which ones were used is
 //! reported ([`Problem::domains`]).
+//!
+//! # Views
+//! The explain step scores channels in groups, [`View`]s: the longitudinal model's speeds,
+//! its shuffle modes, and the axle model's bellow pressures. An effect is fitted and scored on
+//! the views it changes materially ([`super::explain`]), so a view that only a few effects can
+//! move (the modes: the stiffness and the mass) never dilutes the figures of the others. The
+//! speeds and the pressures are pooled in the deviance as largely redundant; the modes are a
+//! term of their own ([`ViewKind::own_term`]).
 //!
 //! # Train / held-out split: alternating blocks in time
 //! The drive is cut into contiguous blocks of whole longitudinal windows (block length
@@ -228,17 +236,37 @@ pub struct Problem<'a> {
     views: Vec<View>,
 }
 
-/// A group of one model's channels that the explain step scores together (module
-/// documentation, "Views"): the longitudinal model's speeds, its shuffle modes, the axle
-/// model's bellow pressures.
+/// A group of one model's channels that the explain step scores together: the longitudinal
+/// model's speeds, its shuffle modes, the axle model's bellow pressures.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct View {
     /// Model whose outputs they are.
     pub domain: Domain,
-    /// Name, in words.
-    pub name: &'static str,
+    /// Which outputs.
+    pub kind: ViewKind,
     /// Channels ([`Problem::channels`] indices).
     pub chans: Vec<usize>,
+}
+
+/// The views of [`View`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ViewKind {
+    /// `vehicle_speed`, `engine_speed`.
+    Speeds,
+    /// `shuffle_frequency` ([`super::modal_channel`]).
+    ShuffleModes,
+    /// The three bellow pressures.
+    Pressures,
+}
+
+impl ViewKind {
+    /// Whether the view is its own term of the deviance ([`super::fit::Evaluator::deviance`]):
+    /// the modes are another quantity than the speeds and the pressures, which are pooled as
+    /// largely redundant.
+    pub fn own_term(self) -> bool {
+        matches!(self, ViewKind::ShuffleModes)
+    }
 }
 
 fn long_channel_names() -> [(&'static str, &'static str); 2] {
@@ -301,16 +329,13 @@ impl<'a> Problem<'a> {
                     .and_then(|m| m.simulate(&nominal).map(|p| (m, Vec::from(p))))
             },
         );
-        let mut nominal_outputs = Vec::new();
-        let mut views = Vec::new();
+        // (view, its nominal outputs) in view order
+        let mut views: Vec<(View, Vec<Vec<f64>>)> = Vec::new();
+        let mut long_nominal = Vec::new();
+        let mut axle_nominal = Vec::new();
         let long = match long {
             Ok((m, y)) => {
-                nominal_outputs.push(y);
-                views.push(View {
-                    domain: Domain::Longitudinal,
-                    name: "speeds",
-                    chans: vec![0, 1],
-                });
+                long_nominal = y;
                 Some(m)
             }
             Err(e @ (ExtendedError::Missing { .. } | ExtendedError::Recorded(_))) => {
@@ -321,7 +346,7 @@ impl<'a> Problem<'a> {
         };
         let axle = match axle {
             Ok((m, y)) => {
-                nominal_outputs.push(y);
+                axle_nominal = y;
                 Some(m)
             }
             Err(e @ (ExtendedError::Missing { .. } | ExtendedError::Recorded(_))) => {
@@ -384,6 +409,14 @@ impl<'a> Problem<'a> {
                     .collect();
                 channels.push(mk(name, unit, Domain::Longitudinal, meas.to_vec(), valid));
             }
+            views.push((
+                View {
+                    domain: Domain::Longitudinal,
+                    kind: ViewKind::Speeds,
+                    chans: vec![0, 1],
+                },
+                std::mem::take(&mut long_nominal),
+            ));
             // the shuffle modes (super::modal_channel), when enough engagements fall in each part
             let samples = modal_channel::measure(
                 log,
@@ -410,30 +443,32 @@ impl<'a> Problem<'a> {
                     valid,
                 );
                 ch.events = Some(EventWeights(w));
-                views.push(View {
-                    domain: Domain::Longitudinal,
-                    name: "shuffle modes",
-                    chans: vec![channels.len()],
-                });
-                channels.push(ch);
-                nominal_outputs.insert(
-                    1,
+                views.push((
+                    View {
+                        domain: Domain::Longitudinal,
+                        kind: ViewKind::ShuffleModes,
+                        chans: vec![channels.len()],
+                    },
                     vec![modal_channel::simulate(
                         &samples,
                         &nominal_truth.driveline,
                         ratios,
                         n,
                     )],
-                );
+                ));
+                channels.push(ch);
                 modes = samples;
             }
         }
         if axle.is_some() {
-            views.push(View {
-                domain: Domain::Axle,
-                name: "bellow pressures",
-                chans: (channels.len()..channels.len() + PRESSURES.len()).collect(),
-            });
+            views.push((
+                View {
+                    domain: Domain::Axle,
+                    kind: ViewKind::Pressures,
+                    chans: (channels.len()..channels.len() + PRESSURES.len()).collect(),
+                },
+                std::mem::take(&mut axle_nominal),
+            ));
             let steady = super::compare::axle_rows(log);
             for name in PRESSURES {
                 let raw = log.signal(name).unwrap_or(&[]);
@@ -446,7 +481,12 @@ impl<'a> Problem<'a> {
                 channels.push(mk(name, "Pa", Domain::Axle, meas, valid));
             }
         }
-        for c in channels.iter().filter(|c| c.events.is_none()) {
+        // the speeds and pressures must have data; an own-term view is used only when it has
+        let required = views
+            .iter()
+            .filter(|(v, _)| !v.kind.own_term())
+            .flat_map(|(v, _)| v.chans.iter().map(|&c| &channels[c]));
+        for c in required {
             if c.train_idx.len() < MIN_SAMPLES_PER_PART || c.held_idx.len() < MIN_SAMPLES_PER_PART {
                 return Err(ExplainError::TooShort {
                     file,
@@ -457,6 +497,7 @@ impl<'a> Problem<'a> {
                 });
             }
         }
+        let (views, nominal_outputs): (Vec<View>, Vec<Vec<Vec<f64>>>) = views.into_iter().unzip();
         let slope_step = log
             .signal("road_slope")
             .and_then(estimate_quantization)
@@ -548,41 +589,59 @@ impl<'a> Problem<'a> {
     /// # Errors
     /// [`ExtendedError`] from the model.
     pub fn simulate(&self, domain: Domain, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
-        let mut y = Vec::new();
-        for v in 0..self.views.len() {
-            if self.views[v].domain == domain {
-                y.extend(self.simulate_view(v, theta)?);
-            }
-        }
-        Ok(y)
+        let which: Vec<bool> = self.views.iter().map(|v| v.domain == domain).collect();
+        Ok(self
+            .simulate_views(&which, theta)?
+            .into_iter()
+            .flatten()
+            .flatten()
+            .collect())
     }
 
-    /// Simulates view `v` ([`Problem::views`]) at `theta`: its channels' outputs. The shuffle
-    /// modes need only the linearised driveline of `theta`, not a simulation.
+    /// Simulates the views `which` ([`Problem::views`]) at `theta`: per view its channels'
+    /// outputs (`None` for a view not asked for). The shuffle modes need only the linearised
+    /// driveline of `theta`, not a simulation.
     ///
     /// # Errors
-    /// [`ExtendedError`] from the model.
-    pub fn simulate_view(&self, v: usize, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
-        let Some(view) = self.views.get(v) else {
-            return Ok(Vec::new());
+    /// [`ExtendedError`] from a model.
+    pub fn simulate_views(
+        &self,
+        which: &[bool],
+        theta: &Theta,
+    ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
+        let wants = |k: ViewKind| self.views.iter().zip(which).any(|(v, w)| *w && v.kind == k);
+        let long = match &self.long {
+            Some(m) if wants(ViewKind::Speeds) => Some(m.simulate(theta)?),
+            _ => None,
         };
-        match (view.domain, &self.long, &self.axle) {
-            (Domain::Longitudinal, Some(m), _) if self.channels[view.chans[0]].events.is_some() => {
+        let axle = match &self.axle {
+            Some(m) if wants(ViewKind::Pressures) => Some(Vec::from(m.simulate(theta)?)),
+            _ => None,
+        };
+        let modes = match &self.long {
+            Some(m) if wants(ViewKind::ShuffleModes) => {
                 let p = m.plant(theta)?.driveline;
-                Ok(vec![modal_channel::simulate(
+                Some(modal_channel::simulate(
                     &self.modes,
                     &p,
                     m.ratios(),
                     self.log.len(),
-                )])
+                ))
             }
-            (Domain::Longitudinal, Some(m), _) => {
-                let o = m.simulate(theta)?;
-                Ok(vec![o.vehicle_speed, o.engine_speed])
-            }
-            (Domain::Axle, _, Some(m)) => Ok(m.simulate(theta)?.into()),
-            _ => Ok(Vec::new()),
+            _ => None,
+        };
+        let mut out = Vec::with_capacity(self.views.len());
+        for (v, w) in self.views.iter().zip(which) {
+            out.push(match (w, v.kind) {
+                (false, _) => None,
+                (true, ViewKind::Speeds) => long
+                    .as_ref()
+                    .map(|o| vec![o.vehicle_speed.clone(), o.engine_speed.clone()]),
+                (true, ViewKind::ShuffleModes) => modes.clone().map(|y| vec![y]),
+                (true, ViewKind::Pressures) => axle.clone(),
+            });
         }
+        Ok(out)
     }
 
     /// Per-channel weights `σ_c` of the channels `chans` (module documentation; `outputs` one
