@@ -24,8 +24,9 @@
 //! faster than the gear's input speed `i_t i_f v / r_w`. Why that margin: right after a launch
 //! locks, the 1st-gear shuffle swings the engine speed against the wheels by up to ~100 rpm
 //! (overall ratio ~46), and those locked samples carry less than the capacity (measured on the
-//! 66 proof drives: a 50 rpm margin put clean launches' ratios as low as 0.3, 150 rpm kept 187
-//! of 190 clean launches within 0.84–0.99). `ω̇_e` is the centred difference over
+//! 66 proof drives: a 50 rpm margin put clean launches' ratios as low as 0.3, 150 rpm kept 177
+//! of 181 launches of drives without a clutch or engine-torque effect within 0.84–0.99,
+//! `docs/events.md`). `ω̇_e` is the centred difference over
 //! ±[`EventConfig::derivative_halfwidth_s`].
 //!
 //! # Torque reversals
