@@ -4,6 +4,7 @@
 pub mod catalogue;
 pub mod compare;
 pub mod contract;
+pub mod events;
 pub mod explain;
 pub mod extended;
 pub mod fit;
