@@ -748,6 +748,7 @@ fn signal_words(name: &str) -> &str {
     match name {
         "vehicle_speed" => "speed",
         "engine_speed" => "engine speed",
+        "shuffle_frequency" => "shuffle frequency (after clutch engagements)",
         "bellow_pressure_front" => "front bellow pressure",
         "bellow_pressure_rear" => "rear bellow pressure",
         "bellow_pressure_tag" => "tag bellow pressure",
@@ -833,9 +834,10 @@ fn sentence(
             v.to_degrees()
         ),
         DrivelineCompliance => format!(
-            "the drive shaft is {:.0} % {} than the vehicle file says, {ci}: shuffle frequency and decay mismatch",
+            "the drive shaft is {:.0} % {} than the vehicle file says, {ci}: the shuffle rings {} after clutch engagements than the nominal driveline's mode",
             pct.abs(),
-            more("stiffer", "softer")
+            more("stiffer", "softer"),
+            more("faster", "slower")
         ),
         EngineTorqueOffset => format!(
             "the reported engine torque is {:.0} N·m {} the delivered torque, {ci}: residual force ∝ gear ratio, constant in torque",
@@ -843,7 +845,7 @@ fn sentence(
             if v >= 0.0 { "above" } else { "below" }
         ),
         ClutchSlip => format!(
-            "the clutch transmits at most {:.0} N·m, {:.0} % {} than the vehicle file says, {ci}: engine speed mismatch while the clutch is actuated",
+            "the clutch transmits at most {:.0} N·m, {:.0} % {} than the vehicle file says, {ci}: the engine speed runs away from the gearbox's where the clutch slips (engagements, full load)",
             v,
             pct.abs(),
             more("more", "less")
@@ -888,13 +890,23 @@ fn sentence(
         });
     let mut s = head;
     if let Some((name, m)) = best {
-        s.push_str(&format!(
-            "; held-out {} RMSE {} → {} {}",
-            signal_words(name),
-            num(m.rmse.heldout_before),
-            num(m.rmse.heldout_after),
-            m.unit
-        ));
+        if m.unit == "1" {
+            // a relative error (the shuffle frequency's ln f residual), in per cent
+            s.push_str(&format!(
+                "; held-out {} RMS error {:.1} % → {:.1} %",
+                signal_words(name),
+                100.0 * m.rmse.heldout_before,
+                100.0 * m.rmse.heldout_after,
+            ));
+        } else {
+            s.push_str(&format!(
+                "; held-out {} RMSE {} → {} {}",
+                signal_words(name),
+                num(m.rmse.heldout_before),
+                num(m.rmse.heldout_after),
+                m.unit
+            ));
+        }
     }
     if !ambiguous.is_empty() {
         s.push_str(&format!(

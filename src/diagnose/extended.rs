@@ -26,7 +26,10 @@
 //! [`LongitudinalModel::simulate`]: vehicle and engine speed on the log's rows, from windows
 //! re-initialised at the measured state ([`crate::sim::validate`]) every 20 s and after every
 //! stretch whose inputs the recording does not determine ([`window_starts`]): open-loop drift cannot
-//! accumulate over more than one window. [`AxleModel::simulate`]: the three bellow pressures on
+//! accumulate over more than one window. A window starts with the clutch locked when it reads
+//! closed and the truck moves, unless the measured engine speed runs more than
+//! [`SLIP_START_MIN_RAD_S`] above the locked driveline's (a clutch slipping under load); then,
+//! as with an open or actuated clutch, it starts slipping from the measured engine speed. [`AxleModel::simulate`]: the three bellow pressures on
 //! the log's rows, open loop from the steady state (the suspension is stable, nothing drifts).
 
 use super::catalogue::Effect;
@@ -320,6 +323,15 @@ fn filled(log: &DriveLog, name: &str) -> Result<Vec<f64>, ExtendedError> {
         })
 }
 
+/// Engine speed above the locked driveline's at which a window with the clutch closed starts
+/// slipping instead of locked ([`LongitudinalModel::simulate`]), rad/s (150 rpm). Why that
+/// margin: right after a clutch closes the first-gear shuffle swings the engine against the
+/// wheels by up to ~100 rpm (docs/events.md), and a window that starts slipping on such a
+/// swing locks again within milliseconds under the clutch's full capacity, whereas a clutch
+/// that cannot carry the engine torque (`clutch_slip` at full load: measured 100–390 rpm
+/// for tens of seconds on the proof) keeps slipping — which a locked start never reproduces.
+pub const SLIP_START_MIN_RAD_S: f64 = 150.0 * std::f64::consts::PI / 30.0;
+
 /// Start times of the longitudinal model's windows on `log`, s from the first row: every
 /// `window_s`, and wherever the recording determines the model's mode again after a stretch it
 /// did not ([`super::compare::longitudinal_rows`] switching back on: a clutch transition, a
@@ -522,7 +534,11 @@ impl<'a> LongitudinalModel<'a> {
             let x = sc.clutch_x.eval(ta + 1e-9);
             let (mut y0, _) = steady_state_locked(p, self.ratios, gear, v0, slope, sc.smoothing);
             let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
-            let mode = if engaged && v0 >= self.cfg.min_speed_mps {
+            // a closed clutch whose engine runs well above the gearbox slips (a worn clutch
+            // under full torque): the window starts slipping from the measured engine speed
+            let we = interp(&self.t, &self.w_meas, ta);
+            let slipping = we.is_finite() && we - y0[0] > SLIP_START_MIN_RAD_S;
+            let mode = if engaged && v0 >= self.cfg.min_speed_mps && !slipping {
                 ClutchMode::Locked
             } else {
                 let we = interp(&self.t, &self.w_meas, ta);

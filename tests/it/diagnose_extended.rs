@@ -233,3 +233,42 @@ fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
         assert!(x.is_finite() && x < 2.0, "{x}");
     }
 }
+
+/// A worn clutch that cannot carry the engine's full torque (kinetic capacity 2438 N·m, static
+/// 3048 N·m: it breaks loose in a transient and keeps slipping at full load, as on the proof's
+/// case 53 — the same road, seed and magnitude, without the proof's CAN dropouts): the
+/// recording's engine speed runs above the gearbox's for tens of seconds with the clutch
+/// closed. The windows start slipping where the measured engine speed is more than 150 rpm
+/// above the locked driveline's (`SLIP_START_MIN_RAD_S`), so the model at the true capacity
+/// follows the slip that a locked start would snap shut.
+#[test]
+fn a_clutch_slipping_under_full_load_is_reproduced_at_its_true_capacity() {
+    let dir = tempfile::tempdir().unwrap();
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.01);
+    let worn = 2438.3;
+    let hidden = HiddenEffect {
+        choice: EffectChoice::Given(Effect::ClutchSlip, Some(worn)),
+        answer_path: dir.path().join("answer.json"),
+    };
+    let d = synth_drive(
+        &fixture(VEHICLE),
+        "highway-se",
+        6.0,
+        54,
+        &dir.path().join("d"),
+        &DriveConfig::default(),
+        Some(&hidden),
+    )
+    .unwrap();
+    let mut th = nominal;
+    th.set(Effect::ClutchSlip, worn);
+    let before = error(&d, &truth, &ratios, &nominal, Domain::Longitudinal);
+    let after = error(&d, &truth, &ratios, &th, Domain::Longitudinal);
+    eprintln!("clutch_slip {worn} N·m: nominal {before:.2}, at truth {after:.2}");
+    // the truth must explain most of the mismatch (the fixed rule asks 25 % of held-out RMSE;
+    // measured 8.43 -> 4.06, and 8.50 -> 8.26 with every closed-clutch window started locked)
+    assert!(after < 0.5 * before, "{before} -> {after}");
+}
