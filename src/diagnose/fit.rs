@@ -470,23 +470,32 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         }
     }
 
-    /// Fewest effective train samples ([`effective_samples`]) over the channels of the time
-    /// series views of `active` (infinite when there is none; an events view has its own
-    /// count, [`Evaluator::deviance`]).
+    /// Fewest effective train samples ([`effective_samples`]) over the channels of the pooled
+    /// views of `active` (the speeds, the pressures; an own-term view has its own count in
+    /// [`Evaluator::deviance`]); when `active` has no pooled view, the fewest over its own-term
+    /// views, so that the figure reported with a fit is always a sample count.
     pub fn n_eff(&self, x: &Eval, active: &[bool]) -> f64 {
-        let mut n = f64::INFINITY;
-        for (m, v) in self.models.iter().enumerate() {
-            if active[m] && !v.own_term {
-                for (k, &c) in v.chans.iter().enumerate() {
-                    n = n.min(effective_samples(
-                        &self.problem.channels()[c],
-                        &x.outputs[m][k],
-                        Part::Train,
-                    ));
+        let fewest = |own: bool| {
+            let mut n = f64::INFINITY;
+            for (m, v) in self.models.iter().enumerate() {
+                if active[m] && v.own_term == own {
+                    for (k, &c) in v.chans.iter().enumerate() {
+                        n = n.min(effective_samples(
+                            &self.problem.channels()[c],
+                            &x.outputs[m][k],
+                            Part::Train,
+                        ));
+                    }
                 }
             }
+            n
+        };
+        let n = fewest(false);
+        if n.is_finite() {
+            n
+        } else {
+            fewest(true)
         }
-        n
     }
 
     /// Cluster-robust effective sample count of a fit at `best` with sensitivity `a` over the

@@ -833,7 +833,7 @@ pub fn fit_shaft_stiffness(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A deterministic Gaussian-ish noise (sum of 12 uniforms − 6, xorshift), unit variance.
@@ -1110,7 +1110,7 @@ mod tests {
     }
 
     /// The proof's vehicle (seed 002 6×2 diesel): driveline parameters and gear ratios.
-    fn vehicle() -> (DrivelineParams, Vec<f64>) {
+    pub(crate) fn vehicle() -> (DrivelineParams, Vec<f64>) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("fixtures/vehicles/seed002-6x2-diesel.toml");
         let vf = crate::model::vehicle::VehicleFile::load(&path).expect("bundled vehicle");

@@ -110,10 +110,10 @@ pub fn measure(
 }
 
 /// The simulated channel on `n` rows for the driveline `p`: `ln f` of the linearised mode on
-/// each sample's row, 0 on every other row (not valid there). A sample whose linearised
-/// driveline has no oscillating mode gets `ln f` of 0 Hz's neighbour, −∞ replaced by the
-/// measured value minus 10 (a residual far outside any floor rather than a NaN that would
-/// poison the sums).
+/// each sample's row, 0 on every other row (not valid there). Where the linearised driveline
+/// of `p` has no oscillating mode (parameters far outside any truck's), the sample's measured
+/// value minus 10 stands in: a residual far outside any floor, rather than a NaN or −∞ that
+/// would poison the sums.
 pub fn simulate(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64], n: usize) -> Vec<f64> {
     let mut out = vec![0.0; n];
     for s in samples {
@@ -131,13 +131,7 @@ pub fn simulate(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64], n: 
 mod tests {
     use super::*;
 
-    /// The proof's vehicle (seed 002 6×2 diesel): driveline parameters and gear ratios.
-    fn vehicle() -> (DrivelineParams, Vec<f64>) {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("fixtures/vehicles/seed002-6x2-diesel.toml");
-        let vf = crate::model::vehicle::VehicleFile::load(&path).expect("bundled vehicle");
-        (vf.driveline.expect("has a driveline"), vf.gearbox.ratios)
-    }
+    use crate::diagnose::modal::tests::vehicle;
 
     #[test]
     fn the_simulated_channel_follows_stiffness_and_mass_on_its_rows_only() {
