@@ -341,7 +341,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     }
 
     /// The pooled views of `active` (its own-term views switched off).
-    pub fn series(&self, active: &[bool]) -> Vec<bool> {
+    pub fn pooled(&self, active: &[bool]) -> Vec<bool> {
         active
             .iter()
             .zip(&self.models)
@@ -357,16 +357,16 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// as an independent Gaussian sample with its own variance profiled out, `N_v` its
     /// effective train samples at `r` ([`effective_samples`]: the engagements). A group `x` and
     /// `r` both leave at zero cost adds nothing.
-    pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_series: f64) -> f64 {
-        let series = self.series(active);
+    pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_pooled: f64) -> f64 {
+        let pooled = self.pooled(active);
         let mut d = 0.0;
-        if series.contains(&true) {
+        if pooled.contains(&true) {
             let (jx, jr) = (
-                self.cost(x, &series, Part::Train),
-                self.cost(r, &series, Part::Train),
+                self.cost(x, &pooled, Part::Train),
+                self.cost(r, &pooled, Part::Train),
             );
             if jx > 0.0 && jr > 0.0 {
-                d += n_series.max(1.0) * (jx / jr).ln();
+                d += n_pooled.max(1.0) * (jx / jr).ln();
             }
         }
         for (m, v) in self.models.iter().enumerate() {
@@ -499,8 +499,8 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     }
 
     /// Cluster-robust effective sample count of a fit at `best` with sensitivity `a` over the
-    /// models of `active` (module documentation): `(N_cl, B)`, `B` the train blocks with valid
-    /// rows.
+    /// pooled views of `active` (module documentation; [`Evaluator::pooled`]): `(N_cl, B)`, `B`
+    /// the train blocks with valid rows.
     fn cluster_n_eff(
         &self,
         best: &Eval,
@@ -510,13 +510,13 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         let ch = self.problem.channels();
         let block = &self.problem.split().block;
         let nb = block.iter().copied().max().map_or(0, |b| b + 1);
-        let series = self.series(active);
-        let n_act = series.iter().filter(|x| **x).count().max(1) as f64;
+        let pooled = self.pooled(active);
+        let n_act = pooled.iter().filter(|x| **x).count().max(1) as f64;
         let mut g = vec![0.0; nb];
         let mut used = vec![false; nb];
         let mut h = 0.0;
         for (m, v) in self.models.iter().enumerate() {
-            if !series[m] {
+            if !pooled[m] {
                 continue;
             }
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
@@ -536,7 +536,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             return None;
         }
         let v = b as f64 / (b - 1) as f64 * g.iter().map(|x| x * x).sum::<f64>() / (h * h);
-        let j = self.cost(best, &series, Part::Train);
+        let j = self.cost(best, &pooled, Part::Train);
         let n = if v > 0.0 { j / (h * v) } else { f64::INFINITY };
         Some((n, b))
     }
