@@ -749,6 +749,7 @@ fn signal_words(name: &str) -> &str {
         "vehicle_speed" => "speed",
         "engine_speed" => "engine speed",
         "shuffle_frequency" => "shuffle frequency (after clutch engagements)",
+        "reversal_relative_speed" => "engine-against-wheel speed at torque reversals",
         "bellow_pressure_front" => "front bellow pressure",
         "bellow_pressure_rear" => "rear bellow pressure",
         "bellow_pressure_tag" => "tag bellow pressure",

@@ -332,6 +332,11 @@ fn filled(log: &DriveLog, name: &str) -> Result<Vec<f64>, ExtendedError> {
 /// for tens of seconds on the proof) keeps slipping — which a locked start never reproduces.
 pub const SLIP_START_MIN_RAD_S: f64 = 150.0 * std::f64::consts::PI / 30.0;
 
+/// How far a regular window start keeps from an engine-torque step, s ([`window_starts`]): the
+/// 0.3 s of the step test plus the [`crate::diagnose::reversal_channel`] reference window's
+/// 0.5 s and a margin.
+pub const STEP_CLEAR_S: f64 = 1.0;
+
 /// Start times of the longitudinal model's windows on `log`, s from the first row: every
 /// `window_s`, and wherever the recording determines the model's mode again after a stretch it
 /// did not ([`super::compare::longitudinal_rows`] switching back on: a clutch transition, a
@@ -339,6 +344,18 @@ pub const SLIP_START_MIN_RAD_S: f64 = 150.0 * std::f64::consts::PI / 30.0;
 /// rows inside such a stretch do not count, but an error the model makes there (measured on
 /// clean synthetic drives: 0.1 m/s after one upshift on a climb, from the clutch closing
 /// between two 10 Hz samples) would otherwise be carried as a speed offset to the window's end.
+///
+/// A regular start that falls on an engine-torque step (more than
+/// [`super::compare::TORQUE_STEP_NM`] within [`super::compare::STEP_WINDOW_S`], detected from
+/// 0.3 s before the start to [`STEP_CLEAR_S`] after it) with the clutch closed (≤ 2 %) and a
+/// gear held from the new start to [`STEP_CLEAR_S`] after the old one (not a shift's torque
+/// recovery) moves to
+/// [`STEP_CLEAR_S`] before the step's first detection: a window started on a step begins with the new torque's shaft
+/// twists, so it never crosses a lash or rings as the drive did (measured on the proof's
+/// case 28, a tip-out at 260.0 s: +80 rpm of engine-speed residual at the nominal and at the
+/// true lash alike, docs/events.md). The moved window's first rows then lie in the block
+/// before; they are simulated from the measured state like every window's, so no fitted
+/// quantity crosses the split.
 pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     let n = log.len();
     if n == 0 {
@@ -347,8 +364,52 @@ pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     let t: Vec<f64> = log.seconds_from_start();
     let end = t[n - 1];
     let regular = (end / window_s).ceil().max(1.0) as usize;
-    let mut starts: Vec<f64> = (0..regular).map(|k| k as f64 * window_s).collect();
+    let torque = log
+        .signal("engine_torque")
+        .and_then(|m| crate::signal::distance::fill_gaps(m, crate::schema::Interpolation::Linear));
+    let step_at = |a: f64, b: f64| -> Option<f64> {
+        let m = torque.as_ref()?;
+        let lo = t.partition_point(|&x| x < a);
+        let hi = t.partition_point(|&x| x <= b);
+        (lo..hi).map(|i| t[i]).find(|&ti| {
+            let i = t.partition_point(|&x| x < ti);
+            let j = t.partition_point(|&x| x < ti - super::compare::STEP_WINDOW_S);
+            (m[i] - m[j]).abs() > super::compare::TORQUE_STEP_NM
+        })
+    };
     let ok = super::compare::longitudinal_rows(log);
+    let held = |c: &str| {
+        log.signal(c)
+            .and_then(|g| crate::signal::distance::fill_gaps(g, crate::schema::Interpolation::Hold))
+    };
+    let (gear, clutch) = (held("gear"), held("clutch_position"));
+    // the clutch closed and the gear held over [a, b]: not a shift's torque recovery
+    let steady = |a: f64, b: f64| {
+        let lo = t.partition_point(|&x| x < a);
+        let hi = t.partition_point(|&x| x <= b);
+        hi > lo
+            && gear
+                .as_ref()
+                .is_none_or(|g| (lo..hi).all(|i| g[i].round() == g[lo].round() && g[i] >= 0.5))
+            && clutch
+                .as_ref()
+                .is_none_or(|c| (lo..hi).all(|i| c[i] <= 0.02))
+    };
+    let mut starts: Vec<f64> = (0..regular)
+        .map(|k| {
+            let s = k as f64 * window_s;
+            match step_at(s - 0.3, s + STEP_CLEAR_S) {
+                Some(ts)
+                    if k > 0
+                        && ts - STEP_CLEAR_S > (k - 1) as f64 * window_s + 2.0
+                        && steady(ts - STEP_CLEAR_S, s + STEP_CLEAR_S) =>
+                {
+                    ts - STEP_CLEAR_S
+                }
+                _ => s,
+            }
+        })
+        .collect();
     for i in 1..n {
         if ok[i] && !ok[i - 1] {
             let next_regular = ((t[i] / window_s).floor() + 1.0) * window_s;
@@ -423,6 +484,11 @@ impl<'a> LongitudinalModel<'a> {
     /// Times of the rows, s from the first.
     pub fn times(&self) -> &[f64] {
         &self.t
+    }
+
+    /// Start times of the windows ([`window_starts`]), s from the first row.
+    pub fn window_starts(&self) -> &[f64] {
+        &self.starts
     }
 
     /// Gear ratios of the nominal vehicle (1st gear first).

@@ -14,5 +14,6 @@ pub mod modal_channel;
 pub mod noise;
 pub mod problem;
 pub mod prove;
+pub mod reversal_channel;
 pub mod run;
 pub mod setup;

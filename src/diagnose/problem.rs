@@ -55,6 +55,7 @@ use super::catalogue::Domain;
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
 use super::modal::ModalConfig;
 use super::modal_channel::{self, ModeSample};
+use super::reversal_channel::{self, ReversalSample};
 use crate::signal::quantization::estimate_quantization;
 use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
@@ -233,6 +234,7 @@ pub struct Problem<'a> {
     left_out: Vec<String>,
     nominal_outputs: Vec<Vec<Vec<f64>>>,
     modes: Vec<ModeSample>,
+    reversals: Vec<ReversalSample>,
     views: Vec<View>,
 }
 
@@ -256,6 +258,8 @@ pub enum ViewKind {
     Speeds,
     /// `shuffle_frequency` ([`super::modal_channel`]).
     ShuffleModes,
+    /// `reversal_relative_speed` ([`super::reversal_channel`]).
+    Reversals,
     /// The three bellow pressures.
     Pressures,
 }
@@ -265,7 +269,7 @@ impl ViewKind {
     /// the modes are another quantity than the speeds and the pressures, which are pooled as
     /// largely redundant.
     pub fn own_term(self) -> bool {
-        matches!(self, ViewKind::ShuffleModes)
+        matches!(self, ViewKind::ShuffleModes | ViewKind::Reversals)
     }
 }
 
@@ -389,6 +393,7 @@ impl<'a> Problem<'a> {
             }
         };
         let mut modes = Vec::new();
+        let mut reversals = Vec::new();
         if let Some(m) = &long {
             let steady = super::compare::longitudinal_rows(log);
             let moving: Vec<bool> = m
@@ -459,6 +464,52 @@ impl<'a> Problem<'a> {
                 channels.push(ch);
                 modes = samples;
             }
+            // the driveline's relative speed at torque reversals (super::reversal_channel)
+            let samples = reversal_channel::measure(
+                log,
+                m.measured_speed(),
+                m.measured_engine_speed(),
+                m.window_starts(),
+                &nominal_truth.driveline,
+                ratios,
+                long_cfg.min_speed_mps,
+            );
+            let held = samples.iter().filter(|s| split.heldout[s.row]).count();
+            let min = reversal_channel::MIN_REVERSALS_PER_PART;
+            let speeds_nominal = &views[0].1;
+            if held >= min && samples.len() - held >= min && speeds_nominal.len() == 2 {
+                let n = log.len();
+                let (mut meas, mut valid, mut w) = (vec![0.0; n], vec![false; n], vec![0.0; n]);
+                for s in &samples {
+                    meas[s.row] = s.value;
+                    valid[s.row] = true;
+                    w[s.row] = s.weight;
+                }
+                let mut ch = mk(
+                    reversal_channel::NAME,
+                    reversal_channel::UNIT,
+                    Domain::Longitudinal,
+                    meas,
+                    valid,
+                );
+                ch.events = Some(EventWeights(w));
+                let y = reversal_channel::simulate(
+                    &samples,
+                    &t_s,
+                    &speeds_nominal[1],
+                    &speeds_nominal[0],
+                );
+                views.push((
+                    View {
+                        domain: Domain::Longitudinal,
+                        kind: ViewKind::Reversals,
+                        chans: vec![channels.len()],
+                    },
+                    vec![y],
+                ));
+                channels.push(ch);
+                reversals = samples;
+            }
         }
         if axle.is_some() {
             views.push((
@@ -514,6 +565,7 @@ impl<'a> Problem<'a> {
             left_out,
             nominal_outputs,
             modes,
+            reversals,
             views,
         })
     }
@@ -611,7 +663,9 @@ impl<'a> Problem<'a> {
     ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
         let wants = |k: ViewKind| self.views.iter().zip(which).any(|(v, w)| *w && v.kind == k);
         let long = match &self.long {
-            Some(m) if wants(ViewKind::Speeds) => Some(m.simulate(theta)?),
+            Some(m) if wants(ViewKind::Speeds) || wants(ViewKind::Reversals) => {
+                Some(m.simulate(theta)?)
+            }
             _ => None,
         };
         let axle = match &self.axle {
@@ -638,6 +692,14 @@ impl<'a> Problem<'a> {
                     .as_ref()
                     .map(|o| vec![o.vehicle_speed.clone(), o.engine_speed.clone()]),
                 (true, ViewKind::ShuffleModes) => modes.clone().map(|y| vec![y]),
+                (true, ViewKind::Reversals) => long.as_ref().map(|o| {
+                    vec![reversal_channel::simulate(
+                        &self.reversals,
+                        &self.t_s,
+                        &o.engine_speed,
+                        &o.vehicle_speed,
+                    )]
+                }),
                 (true, ViewKind::Pressures) => axle.clone(),
             });
         }

@@ -272,3 +272,62 @@ fn a_clutch_slipping_under_full_load_is_reproduced_at_its_true_capacity() {
     // measured 8.43 -> 4.06, and 8.50 -> 8.26 with every closed-clutch window started locked)
     assert!(after < 0.5 * before, "{before} -> {after}");
 }
+
+/// A 60 s drive in 10th gear, the clutch closed, whose engine torque steps from 1000 to
+/// −250 N·m at 40.2 s — just after the regular window start at 40 s; `shift` opens the
+/// clutch over 39.4–39.8 s as a shift would.
+fn step_log(shift: bool) -> fleetdyn::table::DriveLog {
+    use fleetdyn::table::{DriveLog, Signal};
+    let n = 3000;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.02).collect();
+    let sig = |name: &str, unit: &str, values: Vec<f64>| Signal {
+        name: name.into(),
+        unit: unit.into(),
+        values,
+    };
+    let torque = t
+        .iter()
+        .map(|&x| if x < 40.2 { 1000.0 } else { -250.0 })
+        .collect();
+    let clutch = t
+        .iter()
+        .map(|&x| {
+            if shift && (39.4..39.8).contains(&x) {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    DriveLog {
+        timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
+        signals: vec![
+            sig("vehicle_speed", "m/s", vec![15.0; n]),
+            sig("engine_speed", "rad/s", vec![150.0; n]),
+            sig("engine_torque", "N.m", torque),
+            sig("gear", "1", vec![10.0; n]),
+            sig("clutch_position", "1", clutch),
+        ],
+        ..DriveLog::default()
+    }
+}
+
+#[test]
+fn a_window_does_not_start_on_a_torque_step_with_the_clutch_closed() {
+    use fleetdyn::diagnose::extended::{window_starts, STEP_CLEAR_S};
+    let starts = window_starts(&step_log(false), 20.0);
+    // the regular starts at 0 and 20 s stay; the one at 40 s moves to 1 s before the step's
+    // first detection (the ±0.1 s mean of the torque has fallen 600 N·m within 0.3 s by
+    // 40.2 s + ~0.02 s)
+    assert_eq!(&starts[..2], &[0.0, 20.0]);
+    assert_eq!(starts.len(), 3, "{starts:?}");
+    let moved = starts[2];
+    assert!(
+        (40.2 - STEP_CLEAR_S - 0.1..40.2 - STEP_CLEAR_S + 0.1).contains(&moved),
+        "{starts:?}"
+    );
+    // with a shift just before it, the step is the shift's torque recovery: the start stays
+    // (moving it would start the window inside the shift)
+    let with_shift = window_starts(&step_log(true), 20.0);
+    assert!(with_shift.contains(&40.0), "{with_shift:?}");
+}

@@ -1,0 +1,127 @@
+//! The reversal channel ([`fleetdyn::diagnose::reversal_channel`]) on the drives of a proof run
+//! (`fleetdyn prove`): per case and reversal, the measured feature, the diagnosis' windowed
+//! model's feature at the nominal parameters and at the hidden truth (any catalogue effect),
+//! in rpm. The summary gives the rms of `measured − nominal` on the drives without an effect —
+//! the model's own error of the feature, from which [`FLOOR_RAD_S`] is set. The answer file
+//! is read only to label the case and to set the truth.
+//!
+//! ```text
+//! cargo run --release --example reversal_floor -- DIR [case-0006 …]
+//! ```
+
+use fleetdyn::diagnose::catalogue::Effect;
+use fleetdyn::diagnose::reversal_channel::{measure, simulate, FLOOR_RAD_S};
+use fleetdyn::diagnose::setup::Setup;
+use std::path::{Path, PathBuf};
+
+const RPM: f64 = 30.0 / std::f64::consts::PI;
+
+/// (label, hidden catalogue effect and its truth value).
+fn answer(dir: &Path, case: &str) -> (String, Option<(Effect, f64)>) {
+    let Ok(s) = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json"))) else {
+        return ("?".into(), None);
+    };
+    let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
+    let e = &v["effect"];
+    if e.is_null() {
+        let l = if v["out_of_catalogue"].is_null() {
+            "none"
+        } else {
+            "out_of_catalogue"
+        };
+        return (l.into(), None);
+    }
+    let id = e["id"].as_str().unwrap_or("?");
+    let truth = e["truth"].as_f64().unwrap_or(f64::NAN);
+    (id.into(), Effect::from_id(id).ok().map(|e| (e, truth)))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let dir = PathBuf::from(args.next().ok_or("usage: reversal_floor DIR [case…]")?);
+    let mut cases: Vec<String> = args.collect();
+    if cases.is_empty() {
+        let mut all: Vec<String> = std::fs::read_dir(dir.join("drives"))?
+            .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect();
+        all.sort();
+        cases = all;
+    }
+    let mut clean: Vec<(f64, f64)> = Vec::new(); // (residual, noise-only weight part)
+    for case in &cases {
+        let d = dir.join("drives").join(case);
+        let (label, hidden) = answer(&dir, case);
+        let vf = fleetdyn::model::vehicle::VehicleFile::load(&d.join("vehicle.toml"))?;
+        let opts =
+            fleetdyn::pipeline::ingest_stage::IngestConfig::default().options(&[], Some(&vf))?;
+        let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
+        let setup = Setup::new(&log, &vf)?;
+        let Some(model) = setup.longitudinal_model(&log)? else {
+            continue;
+        };
+        let samples = measure(
+            &log,
+            model.measured_speed(),
+            model.measured_engine_speed(),
+            model.window_starts(),
+            &setup.nominal_truth.driveline,
+            model.ratios(),
+            1.0,
+        );
+        if samples.is_empty() {
+            println!("{case} [{label}]: no reversal samples");
+            continue;
+        }
+        let t = model.times();
+        let nominal = model.simulate(&setup.nominal)?;
+        let y_nom = simulate(&samples, t, &nominal.engine_speed, &nominal.vehicle_speed);
+        let y_truth = match hidden {
+            Some((e, v)) => {
+                let mut th = setup.nominal;
+                th.set(e, v);
+                let s = model.simulate(&th)?;
+                Some(simulate(&samples, t, &s.engine_speed, &s.vehicle_speed))
+            }
+            None => None,
+        };
+        println!("{case} [{label}]: {} reversal samples", samples.len());
+        for s in &samples {
+            let r_nom = s.value - y_nom[s.row];
+            let noise_sd = (1.0 / s.weight - FLOOR_RAD_S * FLOOR_RAD_S).max(0.0).sqrt();
+            println!(
+                "  {:7.2} s gear {:2} {}: measured {:+6.1} rpm, nominal {:+6.1} (residual {:+6.1}){}, noise sd {:.1} rpm",
+                t[s.row],
+                s.gear,
+                if s.direction > 0.0 { "tip-in " } else { "tip-out" },
+                s.value * RPM,
+                y_nom[s.row] * RPM,
+                r_nom * RPM,
+                y_truth.as_ref().map_or(String::new(), |y| format!(
+                    ", truth {:+6.1} (residual {:+6.1})",
+                    y[s.row] * RPM,
+                    (s.value - y[s.row]) * RPM
+                )),
+                noise_sd * RPM,
+            );
+            if label == "none" {
+                clean.push((r_nom, noise_sd));
+            }
+        }
+    }
+    if !clean.is_empty() {
+        let n = clean.len() as f64;
+        let ms = clean.iter().map(|c| c.0 * c.0).sum::<f64>() / n;
+        let noise = clean.iter().map(|c| c.1 * c.1).sum::<f64>() / n;
+        let mut abs: Vec<f64> = clean.iter().map(|c| c.0.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        println!(
+            "no-effect drives: {} reversals, rms(measured − nominal) {:.2} rpm, mean noise variance {:.2} rpm², median |r| {:.2} rpm, max |r| {:.2} rpm",
+            clean.len(),
+            ms.sqrt() * RPM,
+            noise * RPM * RPM,
+            abs[abs.len() / 2] * RPM,
+            abs[abs.len() - 1] * RPM
+        );
+    }
+    Ok(())
+}
