@@ -25,13 +25,16 @@
 //! sensor effects) the bellow pressures as well — found from the screen's probe (outputs that
 //! change), not assumed. The unit is a *view* of a model ([`super::problem::View`]): the
 //! longitudinal model's speeds, its shuffle modes (one sample per clutch engagement,
-//! [`super::modal_channel`]), the axle model's bellow pressures. An effect is fitted and scored
-//! on the views it changes, so the shuffle modes count for the shaft stiffness and the mass
-//! (which move them) and never dilute the speeds' figures for an effect that leaves them alone
-//! (drag, delay, lash, …). The cost is the mean over those views of each view's weighted mean
-//! square; within a view every signal counts alike (weights `σ_c`: step 2's noise floor when
-//! given, else the signal's train RMS residual at the round's parameters; an engagement's own
-//! standard error for the modes; [`super::problem`]).
+//! [`super::modal_channel`]), its torque reversals (the engine's speed against the wheels,
+//! one sample per reversal, [`super::reversal_channel`]), the axle model's bellow pressures.
+//! An effect is fitted and scored on the views it changes, so the shuffle modes count for the
+//! shaft stiffness and the mass (which move them) and the reversals for the lash, the
+//! stiffness and the torque signal's delay, and neither dilutes the speeds' figures for an
+//! effect that leaves them alone (drag, rolling resistance, …). The cost is the mean over
+//! those views of each view's weighted mean square; within a view every signal counts alike
+//! (weights `σ_c`: step 2's noise floor when given, else the signal's train RMS residual at
+//! the round's parameters; an engagement's own standard error for the modes, a reversal's
+//! noise and floor for the reversals; [`super::problem`]).
 //!
 //! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
 //! advance holds")

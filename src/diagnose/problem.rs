@@ -10,6 +10,9 @@
 //!   and `shuffle_frequency`, an events channel: `ln f` of the ringing after each
 //!   clutch engagement against the linearised driveline's mode, one weighted sample per
 //!   engagement ([`super::modal_channel`]), when at least two engagements fall in each part;
+//!   and `reversal_relative_speed`, an events channel: the engine's speed against the wheels
+//!   at each engine-torque reversal with the clutch closed, one weighted sample per reversal
+//!   ([`super::reversal_channel`]), when at least one reversal falls in each part;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
 //!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
@@ -18,11 +21,12 @@
 //!
 //! # Views
 //! The explain step scores channels in groups, [`View`]s: the longitudinal model's speeds,
-//! its shuffle modes, and the axle model's bellow pressures. An effect is fitted and scored on
-//! the views it changes materially ([`super::explain`]), so a view that only a few effects can
-//! move (the modes: the stiffness and the mass) never dilutes the figures of the others. The
-//! speeds and the pressures are pooled in the deviance as largely redundant; the modes are a
-//! term of their own ([`ViewKind::own_term`]).
+//! its shuffle modes, its torque reversals, and the axle model's bellow pressures. An effect is
+//! fitted and scored on the views it changes materially ([`super::explain`]), so a view that
+//! only a few effects can move (the modes: the stiffness and the mass; the reversals: the
+//! lash, the stiffness, the torque signal's delay) never dilutes the figures of the others.
+//! The speeds and the pressures are pooled in the deviance as largely redundant; the modes and
+//! the reversals are terms of their own ([`ViewKind::own_term`]).
 //!
 //! # Train / held-out split: alternating blocks in time
 //! The drive is cut into contiguous blocks of whole longitudinal windows (block length
@@ -239,7 +243,7 @@ pub struct Problem<'a> {
 }
 
 /// A group of one model's channels that the explain step scores together: the longitudinal
-/// model's speeds, its shuffle modes, the axle model's bellow pressures.
+/// model's speeds, its shuffle modes, its torque reversals, the axle model's bellow pressures.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct View {
     /// Model whose outputs they are.
@@ -266,8 +270,8 @@ pub enum ViewKind {
 
 impl ViewKind {
     /// Whether the view is its own term of the deviance ([`super::fit::Evaluator::deviance`]):
-    /// the modes are another quantity than the speeds and the pressures, which are pooled as
-    /// largely redundant.
+    /// the modes and the reversals are other quantities than the speeds and the pressures,
+    /// which are pooled as largely redundant.
     pub fn own_term(self) -> bool {
         matches!(self, ViewKind::ShuffleModes | ViewKind::Reversals)
     }

@@ -67,12 +67,12 @@ pub const SMOOTHING_HALFWIDTH_S: f64 = 0.04;
 pub const QUIET_BEFORE_START_S: f64 = 0.6;
 /// The model's own error of the feature, rad/s (1.9 rpm): a standard deviation per reversal.
 /// Measured with `examples/reversal_floor.rs` on `fleetdyn prove --seed 1`: on the 12 drives
-/// without an effect, `measured − nominal` has an rms of 1.21 rpm over 56 reversals (the
-/// recording's noise accounts for 0.71 rpm of it), at most 3.7 rpm; on the drives whose
-/// hidden effect does not act at a reversal (mass, drag, the axle effects, …) it reaches
-/// 6.8 rpm at the hidden truth. 0.2 rad/s keeps a clean drive's standardised residuals below 1
-/// in rms and those outliers within 3.5 σ, while the lash's 6–12 rpm at the proof's lashes
-/// stand at 3–6 σ each.
+/// without an effect, `measured − nominal` has an rms of 1.28 rpm over 61 reversals (the
+/// recording's noise accounts for 0.71 rpm of it), at most 3.1 rpm; on the drives whose
+/// hidden effect does not act at a reversal (rolling resistance, torque offset, the axle
+/// effects, …) it reaches 4.6 rpm at the hidden truth. 0.2 rad/s keeps a clean drive's
+/// standardised residuals below 1 in rms and those outliers within 2.5 σ, while the lash's
+/// 6–12 rpm at the proof's lashes stand at 3–6 σ each.
 pub const FLOOR_RAD_S: f64 = 0.2;
 /// Fewest reversals in each part of the split for the channel to be used.
 pub const MIN_REVERSALS_PER_PART: usize = 1;
