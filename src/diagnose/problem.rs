@@ -396,6 +396,28 @@ impl<'a> Problem<'a> {
                 held_idx,
             }
         };
+        // an events channel of the longitudinal model from (row, measured value, weight)
+        // samples, when at least `min` fall in each part of the split
+        let events_channel = |name: &str,
+                              unit: &'static str,
+                              min: usize,
+                              samples: &[(usize, f64, f64)]|
+         -> Option<Channel> {
+            let held = samples.iter().filter(|s| split.heldout[s.0]).count();
+            if held < min || samples.len() - held < min {
+                return None;
+            }
+            let n = log.len();
+            let (mut meas, mut valid, mut w) = (vec![0.0; n], vec![false; n], vec![0.0; n]);
+            for &(row, value, weight) in samples {
+                meas[row] = value;
+                valid[row] = true;
+                w[row] = weight;
+            }
+            let mut ch = mk(name, unit, Domain::Longitudinal, meas, valid);
+            ch.events = Some(EventWeights(w));
+            Some(ch)
+        };
         let mut modes = Vec::new();
         let mut reversals = Vec::new();
         if let Some(m) = &long {
@@ -434,24 +456,14 @@ impl<'a> Problem<'a> {
                 ratios,
                 &ModalConfig::default(),
             );
-            let held = samples.iter().filter(|s| split.heldout[s.row]).count();
+            let events: Vec<(usize, f64, f64)> = samples
+                .iter()
+                .map(|s| (s.row, s.ln_frequency, s.weight))
+                .collect();
             let min = modal_channel::MIN_ENGAGEMENTS_PER_PART;
-            if held >= min && samples.len() - held >= min {
+            if let Some(ch) = events_channel(modal_channel::NAME, modal_channel::UNIT, min, &events)
+            {
                 let n = log.len();
-                let (mut meas, mut valid, mut w) = (vec![0.0; n], vec![false; n], vec![0.0; n]);
-                for s in &samples {
-                    meas[s.row] = s.ln_frequency;
-                    valid[s.row] = true;
-                    w[s.row] = s.weight;
-                }
-                let mut ch = mk(
-                    modal_channel::NAME,
-                    modal_channel::UNIT,
-                    Domain::Longitudinal,
-                    meas,
-                    valid,
-                );
-                ch.events = Some(EventWeights(w));
                 views.push((
                     View {
                         domain: Domain::Longitudinal,
@@ -478,25 +490,12 @@ impl<'a> Problem<'a> {
                 ratios,
                 long_cfg.min_speed_mps,
             );
-            let held = samples.iter().filter(|s| split.heldout[s.row]).count();
+            let events: Vec<(usize, f64, f64)> =
+                samples.iter().map(|s| (s.row, s.value, s.weight)).collect();
             let min = reversal_channel::MIN_REVERSALS_PER_PART;
             let speeds_nominal = &views[0].1;
-            if held >= min && samples.len() - held >= min && speeds_nominal.len() == 2 {
-                let n = log.len();
-                let (mut meas, mut valid, mut w) = (vec![0.0; n], vec![false; n], vec![0.0; n]);
-                for s in &samples {
-                    meas[s.row] = s.value;
-                    valid[s.row] = true;
-                    w[s.row] = s.weight;
-                }
-                let mut ch = mk(
-                    reversal_channel::NAME,
-                    reversal_channel::UNIT,
-                    Domain::Longitudinal,
-                    meas,
-                    valid,
-                );
-                ch.events = Some(EventWeights(w));
+            let ch = events_channel(reversal_channel::NAME, reversal_channel::UNIT, min, &events);
+            if let (Some(ch), 2) = (ch, speeds_nominal.len()) {
                 let y = reversal_channel::simulate(
                     &samples,
                     &t_s,
