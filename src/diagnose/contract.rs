@@ -295,6 +295,7 @@ pub fn signal_unit(signal: &str) -> &'static str {
     match signal {
         "vehicle_speed" => "m/s",
         "engine_speed" => "rad/s",
+        super::reversal_channel::NAME => super::reversal_channel::UNIT,
         s if s.starts_with("bellow_pressure") => "Pa",
         s if s.starts_with("suspension_travel") => "m",
         _ => "1",
@@ -386,6 +387,14 @@ mod tests {
         ] {
             assert!(!f["fit"]["vehicle_speed"][k].is_null(), "{k}");
         }
+    }
+
+    #[test]
+    fn the_event_channels_carry_their_own_units() {
+        assert_eq!(signal_unit("reversal_relative_speed"), "rad/s");
+        assert_eq!(signal_unit("shuffle_frequency"), "1");
+        assert_eq!(signal_unit("engine_speed"), "rad/s");
+        assert_eq!(signal_unit("bellow_pressure_tag"), "Pa");
     }
 
     #[test]
