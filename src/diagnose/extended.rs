@@ -349,13 +349,13 @@ pub const STEP_CLEAR_S: f64 = 1.0;
 /// [`super::compare::TORQUE_STEP_NM`] within [`super::compare::STEP_WINDOW_S`], detected from
 /// 0.3 s before the start to [`STEP_CLEAR_S`] after it) with the clutch closed (≤ 2 %) and a
 /// gear held from the new start to [`STEP_CLEAR_S`] after the old one (not a shift's torque
-/// recovery) moves to
-/// [`STEP_CLEAR_S`] before the step's first detection: a window started on a step begins with the new torque's shaft
-/// twists, so it never crosses a lash or rings as the drive did (measured on the proof's
-/// case 28, a tip-out at 260.0 s: +80 rpm of engine-speed residual at the nominal and at the
-/// true lash alike, docs/events.md). The moved window's first rows then lie in the block
-/// before; they are simulated from the measured state like every window's, so no fitted
-/// quantity crosses the split.
+/// recovery) moves to [`STEP_CLEAR_S`] before the step's first detection, if the window
+/// before keeps at least 2 s. Why: a window started on a step begins with the new torque's
+/// shaft twists, so it never crosses a lash or rings as the drive did (measured on the
+/// proof's case 28, a tip-out at 260.0 s: +80 rpm of engine-speed residual at the nominal and
+/// at the true lash alike, docs/events.md). The moved window's first rows then lie in the
+/// block before; they are simulated from the measured state like every window's, so no
+/// fitted quantity crosses the split.
 pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     let n = log.len();
     if n == 0 {
@@ -367,15 +367,18 @@ pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     let torque = log
         .signal("engine_torque")
         .and_then(|m| crate::signal::distance::fill_gaps(m, crate::schema::Interpolation::Linear));
+    // the first time in [a, b] whose torque differs by more than a step from STEP_WINDOW_S
+    // earlier (compare::away_from_steps' test)
     let step_at = |a: f64, b: f64| -> Option<f64> {
         let m = torque.as_ref()?;
         let lo = t.partition_point(|&x| x < a);
         let hi = t.partition_point(|&x| x <= b);
-        (lo..hi).map(|i| t[i]).find(|&ti| {
-            let i = t.partition_point(|&x| x < ti);
-            let j = t.partition_point(|&x| x < ti - super::compare::STEP_WINDOW_S);
-            (m[i] - m[j]).abs() > super::compare::TORQUE_STEP_NM
-        })
+        (lo..hi)
+            .find(|&i| {
+                let j = t.partition_point(|&x| x < t[i] - super::compare::STEP_WINDOW_S);
+                (m[i] - m[j]).abs() > super::compare::TORQUE_STEP_NM
+            })
+            .map(|i| t[i])
     };
     let ok = super::compare::longitudinal_rows(log);
     let held = |c: &str| {

@@ -350,7 +350,8 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     }
 
     /// Deviance of `x` against the reference `r` on the views of `active`,
-    /// `D = n_pooled ln(J_p(x)/J_p(r)) + Σ_own N_v ln(J_v(x)/J_v(r))` on the train part: the
+    /// `D = n_pooled ln(J_p(x)/J_p(r)) + Σ_own N_v (J_v(x) − J_v(r)) / max(1, J_v(r))` on the
+    /// train part: the
     /// speeds and pressures pooled (`J_p` the mean of their weighted mean squares, `n_pooled`
     /// their effective sample count — the fewest over their largely redundant channels,
     /// [`Evaluator::n_eff`], or the cluster count), and each own-term view (the shuffle modes,

@@ -12,12 +12,15 @@
 //!
 //! # The channel `reversal_relative_speed`
 //! - **Events**: the torque reversals of [`super::events::torque_reversals`] (engine torque
-//!   crossing ±60 N·m within 1 s, clutch closed and gear held from 1.5 s before to 2 s after),
-//!   at a measured speed of at least the model's minimum, with every sample of the engine and
-//!   vehicle speed recorded (not a filled gap) over [`REF_WINDOW_S`]`.0` … [`PEAK_WINDOW_S`]`.1`
-//!   around it, and no start of the model's windows ([`super::extended::window_starts`]) within
-//!   [`QUIET_BEFORE_START_S`] before it to [`PEAK_WINDOW_S`]`.1` after it (a window started at
-//!   the reversal begins on the new flank and cannot cross the lash, docs/events.md).
+//!   crossing ±60 N·m within 1 s, clutch closed and gear held from [`QUIET_BEFORE_START_S`]
+//!   before to 0.6 s after), at a measured speed of at least the model's minimum over the
+//!   windows, with the engine and vehicle speed recorded over [`REF_WINDOW_S`]`.0` …
+//!   [`PEAK_WINDOW_S`]`.1` around it (no gap between samples longer than
+//!   [`MAX_SAMPLE_GAP_S`]: a dropout's fill is not a measurement), and no start of the
+//!   model's windows ([`super::extended::window_starts`]) within [`QUIET_BEFORE_START_S`]
+//!   before it to [`PEAK_WINDOW_S`]`.1` after it (a window started at the reversal begins on
+//!   the new flank and cannot cross the lash, docs/events.md; one started inside the windows
+//!   would copy the measured dip).
 //! - **Feature** of a pair of speed traces (measured or simulated alike): the relative speed
 //!   `u = ω_e − G v` of the engine against the wheels (`G = i_t i_f / r_w` of the held gear, the
 //!   nominal vehicle's), averaged over ±[`SMOOTHING_HALFWIDTH_S`], its extreme in the direction
