@@ -121,6 +121,15 @@ pub fn deviance_threshold(n_acf: f64, cluster: Option<(f64, usize)>) -> (f64, f6
     }
 }
 
+/// Deviance of an events view ([`Evaluator::deviance`]): `n (j_x − j_r) / max(1, j_r)` for `n`
+/// events whose standardised mean square (each residual over its own known standard
+/// deviation) is `j_x` at the tested parameters and `j_r` at the reference — the χ²
+/// difference of known-variance samples, scaled by the reference's overdispersion when its
+/// residual exceeds the known variances (a quasi-likelihood).
+pub fn events_deviance(n: f64, j_x: f64, j_r: f64) -> f64 {
+    n * (j_x - j_r) / j_r.max(1.0)
+}
+
 /// How an effect's parameter is screened and fitted.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct FitSpec {
@@ -392,9 +401,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
                     })
                     .fold(f64::INFINITY, f64::min);
                 if n.is_finite() {
-                    // known variances (the events' own weights), overdispersion estimated
-                    // from the reference's residual but never below them
-                    d += n * (x.train[m] - r.train[m]) / r.train[m].max(1.0);
+                    d += events_deviance(n, x.train[m], r.train[m]);
                 }
             }
         }
@@ -1084,5 +1091,31 @@ pub fn profile_interval(
         lo,
         hi,
         evaluations: n1 + n2,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_events_view_fitted_exactly_keeps_a_finite_interval() {
+        // one event fitted to a near-zero residual: a value one standard deviation off scores
+        // a deviance of 1 (inside the 95 % interval's 3.84), where the profiled form
+        // 1 · ln(1 / 1e-6) = 13.8 would exclude it
+        let d = events_deviance(1.0, 1.0, 1e-6);
+        assert!((d - 1.0).abs() < 1e-5, "{d}");
+        assert!(d < CHI2_1_95);
+        assert!((1.0f64 / 1e-6).ln() > CHI2_1_95);
+        // 2 σ off: excluded
+        assert!(events_deviance(1.0, 4.0, 0.0) > CHI2_1_95);
+        // zero at the reference; grows with the events' count
+        assert_eq!(events_deviance(7.0, 0.8, 0.8), 0.0);
+        assert_eq!(events_deviance(10.0, 1.5, 0.5), 10.0);
+        // a reference residual four times the known variance: the evidence counts a quarter
+        assert_eq!(events_deviance(10.0, 8.0, 4.0), 10.0);
+        // and near a good reference it agrees with the profiled form to first order
+        let (jr, jx): (f64, f64) = (1.0, 1.01);
+        assert!((events_deviance(20.0, jx, jr) - 20.0 * (jx / jr).ln()).abs() < 1e-3);
     }
 }
