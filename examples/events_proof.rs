@@ -15,37 +15,12 @@ use fleetdyn::diagnose::events::{
     launch_clutch_torques, reversal_residual_peaks, torque_reversals, Channels, EventConfig,
 };
 use fleetdyn::diagnose::setup::Setup;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+
+#[path = "common/proof_dir.rs"]
+mod proof_dir;
 
 const RPM: f64 = 30.0 / std::f64::consts::PI;
-
-/// (label, hidden effect and truth value when it is one of the two).
-fn answer(dir: &Path, case: &str) -> (String, Option<(Effect, f64)>) {
-    let Ok(s) = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json"))) else {
-        return ("?".into(), None);
-    };
-    let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
-    let e = &v["effect"];
-    if e.is_null() {
-        let l = if v["out_of_catalogue"].is_null() {
-            "none"
-        } else {
-            "out_of_catalogue"
-        };
-        return (l.into(), None);
-    }
-    let id = e["id"].as_str().unwrap_or("?");
-    let truth = e["truth"].as_f64().unwrap_or(f64::NAN);
-    let label = match e["relative_change"].as_f64() {
-        Some(r) => format!("{id} {:+.0}%", 100.0 * r),
-        None => format!("{id} {truth:.4}"),
-    };
-    let hidden = Effect::from_id(id)
-        .ok()
-        .filter(|e| matches!(e, Effect::ClutchSlip | Effect::DrivelineBacklash))
-        .map(|e| (e, truth));
-    (label, hidden)
-}
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -63,22 +38,16 @@ fn median(v: &mut [f64]) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let dir = PathBuf::from(args.next().ok_or("usage: events_proof DIR [case…]")?);
-    let mut cases: Vec<String> = args.collect();
-    if cases.is_empty() {
-        let mut all: Vec<String> = std::fs::read_dir(dir.join("drives"))?
-            .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
-            .collect();
-        all.sort();
-        cases = all;
-    }
+    let cases = proof_dir::cases(&dir, args.collect())?;
     let cfg = EventConfig::default();
     for case in &cases {
-        let d = dir.join("drives").join(case);
-        let (label, hidden) = answer(&dir, case);
-        let vf = fleetdyn::model::vehicle::VehicleFile::load(&d.join("vehicle.toml"))?;
-        let opts =
-            fleetdyn::pipeline::ingest_stage::IngestConfig::default().options(&[], Some(&vf))?;
-        let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
+        let answer = proof_dir::answer(&dir, case);
+        let label = answer.label;
+        // the truth is set only for the two effects the study is about
+        let hidden = answer
+            .effect
+            .filter(|(e, _)| matches!(e, Effect::ClutchSlip | Effect::DrivelineBacklash));
+        let (vf, log) = proof_dir::load(&dir, case)?;
         let (Some(dl), Some(ch)) = (vf.driveline.as_ref(), Channels::from_log(&log)) else {
             println!("{case} [{label}]: no driveline or channels");
             continue;

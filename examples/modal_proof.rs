@@ -19,34 +19,10 @@ use fleetdyn::diagnose::modal::{
     compare_modes, fit_shaft_stiffness, summarise, ModalComparison, ModalConfig, Reference,
 };
 use fleetdyn::diagnose::setup::Setup;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-fn answer(dir: &Path, case: &str) -> String {
-    let Ok(s) = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json"))) else {
-        return "?".into();
-    };
-    let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
-    match v.get("effect") {
-        Some(e) if !e.is_null() => {
-            let id = e["id"].as_str().unwrap_or("?");
-            match e["relative_change"].as_f64() {
-                Some(r) => format!("{id} {:+.0}%", 100.0 * r),
-                None => format!("{id} {:.4}", e["truth"].as_f64().unwrap_or(f64::NAN)),
-            }
-        }
-        _ if !v["out_of_catalogue"].is_null() => "out_of_catalogue".into(),
-        _ => "none".into(),
-    }
-}
-
-fn truth(dir: &Path, case: &str) -> Option<(String, f64)> {
-    let s = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json"))).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&s).ok()?;
-    Some((
-        v["effect"]["id"].as_str()?.to_string(),
-        v["effect"]["truth"].as_f64()?,
-    ))
-}
+#[path = "common/proof_dir.rs"]
+mod proof_dir;
 
 fn shift(c: &ModalComparison) -> Option<(f64, usize)> {
     c.test.map(|t| (t.mean_shift, t.n))
@@ -67,22 +43,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             cases.push(a);
         }
     }
-    if cases.is_empty() {
-        let mut all: Vec<String> = std::fs::read_dir(dir.join("drives"))?
-            .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
-            .collect();
-        all.sort();
-        cases = all;
-    }
+    let cases = proof_dir::cases(&dir, cases)?;
     let cfg = ModalConfig::default();
     let mut table = Vec::new();
     for case in &cases {
-        let d = dir.join("drives").join(case);
-        let label = answer(&dir, case);
-        let vf = fleetdyn::model::vehicle::VehicleFile::load(&d.join("vehicle.toml"))?;
-        let opts =
-            fleetdyn::pipeline::ingest_stage::IngestConfig::default().options(&[], Some(&vf))?;
-        let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
+        let answer = proof_dir::answer(&dir, case);
+        let label = answer.label;
+        let (vf, log) = proof_dir::load(&dir, case)?;
         let setup = Setup::new(&log, &vf)?;
         let Some(model) = setup.longitudinal_model(&log)? else {
             println!("{case} [{label}]: no longitudinal model");
@@ -172,8 +139,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         let k0 = setup.nominal.get(Effect::DrivelineCompliance);
-        let hidden = truth(&dir, case)
-            .filter(|(id, _)| id == "driveline_compliance")
+        let hidden = answer
+            .effect
+            .filter(|(e, _)| *e == Effect::DrivelineCompliance)
             .map(|(_, t)| t);
         let kfit = fit_shaft_stiffness(&by_sim.engagements, dl, &setup.ratios, &cfg);
         if let Some(k) = kfit {

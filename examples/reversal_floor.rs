@@ -9,52 +9,26 @@
 //! cargo run --release --example reversal_floor -- DIR [case-0006 …]
 //! ```
 
-use fleetdyn::diagnose::catalogue::Effect;
 use fleetdyn::diagnose::reversal_channel::{measure, simulate, FLOOR_RAD_S};
 use fleetdyn::diagnose::setup::Setup;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+
+#[path = "common/proof_dir.rs"]
+mod proof_dir;
 
 const RPM: f64 = 30.0 / std::f64::consts::PI;
-
-/// (label, hidden catalogue effect and its truth value).
-fn answer(dir: &Path, case: &str) -> (String, Option<(Effect, f64)>) {
-    let Ok(s) = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json"))) else {
-        return ("?".into(), None);
-    };
-    let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
-    let e = &v["effect"];
-    if e.is_null() {
-        let l = if v["out_of_catalogue"].is_null() {
-            "none"
-        } else {
-            "out_of_catalogue"
-        };
-        return (l.into(), None);
-    }
-    let id = e["id"].as_str().unwrap_or("?");
-    let truth = e["truth"].as_f64().unwrap_or(f64::NAN);
-    (id.into(), Effect::from_id(id).ok().map(|e| (e, truth)))
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let dir = PathBuf::from(args.next().ok_or("usage: reversal_floor DIR [case…]")?);
-    let mut cases: Vec<String> = args.collect();
-    if cases.is_empty() {
-        let mut all: Vec<String> = std::fs::read_dir(dir.join("drives"))?
-            .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
-            .collect();
-        all.sort();
-        cases = all;
-    }
+    let cases = proof_dir::cases(&dir, args.collect())?;
     let mut clean: Vec<(f64, f64)> = Vec::new(); // (residual, noise-only weight part)
     for case in &cases {
-        let d = dir.join("drives").join(case);
-        let (label, hidden) = answer(&dir, case);
-        let vf = fleetdyn::model::vehicle::VehicleFile::load(&d.join("vehicle.toml"))?;
-        let opts =
-            fleetdyn::pipeline::ingest_stage::IngestConfig::default().options(&[], Some(&vf))?;
-        let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
+        let proof_dir::Answer {
+            label,
+            effect: hidden,
+        } = proof_dir::answer(&dir, case);
+        let (vf, log) = proof_dir::load(&dir, case)?;
         let setup = Setup::new(&log, &vf)?;
         let Some(model) = setup.longitudinal_model(&log)? else {
             continue;
