@@ -35,7 +35,7 @@
 //!   engine and vehicle speeds at θ on the same rows.
 //! - **Weight** of sample `i`: `1 / (s_noise² + s_floor²)`, `s_noise` the standard deviation
 //!   the recording's noise gives the measured feature (engine speed and `G`× vehicle speed, each
-//!   with its own rms noise, estimated from the sample-to-sample differences of the drive) and
+//!   with its own rms error from the drive's sensor estimate, [`super::noise`]) and
 //!   `s_floor` = [`FLOOR_RAD_S`], the model's own error of the feature on drives without an
 //!   effect (module constant's documentation). The channel's `σ_c` is 1, so a residual within
 //!   its standard errors scores about 1 like a speed residual at its noise floor.
@@ -71,7 +71,7 @@ pub const QUIET_BEFORE_START_S: f64 = 0.6;
 /// The model's own error of the feature, rad/s (1.9 rpm): a standard deviation per reversal.
 /// Measured with `examples/reversal_floor.rs` on `fleetdyn prove --seed 1`: on the 12 drives
 /// without an effect, `measured − nominal` has an rms of 1.28 rpm over 61 reversals (the
-/// recording's noise accounts for 0.71 rpm of it), at most 3.1 rpm; on the drives whose
+/// recording's noise accounts for 0.77 rpm of it), at most 3.1 rpm; on the drives whose
 /// hidden effect does not act at a reversal (rolling resistance, torque offset, the axle
 /// effects, …) it reaches 4.6 rpm at the hidden truth. 0.2 rad/s keeps a clean drive's
 /// standardised residuals below 1 in rms and those outliers within 2.5 σ, while the lash's
@@ -139,18 +139,25 @@ pub fn feature(t: &[f64], w: &[f64], v: &[f64], t0: f64, direction: f64, g: f64)
     direction * extreme - reference
 }
 
-/// Rms noise of a recorded signal (its recorded samples only, in order) from the differences
-/// of consecutive samples: the median of `|Δ|` over 0.6745 √2 (a Gaussian's), robust to the
-/// signal's own steps; 0 with fewer than two samples.
-fn noise_rms(raw: &[f64]) -> f64 {
-    let x: Vec<f64> = raw.iter().copied().filter(|x| x.is_finite()).collect();
-    let mut d: Vec<f64> = x.windows(2).map(|p| (p[1] - p[0]).abs()).collect();
-    if d.is_empty() {
+/// Rms error of the recorded column `name` (noise and quantisation, the sensor estimate of
+/// step 2's noise floor: [`super::noise::estimate_sensor_noise`]'s `sigma_raw`); 0 when it
+/// cannot be estimated (the floor then carries the weight alone).
+fn sensor_rms(log: &DriveLog, name: &str) -> f64 {
+    let (Some(s), Ok(dt)) = (
+        log.signals.iter().find(|s| s.name == name),
+        super::noise::grid_step_s(log),
+    ) else {
         return 0.0;
-    }
-    let mid = d.len() / 2;
-    d.select_nth_unstable_by(mid, f64::total_cmp);
-    d[mid] / (0.6745 * std::f64::consts::SQRT_2)
+    };
+    super::noise::estimate_sensor_noise(
+        &s.name,
+        &s.unit,
+        &s.values,
+        dt,
+        super::noise::SampleKind::of_column(name),
+    )
+    .map_or(0.0, |e| e.sigma_raw)
+    .max(0.0)
 }
 
 /// Longest time without a recorded sample inside a reversal's windows for it to count, s: more
@@ -206,7 +213,10 @@ pub fn measure(
         return Vec::new();
     }
     let t = &ch.t_s;
-    let (sw, sv) = (noise_rms(w_raw), noise_rms(v_raw));
+    let (sw, sv) = (
+        sensor_rms(log, "engine_speed"),
+        sensor_rms(log, "vehicle_speed"),
+    );
     let reversals: Vec<TorqueReversal> = torque_reversals(&ch, &event_config());
     reversals
         .into_iter()
