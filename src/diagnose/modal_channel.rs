@@ -102,7 +102,11 @@ pub fn measure(
         .filter_map(|e| {
             let r = e.rows.clone();
             let fit = fit_damped_sinusoid(&t[r.clone()], &engine_speed[r], cfg).ok()?;
-            if !e.speed_mps.is_finite() || e.gear > ratios.len() || !(fit.r2 >= MIN_R2) {
+            if !e.speed_mps.is_finite()
+                || e.gear > ratios.len()
+                || fit.r2.is_nan()
+                || fit.r2 < MIN_R2
+            {
                 return None;
             }
             let nominal = locked_mode(p, ratios, e.gear, e.speed_mps)?;
