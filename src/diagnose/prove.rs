@@ -382,6 +382,9 @@ pub struct ProofSummary {
     pub named_correct: f64,
     /// Catalogue drives whose truth was only in the ambiguity set, share.
     pub ambiguous_correct: f64,
+    /// Catalogue drives with a finding that names neither the hidden effect nor lists it in
+    /// its ambiguity set — a confidently wrong name — share.
+    pub named_wrong: f64,
     /// Catalogue drives whose hidden effect, set to its truth with nothing fitted, passes
     /// rules 1 and 2 of the acceptance rule ([`CaseScore::oracle_visible`]).
     pub visible: usize,
@@ -482,6 +485,13 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
             catalogue.iter().filter(|s| s.ambiguous_correct).count(),
             n_catalogue,
         ),
+        named_wrong: share(
+            catalogue
+                .iter()
+                .filter(|s| !s.correct && !s.ambiguous_correct && !s.findings.is_empty())
+                .count(),
+            n_catalogue,
+        ),
         visible: visible.len(),
         catalogue: n_catalogue,
         named_correct_visible: share(visible.iter().filter(|s| s.correct).count(), visible.len()),
@@ -579,6 +589,11 @@ impl ProofSummary {
             s,
             "| hidden effect only in the ambiguity set | {} |",
             pct(self.ambiguous_correct)
+        );
+        let _ = writeln!(
+            s,
+            "| catalogue drives named a wrong effect, the hidden one not in its ambiguity set | {} |",
+            pct(self.named_wrong)
         );
         let _ = writeln!(
             s,
@@ -1126,8 +1141,18 @@ mod tests {
             600.0,
             3.0,
         );
-        let sum = summarize(&[s1, s2, s3], &[]);
-        assert_eq!(sum.named_correct, 1.0);
+        // a catalogue drive named a wrong effect with no ambiguity set
+        let s4 = score(
+            &case(aero.hidden),
+            &aero,
+            &diag(Some(("vehicle_mass", 20_000.0)), Verdict::Explained),
+            600.0,
+            2.0,
+        );
+        assert!(!s4.correct && !s4.ambiguous_correct);
+        let sum = summarize(&[s1, s2, s3, s4], &[]);
+        assert_eq!(sum.named_correct, 0.5);
+        assert_eq!(sum.named_wrong, 0.5);
         assert_eq!(sum.false_positive_rate, 0.5);
         assert_eq!(sum.median_seconds, 2.0);
         assert!(sum.to_markdown().contains("| aero_drag | 1 |"));
