@@ -8,9 +8,11 @@
 //! signal, `F = Σ r² / Σ σ²` over the rows that count, σ² the floor's per-row null variance
 //! (the mean of the Monte-Carlo copies' squared null residuals in the same rows). Under "no
 //! mismatch" `Σ r²` is a scaled χ²_ν and the copies' mean a scaled χ²_{Kν}/K, so
-//! `F ~ F(ν, K·ν)`; ν is the window's effective degrees of freedom from the null's
-//! autocorrelation ([`NoiseFloor::effective_dof`]; the longitudinal null is correlated over
-//! the model's 20 s re-initialisation windows, so ν is small there and the test honest). The
+//! `F ~ F(ν, K·ν)`; ν is the window's effective degrees of freedom, the smaller of the one
+//! from the null's autocorrelation (the longitudinal null is correlated over the model's 20 s
+//! re-initialisation windows, so ν is small there) and the one the copies' own spread in the
+//! window gives ([`NoiseFloor::window_dof`]: the pooled autocorrelation is stationary, the
+//! null is not), so the test claims no more evidence than the null shows. The
 //! p-values of **every window of every signal** of the drive form one family, corrected by
 //! Holm's step-down method at α = [`LocateConfig::alpha`] (0.01): the chance that a drive
 //! without mismatch shows any significant window is at most α. A window is a mismatch when its
@@ -1062,7 +1064,7 @@ fn windows_of(s: &Compared, floor: &NoiseFloor, c: &Cond<'_>, cfg: &LocateConfig
         }
         let qw: f64 = rows.iter().map(|&i| residual[i] * residual[i]).sum();
         let ew: f64 = rows.iter().map(|&i| floor.null_variance[i]).sum();
-        let nu = floor.effective_dof(&rows);
+        let nu = floor.window_dof(&rows);
         let f = qw / ew;
         let (a, b) = (rows[0], rows[rows.len() - 1]);
         windows.push(WindowTest {

@@ -1048,6 +1048,10 @@ pub struct NoiseFloor {
     /// Autocorrelation of the normalised null, lags 0.. (rows); `ρ(0) = 1`.
     #[serde(skip)]
     pub autocorrelation: Vec<f64>,
+    /// The null copies themselves, per copy and row (NaN where the row does not count), kept
+    /// in single precision for [`NoiseFloor::window_dof`].
+    #[serde(skip)]
+    pub null_copies: Vec<Vec<f32>>,
     /// Null PSD (`None` when no valid stretch is as long as a segment).
     #[serde(skip)]
     pub null_psd: Option<NullPsd>,
@@ -1251,6 +1255,14 @@ impl NoiseFloor {
             sensor: None,
             null_variance,
             autocorrelation,
+            null_copies: copies
+                .iter()
+                .map(|c| {
+                    (0..n)
+                        .map(|i| if usable[i] { c[i] as f32 } else { f32::NAN })
+                        .collect()
+                })
+                .collect(),
             null_psd,
         })
     }
@@ -1329,6 +1341,47 @@ impl NoiseFloor {
         } else {
             total.max(1.0)
         }
+    }
+
+    /// Degrees of freedom of a window's `Σ r²` over `rows` for the window test of
+    /// [`super::locate`]: the smaller of [`NoiseFloor::effective_dof`] (from the drive-wide
+    /// autocorrelation) and Satterthwaite's `ν = 2 E[Q]² / Var[Q]` of the copies' own sums
+    /// `Q_c = Σ_rows e_c²` over the same rows (at least 1).
+    ///
+    /// Why both: the drive-wide autocorrelation is stationary, but the null is not — the
+    /// longitudinal null restarts at every re-initialisation window, the input noise it
+    /// integrates differs between a steady cruise and a shift sequence — so the pooled
+    /// autocorrelation can give a window more degrees of freedom than its own null has. The
+    /// copies show the window's own null: measured on `fleetdyn prove --seed 1001`, a clean
+    /// drive's engine-speed window (case 38, 20–30 s, a climb through gears 5–8; 2.3 × its
+    /// floor) has ν = 23 from the autocorrelation but 2.0 from its copies, and tested at
+    /// p = 4·10⁻¹² as a mismatch; at ν = 2.0 its p is 0.013, not one after Holm. With only 12 copies the variance is itself uncertain
+    /// (its relative standard error is about √(2/11) ≈ 0.43); taking the smaller of the two
+    /// keeps the test from claiming more evidence than either supports.
+    pub fn window_dof(&self, rows: &[usize]) -> f64 {
+        let nu_acf = self.effective_dof(rows);
+        let k = self.null_copies.len();
+        if k < 2 || rows.is_empty() {
+            return nu_acf;
+        }
+        let q: Vec<f64> = self
+            .null_copies
+            .iter()
+            .map(|c| {
+                rows.iter()
+                    .map(|&r| f64::from(c.get(r).copied().unwrap_or(f32::NAN)))
+                    .filter(|x| x.is_finite())
+                    .map(|x| x * x)
+                    .sum::<f64>()
+            })
+            .collect();
+        let mean = q.iter().sum::<f64>() / k as f64;
+        let var = q.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1) as f64;
+        if !(var > 0.0 && mean > 0.0) {
+            return nu_acf;
+        }
+        let nu_sat = 2.0 * mean * mean / var;
+        nu_acf.min(nu_sat).max(1.0)
     }
 }
 
@@ -1799,5 +1852,43 @@ mod tests {
         let rows: Vec<usize> = (0..500).collect();
         let nu = f.effective_dof(&rows);
         assert!(nu > 400.0 && nu <= 500.0, "{nu}");
+        // the copies agree: white rows keep their degrees of freedom (Satterthwaite's estimate
+        // from 12 copies has a relative error of about 0.43, so only its order is pinned)
+        assert!(f.window_dof(&rows) > 150.0, "{}", f.window_dof(&rows));
+    }
+
+    #[test]
+    fn a_window_whose_null_is_one_offset_has_about_one_dof_whatever_the_pooled_correlation() {
+        // first half white, second half one constant offset per 200-row block (a start-state
+        // error held through a re-initialisation window): the pooled autocorrelation is a mix
+        // of the two, the copies inside one block are not
+        let cfg = NoiseConfig::default();
+        let n = 4000;
+        let copies: Vec<Vec<f64>> = (0..12)
+            .map(|c| {
+                let mut r = stream(5, c, "w");
+                let mut offset = 0.0;
+                (0..n)
+                    .map(|i| {
+                        if i < n / 2 {
+                            r.standard_normal()
+                        } else {
+                            if (i - n / 2) % 200 == 0 {
+                                offset = r.standard_normal();
+                            }
+                            offset
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let f =
+            NoiseFloor::from_null_copies("w", "1", 0.02, &copies, &vec![true; n], &cfg).unwrap();
+        let block: Vec<usize> = (2200..2400).collect();
+        let (acf, own) = (f.effective_dof(&block), f.window_dof(&block));
+        assert!(own < 3.0, "window_dof {own}");
+        assert!(own < acf, "window_dof {own} vs effective_dof {acf}");
+        // both are at least 1
+        assert!(own >= 1.0);
     }
 }
