@@ -69,7 +69,8 @@
 //! # What the floor carries
 //! [`NoiseFloor`]: the per-row null variance `mean_c e_c²` (unit²), the autocorrelation of the
 //! normalised null (for the effective degrees of freedom of a sum of squared residuals over a
-//! window, [`NoiseFloor::effective_dof`]), the null's Welch PSD (for band powers), and the split
+//! window, [`NoiseFloor::effective_dof`]), the copies themselves (for a window's own degrees of
+//! freedom, [`NoiseFloor::window_dof`]), the null's Welch PSD (for band powers), and the split
 //! into measurement and input parts (RMS). The scalar floor (diagnosis.json `noise_floor`) is the
 //! RMS of the null over the rows that count.
 //!
