@@ -1356,9 +1356,10 @@ impl NoiseFloor {
     /// copies show the window's own null: measured on `fleetdyn prove --seed 1001`, a clean
     /// drive's engine-speed window (case 38, 20–30 s, a climb through gears 5–8; 2.3 × its
     /// floor) has ν = 23 from the autocorrelation but 2.0 from its copies, and tested at
-    /// p = 4·10⁻¹² as a mismatch; at ν = 2.0 its p is 0.013, not one after Holm. With only 12 copies the variance is itself uncertain
-    /// (its relative standard error is about √(2/11) ≈ 0.43); taking the smaller of the two
-    /// keeps the test from claiming more evidence than either supports.
+    /// p = 4·10⁻¹² as a mismatch; at ν = 2.0 its p is 0.013, not one after Holm. With few
+    /// copies `K` the variance is itself uncertain (relative standard error about
+    /// `√(2/(K−1))`, 0.43 at the default 12); taking the smaller of the two keeps the test from
+    /// claiming more evidence than either supports.
     pub fn window_dof(&self, rows: &[usize]) -> f64 {
         let nu_acf = self.effective_dof(rows);
         let k = self.null_copies.len();
