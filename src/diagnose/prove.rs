@@ -171,6 +171,18 @@ pub struct GeneratedCase {
     pub truth: ProofTruth,
 }
 
+/// The generator settings of `case`'s drive: a fine (0.1 %) slope sensor, `cfg`'s dropouts and
+/// a stop every 1–3 km (by the drive seed), so every drive has standstills and launches.
+pub fn drive_config(case: &ProofCase, cfg: &ProofConfig) -> DriveConfig {
+    let mut dc = DriveConfig {
+        slope_resolution: 0.001,
+        dropouts: Some(cfg.dropouts),
+        ..DriveConfig::default()
+    };
+    dc.driver.stop_every_m = Some(1000.0 + (case.seed % 3) as f64 * 1000.0);
+    dc
+}
+
 /// Generates `case` with the vehicle of `vehicle`: the drive into `drives_dir/<index>/`, the
 /// answer into `answers_dir/<index>.json`.
 ///
@@ -191,20 +203,13 @@ pub fn generate(
         Hidden::Effect(e) => EffectChoice::Given(e, None),
         Hidden::OutOfCatalogue => EffectChoice::LocalRollingResistance,
     };
-    let mut dc = DriveConfig {
-        slope_resolution: 0.001,
-        dropouts: Some(cfg.dropouts),
-        ..DriveConfig::default()
-    };
-    // a stop every 1–3 km: standstills and launches in every drive
-    dc.driver.stop_every_m = Some(1000.0 + (case.seed % 3) as f64 * 1000.0);
     let r = synth_drive(
         vehicle,
         case.rules,
         case.length_km,
         case.seed,
         &dir,
-        &dc,
+        &drive_config(case, cfg),
         Some(&HiddenEffect {
             choice,
             answer_path: answer.clone(),
