@@ -1,0 +1,301 @@
+//! A nominal model's residual on one drive of a proof run (`fleetdyn prove`) traced to its
+//! inputs: the drive is generated again from the proof's plan, so the generator's truth of
+//! every recorded column is known (the diagnosis never sees it). Per second of a stretch: the
+//! measured and simulated first compared signal and their residual, the second signal's
+//! residual, the mean recorded − true engine torque (N·m), slope (%), service-brake force (N)
+//! and retarder torque (N·m), and the gear. The longitudinal model (vehicle speed m/s, engine
+//! speed rad/s) by default; with `axle` after the times the axle model (rear bellow, front
+//! bellow, tag bellow, Pa). Then, per compared signal, the residual RMS and mean over the
+//! stretch with the recorded inputs, with each one input replaced by its truth, and with every
+//! input and output at its truth ("all": a model that differs from the generator shows here).
+//! `TRUTH_RESIDUAL_TRUTH=1` prints the per-second table for that all-truth log;
+//! `TRUTH_RESIDUAL_INPUTS=1` lists the truth's columns every 0.25 s of the stretch first.
+//! Used to find the clean drives' `unexplained` windows: a slope noise estimate read off its
+//! lattice (`diagnose::noise`), a holding force read as a released brake and one biased by
+//! clipping (`sim::axle_recorded`, `diagnose::extended::corrected_log`).
+//!
+//! ```text
+//! cargo run --release --example truth_residual -- DIR case-0060 100 130
+//! cargo run --release --example truth_residual -- DIR case-0018 0 8 axle
+//! ```
+use fleetdyn::diagnose::extended::{AxleModel, LongitudinalModel, Theta};
+use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
+use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::synth::drive::{drive_truth, synth_drive, HiddenEffect, DRIVE_START_NS};
+use fleetdyn::synth::effects::EffectChoice;
+use fleetdyn::table::DriveLog;
+use std::path::PathBuf;
+#[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one lists no cases
+mod proof_dir;
+
+/// A compared signal's measured and simulated values on the log's rows.
+type Pair = (Vec<f64>, Vec<f64>);
+
+/// `y` (on `t`, increasing) linearly interpolated at `x`.
+fn interp(t: &[f64], y: &[f64], x: f64) -> f64 {
+    let k = t.partition_point(|&v| v <= x);
+    if k == 0 {
+        return y[0];
+    }
+    if k >= t.len() {
+        return y[t.len() - 1];
+    }
+    let f = (x - t[k - 1]) / (t[k] - t[k - 1]);
+    y[k - 1] + f * (y[k] - y[k - 1])
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let (dir, case, from, to, axle) = match a.as_slice() {
+        [d, c, f, t] => (d, c, f, t, false),
+        [d, c, f, t, m] if m == "axle" => (d, c, f, t, true),
+        _ => return Err("usage: truth_residual DIR CASE FROM_S TO_S [axle]".into()),
+    };
+    let (t0, t1): (f64, f64) = (from.parse()?, to.parse()?);
+    let dir = PathBuf::from(dir);
+    let (vf, log) = proof_dir::load(&dir, case)?;
+    let ans: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
+        dir.join("answers").join(format!("{case}.json")),
+    )?)?;
+    let index: usize = case.trim_start_matches("case-").parse()?;
+    let drive_seed = ans["seed"].as_u64().ok_or("answer without seed")?;
+    let cfg = ProofConfig {
+        seed: drive_seed - index as u64,
+        drives: index + 1,
+        ..ProofConfig::default()
+    };
+    let pc = plan(&cfg).pop().ok_or("empty plan")?;
+    println!(
+        "{case} [{}] {} {} km seed {}",
+        proof_dir::answer(&dir, case).label,
+        pc.rules,
+        pc.length_km,
+        pc.seed
+    );
+    let choice = match proof_dir::answer(&dir, case).effect {
+        Some((e, v)) => EffectChoice::Given(e, Some(v)),
+        None if ans["out_of_catalogue"].is_null() => EffectChoice::None,
+        None => EffectChoice::LocalRollingResistance,
+    };
+    let tmp = std::env::temp_dir().join(format!("truth_residual-{case}-{}", std::process::id()));
+    let r = synth_drive(
+        &dir.join("drives").join(case).join("vehicle.toml"),
+        pc.rules,
+        pc.length_km,
+        pc.seed,
+        &tmp,
+        &drive_config(&pc, &cfg),
+        Some(&HiddenEffect {
+            choice,
+            answer_path: tmp.join("answer.json"),
+        }),
+    )?;
+    let truth = drive_truth(&r.drive, r.axles.as_ref());
+    let _ = std::fs::remove_dir_all(&tmp);
+    if std::env::var_os("TRUTH_RESIDUAL_INPUTS").is_some() {
+        // the truth's inputs every 0.25 s of the stretch
+        let names: Vec<&str> = truth.columns.iter().map(|(n, _)| n.as_str()).collect();
+        println!("truth: t | {}", names.join(" | "));
+        let mut x = t0;
+        while x < t1 {
+            let k = truth
+                .t_s
+                .partition_point(|&v| v < x)
+                .min(truth.t_s.len() - 1);
+            let vals: Vec<String> = truth
+                .columns
+                .iter()
+                .map(|(_, y)| format!("{:.4}", y[k]))
+                .collect();
+            println!("{x:7.2} | {}", vals.join(" | "));
+            x += 0.25;
+        }
+    }
+    let t = log.seconds_from_start();
+    let off = (log.timestamp_ns[0] - DRIVE_START_NS) as f64 * 1e-9;
+    let true_col = |name: &str| -> Option<Vec<f64>> {
+        let (_, y) = truth.columns.iter().find(|(n, _)| n == name)?;
+        Some(t.iter().map(|&x| interp(&truth.t_s, y, x + off)).collect())
+    };
+    let with_truth = |names: &[&str]| -> DriveLog {
+        let mut l = log.clone();
+        for s in l.signals.iter_mut() {
+            if names.contains(&s.name.as_str()) {
+                if let Some(v) = true_col(&s.name) {
+                    s.values = v;
+                }
+            }
+        }
+        l
+    };
+    let setup = Setup::new(&log, &vf)?;
+    // (measured, simulated) of the compared signals: the two speeds, or the three pressures
+    let sim = |l: &DriveLog| -> Result<Vec<Pair>, Box<dyn std::error::Error>> {
+        let names: &[&str] = if axle {
+            &[
+                "bellow_pressure_rear",
+                "bellow_pressure_front",
+                "bellow_pressure_tag",
+            ]
+        } else {
+            &["vehicle_speed", "engine_speed"]
+        };
+        let y: Vec<Vec<f64>> = if axle {
+            let m = AxleModel::new(l, &setup.nominal_truth, &setup.ratios, setup.nominal)?;
+            let [f, r, t] = m.simulate(&setup.nominal as &Theta)?;
+            vec![r, f, t]
+        } else {
+            let m = LongitudinalModel::new(
+                l,
+                &setup.nominal_truth,
+                &setup.ratios,
+                setup.nominal,
+                Default::default(),
+            )?;
+            let y = m.simulate(&setup.nominal as &Theta)?;
+            vec![y.vehicle_speed, y.engine_speed]
+        };
+        let mut out = Vec::new();
+        for (n, y) in names.iter().zip(y) {
+            out.push((l.signal(n).ok_or(format!("no {n}"))?.to_vec(), y));
+        }
+        Ok(out)
+    };
+    let mut all: Vec<&str> = vec![
+        "engine_torque",
+        "road_slope",
+        "brake_force",
+        "retarder_torque",
+        "vehicle_speed",
+        "engine_speed",
+        "clutch_position",
+        "gear",
+    ];
+    if axle {
+        all.extend([
+            "bellow_pressure_front",
+            "bellow_pressure_rear",
+            "bellow_pressure_tag",
+        ]);
+    }
+    // TRUTH_RESIDUAL_TRUTH=1: the table for the log with every input and output at its truth
+    let shown = if std::env::var_os("TRUTH_RESIDUAL_TRUTH").is_some() {
+        with_truth(&all)
+    } else {
+        log.clone()
+    };
+    let base = sim(&shown)?;
+    let (vm, vs) = (&base[0].0, &base[0].1);
+    let (wm, ws) = (&base[1].0, &base[1].1);
+    let gear = log.signal("gear").ok_or("no gear")?;
+    let inputs = [
+        "engine_torque",
+        "road_slope",
+        "brake_force",
+        "retarder_torque",
+    ];
+    let scale = [1.0, 100.0, 1.0, 1.0];
+    let errs: Vec<Option<Vec<f64>>> = inputs
+        .iter()
+        .map(|n| {
+            let rec = log.signal(n)?;
+            let tr = true_col(n)?;
+            Some(rec.iter().zip(&tr).map(|(a, b)| a - b).collect())
+        })
+        .collect();
+    println!(
+        "     t | {} meas, sim, res | res {} |  dM_e  dslope%  dbrake  dretard | gear",
+        if axle { "p_rear" } else { "v" },
+        if axle { "p_front" } else { "we" }
+    );
+    let mut s = t0;
+    while s < t1 {
+        let idx: Vec<usize> = (0..t.len())
+            .filter(|&i| t[i] >= s && t[i] < s + 1.0 && vm[i].is_finite() && wm[i].is_finite())
+            .collect();
+        let mean = |f: &dyn Fn(usize) -> f64| {
+            let v: Vec<f64> = idx
+                .iter()
+                .map(|&i| f(i))
+                .filter(|x| x.is_finite())
+                .collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        };
+        let mut line = format!(
+            "{s:6.1} | {:9.3} {:9.3} {:+7.3} | {:+6.2} |",
+            mean(&|i| vm[i]),
+            mean(&|i| vs[i]),
+            mean(&|i| vm[i] - vs[i]),
+            mean(&|i| wm[i] - ws[i]),
+        );
+        for (e, k) in errs.iter().zip(scale) {
+            match e {
+                Some(e) => line += &format!(" {:+7.2}", k * mean(&|i| e[i])),
+                None => line += "      — ",
+            }
+        }
+        line += &format!(" | {:.0}", mean(&|i| gear[i]));
+        println!("{line}");
+        s += 1.0;
+    }
+    // RMS over the stretch of each compared signal (against the log `l`'s own measurement)
+    let rms = |r: &[Pair]| -> String {
+        r.iter()
+            .map(|(m, v)| {
+                let (mut q, mut n) = (0.0, 0);
+                for i in 0..t.len() {
+                    if t[i] >= t0 && t[i] < t1 && m[i].is_finite() && v[i].is_finite() {
+                        q += (m[i] - v[i]).powi(2);
+                        n += 1;
+                    }
+                }
+                let mean: f64 = (0..t.len())
+                    .filter(|&i| t[i] >= t0 && t[i] < t1 && m[i].is_finite() && v[i].is_finite())
+                    .map(|i| m[i] - v[i])
+                    .sum::<f64>()
+                    / n.max(1) as f64;
+                format!(" {:10.4} ({:+.4})", (q / n.max(1) as f64).sqrt(), mean)
+            })
+            .collect()
+    };
+    // each input's error over the whole drive: its σ per row, and the σ of its 20 s means
+    // against what independent 10 Hz samples of that σ would give
+    for (n, e) in inputs.iter().zip(&errs) {
+        let Some(e) = e else { continue };
+        let ok: Vec<usize> = (0..t.len()).filter(|&i| e[i].is_finite()).collect();
+        let m = ok.iter().map(|&i| e[i]).sum::<f64>() / ok.len().max(1) as f64;
+        let sd =
+            (ok.iter().map(|&i| (e[i] - m).powi(2)).sum::<f64>() / ok.len().max(1) as f64).sqrt();
+        let mut means = Vec::new();
+        let mut a = 0.0;
+        while a + 20.0 <= t[t.len() - 1] {
+            let w: Vec<f64> = ok
+                .iter()
+                .filter(|&&i| t[i] >= a && t[i] < a + 20.0)
+                .map(|&i| e[i])
+                .collect();
+            if !w.is_empty() {
+                means.push(w.iter().sum::<f64>() / w.len() as f64);
+            }
+            a += 20.0;
+        }
+        let msd =
+            (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / means.len().max(1) as f64).sqrt();
+        println!(
+            "{n} error over the drive: mean {m:+.3e}, σ {sd:.3e}, σ of 20 s means {msd:.3e} \
+             (independent 10 Hz samples: {:.3e})",
+            sd / 200f64.sqrt()
+        );
+    }
+    println!("residual RMS (mean) over the stretch per compared signal:");
+    println!("  recorded inputs        {}", rms(&sim(&log)?));
+    for n in inputs
+        .iter()
+        .chain(&["vehicle_speed", "engine_speed", "clutch_position"])
+    {
+        println!("  true {n:<17} {}", rms(&sim(&with_truth(&[n]))?));
+    }
+    println!("  all (against truth)    {}", rms(&sim(&with_truth(&all))?));
+    Ok(())
+}
