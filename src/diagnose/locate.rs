@@ -10,8 +10,8 @@
 //! mismatch" `Σ r²` is a scaled χ²_ν and the copies' mean a scaled χ²_{Kν}/K, so
 //! `F ~ F(ν, K·ν)`; ν is the window's effective degrees of freedom, the smaller of the one
 //! from the null's autocorrelation (the longitudinal null is correlated over the model's 20 s
-//! re-initialisation windows, so ν is small there) and the one the copies' own spread in the
-//! window gives ([`NoiseFloor::window_dof`]: the pooled autocorrelation is stationary, the
+//! re-initialisation windows, so ν is small there) and the one the copies' own covariance in
+//! the window gives ([`NoiseFloor::window_dof`]: the pooled autocorrelation is stationary, the
 //! null is not), so the test claims no more evidence than the null shows. The
 //! p-values of **every window of every signal** of the drive form one family, corrected by
 //! Holm's step-down method at α = [`LocateConfig::alpha`] (0.01): the chance that a drive
