@@ -47,9 +47,9 @@
 //!   truck `J_c G²` is 211 kg·m² at the wheels, half the gearbox's 426: a clean proof drive
 //!   rolling away downhill with the clutch open showed +2 … +3.5 kPa of bellow residual on
 //!   every axle for 12 s while this term was taken as 0, and within ±1.2 kPa with it. No
-//!   gear engaged disconnects the gearbox input side altogether;
-//!   At a standstill the wheels are held: `ω_w = ω̇_w = 0` there (the 10 Hz speed's difference
-//!   over the torque's window is noise of σ ≈ 0.2 m/s², times up to 650 kg·m² in 1st gear);
+//!   gear engaged disconnects the gearbox input side altogether. At a standstill the wheels
+//!   are held: `ω_w = ω̇_w = 0` there (the 10 Hz speed's difference over the torque's window
+//!   is noise of σ ≈ 0.2 m/s², times up to 650 kg·m² in 1st gear);
 //! - drive-shaft torque
 //!   `M_d = G M_c − ((J_t(gear) + J_p) i_f² + J_f + J_d) ω̇_w − (b_t i_f² + b_f) ω_w`
 //!   (gear 0 or below — neutral, or a reverse gear the model lacks — disconnects the gearbox
