@@ -43,9 +43,10 @@
 //!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters (over
 //!    the own model's views the effect changes: their weighted mean squares averaged);
 //! 2. **whiteness improves**: the held-out residual's non-white power
-//!    ([`super::problem::whiteness`]: the Ljung–Box statistic per sample `Q/n` of the
-//!    non-centred autocorrelation at lags 0.1…2 s, times the residual's weighted mean square)
-//!    is lower after the fit than before;
+//!    ([`super::problem::whiteness`]: the root of the Ljung–Box statistic per sample `Q/n` of
+//!    the non-centred autocorrelation at lags 0.1…2 s, times the residual's weighted mean
+//!    square — the RMS of the weighted autocovariance at those lags) is lower after the fit
+//!    than before;
 //! 3. **the interval excludes "no effect"**: the 95 % profile-likelihood interval of the
 //!    parameter does not contain the round's value (the nominal, "no effect") — tested first
 //!    as the likelihood-ratio statistic `N_eff ln(J_before/J_after)` against the interval's
@@ -70,6 +71,18 @@
 //! `signal_delay` drives: `Q/n` 0.37 → 0.62 while the held-out RMSE fell 57 %); the non-white
 //! power falls when less of the residual is structure, and stays 0 for white noise of any
 //! level.
+//!
+//! Why `√(Q/n)·MS` and not `(Q/n)·MS`: with `c_k` the residual's autocovariance, `(Q/n)·MS`
+//! is `mean_k c_k² / c_0`, which *grows* when a fit removes an error that is white at the
+//! lags (it lowers `c_0` and leaves every `c_k`), whereas `√(Q/n)·MS = √(mean_k c_k²)` is the
+//! autocovariance at the lags alone: white noise of any level leaves it as it is, and only
+//! less structure lowers it. This form replaced the first after the proof showed the flaw
+//! (`fleetdyn prove --seed 1`, case 49, `signal_delay`; `examples/whiteness_views.rs`): at
+//! the hidden delay the speeds' held-out mean square fell 1.94 → 1.32 and the reversals'
+//! 61.5 → 0.81, yet `(Q/n)·MS` rose on the speeds (0.47 → 0.60) — the delay's fast error was
+//! gone, the sensors' slow drift left — and rule 2 rejected the truth itself. Measured on
+//! four seeds of the proof (1, 2, 3, 1001), the change named that drive and
+//! changed nothing else (README, "Diagnosis proof").
 //!
 //! # Ranking and isolability
 //! Passing candidates are ranked by the held-out mean square they explain summed over every

@@ -1,0 +1,63 @@
+//! The acceptance rule's held-out figures per view of a proof drive at the hidden truth: for
+//! each view of the effect's own model, the held-out weighted mean square and the whiteness
+//! (`Q/n`, non-white power) at the nominal parameters and at the truth, weighted as the
+//! diagnosis weighted them (its `diagnosis.json` noise floor). Rules 1 and 2 of
+//! `diagnose::explain` average these over the views the effect changes.
+//!
+//! ```text
+//! cargo run --release --example whiteness_views -- DIR case-0049
+//! ```
+use fleetdyn::diagnose::fit::Evaluator;
+use fleetdyn::diagnose::setup::Setup;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+#[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one lists no cases
+mod proof_dir;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let [dir, case] = a.as_slice() else {
+        return Err("usage: whiteness_views DIR CASE".into());
+    };
+    let dir = PathBuf::from(dir);
+    let (vf, log) = proof_dir::load(&dir, case)?;
+    let ans = proof_dir::answer(&dir, case);
+    let (e, truth) = ans.effect.ok_or("not a catalogue case")?;
+    println!("{case} [{}]", ans.label);
+    let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
+        dir.join("diagnoses").join(case).join("diagnosis.json"),
+    )?)?;
+    let floor: BTreeMap<String, f64> = serde_json::from_value(d["noise_floor"].clone())?;
+    let setup = Setup::new(&log, &vf)?;
+    let problem = setup.problem(&log)?;
+    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+        .nominal_outputs()
+        .iter()
+        .map(|y| Arc::new(y.clone()))
+        .collect();
+    let t = problem.times();
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let ev = Evaluator::new(&problem, *problem.nominal(), &bases, Some(&floor), dt);
+    let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
+    let base = ev.eval_outputs(f64::NAN, bases);
+    let at = ev.eval(&base, &own, e, truth)?;
+    for (m, v) in problem.views().iter().enumerate() {
+        let only: Vec<bool> = (0..ev.models.len()).map(|k| k == m).collect();
+        let (wb, wa) = (ev.whiteness(&base, &only), ev.whiteness(&at, &only));
+        println!(
+            "{:?} {:?}: changed {}, held-out MS {:.4} -> {:.4}, Q/n {:.4} -> {:.4}, non-white {:.4} -> {:.4}",
+            v.domain,
+            v.kind,
+            own[m] && ev.changed(m, &at, &base),
+            base.heldout[m],
+            at.heldout[m],
+            wb.q_per_n,
+            wa.q_per_n,
+            wb.nonwhite_power,
+            wa.nonwhite_power
+        );
+    }
+    Ok(())
+}
