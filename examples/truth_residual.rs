@@ -21,6 +21,7 @@
 use fleetdyn::diagnose::extended::{AxleModel, LongitudinalModel, Theta};
 use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
 use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::signal::interp_linear;
 use fleetdyn::synth::drive::{drive_truth, synth_drive, HiddenEffect, DRIVE_START_NS};
 use fleetdyn::synth::effects::EffectChoice;
 use fleetdyn::table::DriveLog;
@@ -31,19 +32,6 @@ mod proof_dir;
 
 /// A compared signal's measured and simulated values on the log's rows.
 type Pair = (Vec<f64>, Vec<f64>);
-
-/// `y` (on `t`, increasing) linearly interpolated at `x`.
-fn interp(t: &[f64], y: &[f64], x: f64) -> f64 {
-    let k = t.partition_point(|&v| v <= x);
-    if k == 0 {
-        return y[0];
-    }
-    if k >= t.len() {
-        return y[t.len() - 1];
-    }
-    let f = (x - t[k - 1]) / (t[k] - t[k - 1]);
-    y[k - 1] + f * (y[k] - y[k - 1])
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -116,7 +104,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let off = (log.timestamp_ns[0] - DRIVE_START_NS) as f64 * 1e-9;
     let true_col = |name: &str| -> Option<Vec<f64>> {
         let (_, y) = truth.columns.iter().find(|(n, _)| n == name)?;
-        Some(t.iter().map(|&x| interp(&truth.t_s, y, x + off)).collect())
+        Some(
+            t.iter()
+                .map(|&x| interp_linear(&truth.t_s, y, x + off))
+                .collect(),
+        )
     };
     let with_truth = |names: &[&str]| -> DriveLog {
         let mut l = log.clone();

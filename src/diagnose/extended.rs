@@ -43,6 +43,7 @@ use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::dequantise::{dequantise, DequantiseConfig};
 use crate::signal::distance::{fill_gaps, resample_to_distance, DistanceMap, ResampleConfig};
+use crate::signal::interp_linear;
 use crate::sim::axle::{HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
 use crate::sim::fast::FastDriveline;
@@ -440,18 +441,6 @@ pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     starts
 }
 
-fn interp(ts: &[f64], ys: &[f64], t: f64) -> f64 {
-    let k = ts.partition_point(|&x| x <= t);
-    if k == 0 {
-        return ys[0];
-    }
-    if k >= ts.len() {
-        return ys[ys.len() - 1];
-    }
-    let w = (t - ts[k - 1]) / (ts[k] - ts[k - 1]);
-    ys[k - 1] + w * (ys[k] - ys[k - 1])
-}
-
 impl<'a> LongitudinalModel<'a> {
     /// Binds a recording (vehicle speed, engine speed, engine torque and gear needed), the
     /// nominal vehicle and its gear ratios. `nominal` are the nominal parameters
@@ -561,7 +550,9 @@ impl<'a> LongitudinalModel<'a> {
         };
         let h = 0.25;
         let (t0, t1) = ((ta - h).max(0.0), ta + h);
-        let a = (interp(&self.t, &self.v_meas, t1) - interp(&self.t, &self.v_meas, t0)) / (t1 - t0);
+        let a = (interp_linear(&self.t, &self.v_meas, t1)
+            - interp_linear(&self.t, &self.v_meas, t0))
+            / (t1 - t0);
         let fi = p.final_drive_ratio;
         let wdot_w = a / p.wheel_radius_m;
         let m_e = m.eval(ta + 1e-9);
@@ -611,7 +602,7 @@ impl<'a> LongitudinalModel<'a> {
             if tb - ta < dt {
                 continue;
             }
-            let v0 = interp(&self.t, &self.v_meas, ta).max(0.0);
+            let v0 = interp_linear(&self.t, &self.v_meas, ta).max(0.0);
             let gear = sc.gear.eval(ta + 1e-9).round() as usize;
             let slope = sc.slope.eval(ta + 1e-9);
             let x = sc.clutch_x.eval(ta + 1e-9);
@@ -619,12 +610,12 @@ impl<'a> LongitudinalModel<'a> {
             let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
             // a closed clutch whose engine runs well above the gearbox slips (a worn clutch
             // under full torque): the window starts slipping from the measured engine speed
-            let we = interp(&self.t, &self.w_meas, ta);
+            let we = interp_linear(&self.t, &self.w_meas, ta);
             let slipping = we.is_finite() && we - y0[0] > SLIP_START_MIN_RAD_S;
             let mode = if engaged && v0 >= self.cfg.min_speed_mps && !slipping {
                 ClutchMode::Locked
             } else {
-                let we = interp(&self.t, &self.w_meas, ta);
+                let we = interp_linear(&self.t, &self.w_meas, ta);
                 let sigma = if we >= y0[1] { 1.0 } else { -1.0 };
                 y0[0] = we;
                 ClutchMode::Slipping(sigma)
@@ -655,8 +646,16 @@ impl<'a> LongitudinalModel<'a> {
             }
         }
         Ok(LongitudinalOutputs {
-            vehicle_speed: self.t.iter().map(|&tt| interp(&ts, &vs, tt)).collect(),
-            engine_speed: self.t.iter().map(|&tt| interp(&ts, &ws, tt)).collect(),
+            vehicle_speed: self
+                .t
+                .iter()
+                .map(|&tt| interp_linear(&ts, &vs, tt))
+                .collect(),
+            engine_speed: self
+                .t
+                .iter()
+                .map(|&tt| interp_linear(&ts, &ws, tt))
+                .collect(),
         })
     }
 }

@@ -1,4 +1,5 @@
-//! Signal processing for fleet logs: resampling to distance ([`distance`]), sensor
+//! Signal processing for fleet logs: resampling to distance ([`distance`]), reading a series
+//! between its samples ([`interp_linear`]), sensor
 //! quantisation ([`quantization`]) and its consistent reconstruction ([`dequantise`]), Butterworth design in second-order
 //! sections, causal and zero-phase filtering, Welch spectra, cross-spectra and coherence.
 //!
@@ -19,6 +20,7 @@ pub mod dequantise;
 pub mod distance;
 mod error;
 mod filtfilt;
+mod interp;
 pub mod quantization;
 mod sos;
 mod spectrum;
@@ -32,6 +34,7 @@ pub use filtfilt::{
     impulse_decay_len, matched_default_fit_len, ramp_zi, scipy_default_padlen, sosfiltfilt,
     EdgeMode, MATCHED_DECAY_THRESHOLD,
 };
+pub use interp::interp_linear;
 pub use sos::{
     sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FREE_RESPONSE_FLOOR,
     FUSED_SECTIONS, LANES, LOCKSTEP_MIN, SOSFILT_BLOCK,

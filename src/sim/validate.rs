@@ -23,7 +23,7 @@ use super::recorded::{scenario_from_log, RecordedError, RecordedScenario};
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps_borrowed;
-use crate::signal::{butter, sosfiltfilt, BandType, EdgeMode};
+use crate::signal::{butter, interp_linear, sosfiltfilt, BandType, EdgeMode};
 use crate::table::DriveLog;
 use thiserror::Error;
 
@@ -170,25 +170,13 @@ fn metric<R: Iterator<Item = usize>>(
     }
 }
 
-fn interp(ts: &[f64], ys: &[f64], t: f64) -> f64 {
-    let k = ts.partition_point(|&x| x <= t);
-    if k == 0 {
-        return ys[0];
-    }
-    if k >= ts.len() {
-        return ys[ys.len() - 1];
-    }
-    let w = (t - ts[k - 1]) / (ts[k] - ts[k - 1]);
-    ys[k - 1] + w * (ys[k] - ys[k - 1])
-}
-
 /// Values kept per simulated sample: vehicle speed, engine speed, the three torsions, the three
 /// shaft torques, clutch locked (1/0).
 const EMITTED: usize = 9;
 
 /// Appends to `out`, for the recording's times `t[*next..]`, the linear interpolation of the
 /// simulated samples `(bt, bv)` — a contiguous stretch of the whole trajectory that starts at
-/// or before `t[*next]` — as [`interp`] on the whole trajectory gives it. Without `all` it
+/// or before `t[*next]` — as [`interp_linear`] on the whole trajectory gives it. Without `all` it
 /// stops at the first time not before the stretch's last sample (the next stretch brackets
 /// it); with `all` (the last stretch) later times take the last sample.
 fn emit(
@@ -283,7 +271,7 @@ pub fn validate_shuffle(
         if tb - ta < cfg.dt_s {
             continue;
         }
-        let v0 = interp(&t, &v_meas, ta).max(0.0);
+        let v0 = interp_linear(&t, &v_meas, ta).max(0.0);
         let gear = sc.gear.eval(ta + 1e-9).round() as usize;
         let slope = sc.slope.eval(ta + 1e-9);
         let x = sc.clutch_x.eval(ta + 1e-9);
@@ -292,7 +280,7 @@ pub fn validate_shuffle(
         let mode = if engaged && v0 >= cfg.min_speed_mps {
             ClutchMode::Locked
         } else {
-            let we = interp(&t, &w_meas, ta);
+            let we = interp_linear(&t, &w_meas, ta);
             let sigma = if we >= y0[1] { 1.0 } else { -1.0 };
             y0[0] = we;
             ClutchMode::Slipping(sigma)
