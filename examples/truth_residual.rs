@@ -6,8 +6,10 @@
 //! and retarder torque (N·m), and the gear. The longitudinal model (vehicle speed m/s, engine
 //! speed rad/s) by default; with `axle` after the times the axle model (rear bellow, front
 //! bellow, tag bellow, Pa). Then, per compared signal, the residual RMS and mean over the
-//! stretch with the recorded inputs, with each one input replaced by its truth, and with every
-//! input and output at its truth ("all": a model that differs from the generator shows here).
+//! stretch's compared rows (`diagnose::compare`: away from clutch transitions and brake
+//! steps, moving, …) with the recorded inputs, with each one input replaced by its truth, and
+//! with every input and output at its truth ("all": a model that differs from the generator
+//! shows here). The per-second table counts every row.
 //! `TRUTH_RESIDUAL_TRUTH=1` prints the per-second table for that all-truth log;
 //! `TRUTH_RESIDUAL_INPUTS=1` lists the truth's columns every 0.25 s of the stretch first.
 //! Used to find the clean drives' `unexplained` windows: a slope noise estimate read off its
@@ -18,6 +20,7 @@
 //! cargo run --release --example truth_residual -- DIR case-0060 100 130
 //! cargo run --release --example truth_residual -- DIR case-0018 0 8 axle
 //! ```
+use fleetdyn::diagnose::compare;
 use fleetdyn::diagnose::extended::{AxleModel, LongitudinalModel, Theta};
 use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
 use fleetdyn::diagnose::setup::Setup;
@@ -232,21 +235,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s += 1.0;
     }
     // RMS over the stretch of each compared signal (against the log `l`'s own measurement)
+    // the rows the diagnosis compares, per compared signal (`diagnose::compare`)
+    let masks: Vec<Vec<bool>> = if axle {
+        vec![compare::axle_rows(&log); 3]
+    } else {
+        let moving: Vec<bool> = vm.iter().map(|v| v.is_finite() && *v >= 1.0).collect();
+        let both =
+            |r: Vec<bool>| -> Vec<bool> { r.iter().zip(&moving).map(|(a, b)| *a && *b).collect() };
+        vec![
+            both(compare::longitudinal_rows(&log)),
+            both(compare::engine_speed_rows(&log)),
+        ]
+    };
     let rms = |r: &[Pair]| -> String {
         r.iter()
-            .map(|(m, v)| {
-                let (mut q, mut n) = (0.0, 0);
-                for i in 0..t.len() {
-                    if t[i] >= t0 && t[i] < t1 && m[i].is_finite() && v[i].is_finite() {
-                        q += (m[i] - v[i]).powi(2);
-                        n += 1;
-                    }
-                }
-                let mean: f64 = (0..t.len())
-                    .filter(|&i| t[i] >= t0 && t[i] < t1 && m[i].is_finite() && v[i].is_finite())
-                    .map(|i| m[i] - v[i])
-                    .sum::<f64>()
-                    / n.max(1) as f64;
+            .zip(&masks)
+            .map(|((m, v), mask)| {
+                let ok: Vec<usize> = (0..t.len())
+                    .filter(|&i| {
+                        t[i] >= t0 && t[i] < t1 && mask[i] && m[i].is_finite() && v[i].is_finite()
+                    })
+                    .collect();
+                let n = ok.len();
+                let q: f64 = ok.iter().map(|&i| (m[i] - v[i]).powi(2)).sum();
+                let mean: f64 = ok.iter().map(|&i| m[i] - v[i]).sum::<f64>() / n.max(1) as f64;
                 format!(" {:10.4} ({:+.4})", (q / n.max(1) as f64).sqrt(), mean)
             })
             .collect()
@@ -280,7 +292,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             sd / 200f64.sqrt()
         );
     }
-    println!("residual RMS (mean) over the stretch per compared signal:");
+    println!("residual RMS (mean) over the stretch's compared rows per compared signal:");
     println!("  recorded inputs        {}", rms(&sim(&log)?));
     for n in inputs
         .iter()
