@@ -2,7 +2,7 @@
 //! inputs: the drive is generated again from the proof's plan, so the generator's truth of
 //! every recorded column is known (the diagnosis never sees it). Per second of a stretch: the
 //! measured and simulated first compared signal and their residual, the second signal's
-//! residual, the mean recorded − true engine torque (N·m), slope (%), service-brake force (N)
+//! residual (mean and RMS over the second), the mean recorded − true engine torque (N·m), slope (%), service-brake force (N)
 //! and retarder torque (N·m), and the gear. The longitudinal model (vehicle speed m/s, engine
 //! speed rad/s) by default; with `axle` after the times the axle model (rear bellow, front
 //! bellow, tag bellow, Pa). Then, per compared signal, the residual RMS and mean over the
@@ -11,7 +11,9 @@
 //! with every input and output at its truth ("all": a model that differs from the generator
 //! shows here). The per-second table counts every row.
 //! `TRUTH_RESIDUAL_TRUTH=1` prints the per-second table for that all-truth log;
-//! `TRUTH_RESIDUAL_INPUTS=1` lists the truth's columns every 0.25 s of the stretch first.
+//! `TRUTH_RESIDUAL_INPUTS=1` lists the truth's columns every 0.25 s of the stretch first;
+//! `TRUTH_RESIDUAL_SHIFT_S=x` reads the truth `x` s later against the log's rows (every column
+//! alike: the phase of the generator's input steps against the 50 Hz rows).
 //! Used to find the clean drives' `unexplained` windows: a slope noise estimate read off its
 //! lattice (`diagnose::noise`), a holding force read as a released brake and one biased by
 //! clipping (`sim::axle_recorded`, `diagnose::extended::corrected_log`).
@@ -104,7 +106,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let t = log.seconds_from_start();
-    let off = (log.timestamp_ns[0] - DRIVE_START_NS) as f64 * 1e-9;
+    let off = (log.timestamp_ns[0] - DRIVE_START_NS) as f64 * 1e-9
+        + std::env::var("TRUTH_RESIDUAL_SHIFT_S")
+            .ok()
+            .and_then(|x| x.parse::<f64>().ok())
+            .unwrap_or(0.0);
     let true_col = |name: &str| -> Option<Vec<f64>> {
         let (_, y) = truth.columns.iter().find(|(n, _)| n == name)?;
         Some(
@@ -200,7 +206,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     println!(
-        "     t | {} meas, sim, res | res {} |  dM_e  dslope%  dbrake  dretard | gear",
+        "     t | {} meas, sim, res | res {} (mean, rms) |  dM_e  dslope%  dbrake  dretard | gear",
         if axle { "p_rear" } else { "v" },
         if axle { "p_front" } else { "we" }
     );
@@ -218,11 +224,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             v.iter().sum::<f64>() / v.len().max(1) as f64
         };
         let mut line = format!(
-            "{s:6.1} | {:9.3} {:9.3} {:+7.3} | {:+6.2} |",
+            "{s:6.1} | {:9.3} {:9.3} {:+7.3} | {:+6.2} {:5.2} |",
             mean(&|i| vm[i]),
             mean(&|i| vs[i]),
             mean(&|i| vm[i] - vs[i]),
             mean(&|i| wm[i] - ws[i]),
+            mean(&|i| (wm[i] - ws[i]).powi(2)).sqrt(),
         );
         for (e, k) in errs.iter().zip(scale) {
             match e {
