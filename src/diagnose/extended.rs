@@ -220,21 +220,7 @@ fn windowed_max(t: &[f64], v: &[f64], half_s: f64) -> Vec<f64> {
 
 /// `v(t + tau)` on the grid `t` (linear between finite samples, held at the ends, NaN kept).
 pub(crate) fn shifted(t: &[f64], v: &[f64], tau: f64) -> Vec<f64> {
-    let n = t.len();
-    (0..n)
-        .map(|i| {
-            let tt = t[i] + tau;
-            let k = t.partition_point(|&x| x <= tt);
-            if k == 0 {
-                v[0]
-            } else if k >= n {
-                v[n - 1]
-            } else {
-                let w = (tt - t[k - 1]) / (t[k] - t[k - 1]);
-                v[k - 1] + w * (v[k] - v[k - 1])
-            }
-        })
-        .collect()
+    t.iter().map(|&x| interp_linear(t, v, x + tau)).collect()
 }
 
 /// The recorded slope on the 1 m distance grid, for `slope_quantization`'s cure.

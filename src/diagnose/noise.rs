@@ -956,14 +956,20 @@ pub struct NoiseConfig {
     /// actuator places a shift's clutch opening and closing only to ±0.05 s; with ~19 kN of
     /// drive force in a middle gear that is an impulse error of ~0.05 m/s per edge, which the
     /// windowed speed residual carries to the window's end (measured on clean synthetic drives:
-    /// 0.08–0.12 m/s in windows with upshifts on a climb, 3–5× a floor without it).
+    /// 0.08–0.12 m/s in windows with upshifts on a climb, 3–5× a floor without it). The 50 Hz
+    /// engine torque too: where a torque step falls between two rows decides how their linear
+    /// interpolation renders it (measured on a clean proof drive, seed 1062, with every input at
+    /// its truth: a tip-out to engine braking rang the engine speed by 1.19 rad/s RMS for a
+    /// second at the log's sampling phase, 0.14 rad/s with the truth read 10 ms earlier or
+    /// later; `examples/truth_residual.rs`).
     pub phase_jitter_columns: Vec<String>,
 }
 
 impl Default for NoiseConfig {
     /// 12 copies, seed 7, the driveline and axle inputs and outputs with their physical ranges
     /// (brake force, retarder torque, speeds and pressures ≥ 0, clutch 0…1), 1 s smoothing,
-    /// 30 s of lags, 10 s PSD segments, phase jitter on clutch, brake and retarder.
+    /// 30 s of lags, 10 s PSD segments, phase jitter on clutch, brake, retarder and engine
+    /// torque.
     fn default() -> Self {
         let z = Some(0.0);
         Self {
@@ -989,6 +995,7 @@ impl Default for NoiseConfig {
                 "clutch_position".into(),
                 "brake_force".into(),
                 "retarder_torque".into(),
+                "engine_torque".into(),
             ],
         }
     }
@@ -1865,6 +1872,50 @@ mod tests {
             "σ_w {} against {sigma}",
             s.sigma_white
         );
+    }
+
+    #[test]
+    fn a_copy_moves_the_engine_torques_steps_within_half_its_sample_period() {
+        // a 1 000 N·m tip-in at 10 s, 50 Hz samples on the 50 Hz grid, no noise: each copy
+        // reads the torque up to ±10 ms off, so only the two rows about the step change, by at
+        // most half the step
+        let n = 1000;
+        let torque: Vec<f64> = (0..n).map(|i| if i < 500 { 0.0 } else { 1000.0 }).collect();
+        let log = DriveLog {
+            meta: crate::table::DriveMeta::default(),
+            timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
+            signals: vec![crate::table::Signal {
+                name: "engine_torque".into(),
+                unit: "N*m".into(),
+                values: torque,
+            }],
+        };
+        let s = SensorNoise::given(
+            "engine_torque",
+            "N*m",
+            SampleKind::Linear,
+            n,
+            0.02,
+            1,
+            0.0,
+            None,
+        )
+        .unwrap();
+        let cfg = NoiseConfig::default();
+        let mut moved = 0;
+        for copy in 0..12 {
+            let (_, deltas) = perturbed_log(&log, std::slice::from_ref(&s), &cfg, copy);
+            let d = &deltas[0].1;
+            for (i, x) in d.iter().enumerate() {
+                if i == 499 || i == 500 {
+                    assert!(x.abs() <= 500.0 + 1e-9, "copy {copy} row {i}: {x}");
+                } else {
+                    assert_eq!(*x, 0.0, "copy {copy} row {i}");
+                }
+            }
+            moved += usize::from(d.iter().any(|x| *x != 0.0));
+        }
+        assert!(moved >= 11, "{moved} of 12 copies moved the step");
     }
 
     #[test]
