@@ -23,7 +23,7 @@
 //! cargo run --release --example truth_residual -- DIR case-0018 0 8 axle
 //! ```
 use fleetdyn::diagnose::compare;
-use fleetdyn::diagnose::extended::{AxleModel, LongitudinalModel, Theta};
+use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel, Theta};
 use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::signal::interp_linear;
@@ -246,7 +246,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let masks: Vec<Vec<bool>> = if axle {
         vec![compare::axle_rows(&log); 3]
     } else {
-        let moving: Vec<bool> = vm.iter().map(|v| v.is_finite() && *v >= 1.0).collect();
+        let min = LongitudinalConfig::default().min_speed_mps;
+        let moving: Vec<bool> = vm.iter().map(|v| v.is_finite() && *v >= min).collect();
         let both =
             |r: Vec<bool>| -> Vec<bool> { r.iter().zip(&moving).map(|(a, b)| *a && *b).collect() };
         vec![
