@@ -214,6 +214,10 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Run only these plan indices (comma separated, e.g. 49,60), each drive exactly as in
+        /// the whole plan of --drives and --seed.
+        #[arg(long, value_delimiter = ',')]
+        cases: Vec<usize>,
     },
     /// Run a pipeline file (pipelines/*.toml) over its inputs, in parallel, into a
     /// hive-partitioned dataset with a run report; drives already done with the same input and
@@ -822,6 +826,7 @@ fn run_prove(
     vehicle: PathBuf,
     output: PathBuf,
     jobs: Option<usize>,
+    cases: Vec<usize>,
 ) -> Result<(), Failure> {
     use fleetdyn::diagnose::prove::{run_proof, ProofConfig};
     if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
@@ -832,10 +837,17 @@ fn run_prove(
     if drives == 0 {
         return Err(usage(anyhow::anyhow!("--drives must be at least 1")));
     }
+    if let Some(c) = cases.iter().find(|&&c| c >= drives) {
+        return Err(usage(anyhow::anyhow!(
+            "--cases {c} is not in the plan of --drives {drives} (indices 0 to {})",
+            drives - 1
+        )));
+    }
     let cfg = ProofConfig {
         drives,
         seed,
         length_km: (min_km, max_km),
+        only: cases,
         ..ProofConfig::default()
     };
     let jobs = jobs.unwrap_or_else(|| {
@@ -887,7 +899,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             vehicle,
             output,
             jobs,
-        } => run_prove(drives, seed, min_km, max_km, vehicle, output, jobs),
+            cases,
+        } => run_prove(drives, seed, min_km, max_km, vehicle, output, jobs, cases),
         Command::Ingest {
             inputs,
             dbc,

@@ -56,6 +56,8 @@ pub struct ProofConfig {
     pub clean_per_cycle: usize,
     /// Drives with the out-of-catalogue effect in each cycle of the plan.
     pub out_of_catalogue_per_cycle: usize,
+    /// Plan indices to run (each drive exactly as in the whole plan); empty: all `drives`.
+    pub only: Vec<usize>,
 }
 
 impl Default for ProofConfig {
@@ -73,6 +75,7 @@ impl Default for ProofConfig {
             },
             clean_per_cycle: 4,
             out_of_catalogue_per_cycle: 2,
+            only: Vec::new(),
         }
     }
 }
@@ -869,7 +872,10 @@ pub fn run_proof(
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
     crate::model::vehicle::VehicleFile::load(vehicle)?;
-    let cases = plan(cfg);
+    let cases: Vec<ProofCase> = plan(cfg)
+        .into_iter()
+        .filter(|c| cfg.only.is_empty() || cfg.only.contains(&c.index))
+        .collect();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))
         .build()
@@ -910,7 +916,7 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
     use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
     let io = |path: PathBuf| move |source| ProveError::Io { path, source };
     let md = format!(
-        "# Diagnosis proof\n\n`fleetdyn prove --drives {} --seed {} --min-km {} --max-km {}`: \
+        "# Diagnosis proof\n\n`fleetdyn prove --drives {} --seed {} --min-km {} --max-km {}{}`: \
          {} synthetic drives, each hiding one catalogue effect (random magnitude), nothing, or \
          the out-of-catalogue stretch of extra rolling resistance; diagnosed blind.\n\n{}\n\
          ## Cases\n\n{}",
@@ -918,6 +924,18 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
         cfg.seed,
         cfg.length_km.0,
         cfg.length_km.1,
+        if cfg.only.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " --cases {}",
+                cfg.only
+                    .iter()
+                    .map(|i| i.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            )
+        },
         run.summary.drives,
         run.summary.to_markdown(),
         cases_markdown(&run.scores, &run.failed)
