@@ -28,7 +28,7 @@
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;
-use fleetdyn::diagnose::prove::{run_proof, ProofConfig};
+use fleetdyn::diagnose::prove::{run_proof, ProofConfig, ProofRun};
 
 const IDENTIFIED: [&str; 12] = [
     "rolling_resistance",
@@ -48,21 +48,26 @@ const IDENTIFIED: [&str; 12] = [
 /// Effects whose truth barely changes the compared outputs on these drives.
 const NOT_VISIBLE: [&str; 1] = ["clutch_slip"];
 
-#[test]
-fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
+/// Runs the proof `cfg` with the seed 002 truck on 2 jobs into a temporary folder.
+fn proof(cfg: &ProofConfig) -> (tempfile::TempDir, ProofRun) {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = ProofConfig {
-        drives: 22,
-        ..ProofConfig::default()
-    };
     let run = run_proof(
-        &cfg,
+        cfg,
         &fixture("fixtures/vehicles/seed002-6x2-diesel.toml"),
         dir.path(),
         2,
         &|_, _| {},
     )
     .unwrap();
+    (dir, run)
+}
+
+#[test]
+fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
+    let (dir, run) = proof(&ProofConfig {
+        drives: 22,
+        ..ProofConfig::default()
+    });
     println!("{}", run.summary.to_markdown());
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     assert_eq!(run.scores.len(), 22);
@@ -165,19 +170,10 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
 /// as a mismatch (README "Diagnosis proof").
 #[test]
 fn a_delay_rule_two_had_rejected_is_named_and_a_clean_city_drive_has_no_mismatch() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = ProofConfig {
+    let (_dir, run) = proof(&ProofConfig {
         only: vec![49, 60],
         ..ProofConfig::default()
-    };
-    let run = run_proof(
-        &cfg,
-        &fixture("fixtures/vehicles/seed002-6x2-diesel.toml"),
-        dir.path(),
-        2,
-        &|_, _| {},
-    )
-    .unwrap();
+    });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     let by = |i: usize| run.scores.iter().find(|s| s.index == i).unwrap();
     let delay = by(49);
