@@ -57,6 +57,8 @@ pub struct ProofConfig {
     /// Drives with the out-of-catalogue effect in each cycle of the plan.
     pub out_of_catalogue_per_cycle: usize,
     /// Plan indices to run (each drive exactly as in the whole plan); empty: all `drives`.
+    /// An index at or past `drives` matches no case and runs nothing (`fleetdyn prove --cases`
+    /// rejects it with exit 2).
     pub only: Vec<usize>,
 }
 
