@@ -12,6 +12,10 @@
 //! shows here). The per-second table counts every row.
 //! `TRUTH_RESIDUAL_TRUTH=1` prints the per-second table for that all-truth log;
 //! `TRUTH_RESIDUAL_INPUTS=1` lists the truth's columns every 0.25 s of the stretch first;
+//! `TRUTH_RESIDUAL_THETA=1` runs the models at the hidden effect's truth;
+//! `TRUTH_RESIDUAL_SHUFFLE=1` adds, per gear, the engine speed's part above ~1 Hz that the
+//! recorded slope alone gives the model (against the true slope) beside the residual's
+//! (`slope_quantization`'s fingerprint, "spurious shuffle after slope steps");
 //! `TRUTH_RESIDUAL_SHIFT_S=x` reads the truth `x` s later against the log's rows (every column
 //! alike: the phase of the generator's input steps against the 50 Hz rows).
 //! Used to find the clean drives' `unexplained` windows: a slope noise estimate read off its
@@ -23,7 +27,7 @@
 //! cargo run --release --example truth_residual -- DIR case-0018 0 8 axle
 //! ```
 use fleetdyn::diagnose::compare;
-use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel, Theta};
+use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel};
 use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::signal::interp_linear;
@@ -131,6 +135,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         l
     };
     let setup = Setup::new(&log, &vf)?;
+    // TRUTH_RESIDUAL_THETA=1: the models at the hidden effect's truth instead of the nominal
+    let mut theta = setup.nominal;
+    if std::env::var_os("TRUTH_RESIDUAL_THETA").is_some() {
+        if let Some((e, v)) = proof_dir::answer(&dir, case).effect {
+            theta.set(e, v);
+        }
+    }
     // (measured, simulated) of the compared signals: the two speeds, or the three pressures
     let sim = |l: &DriveLog| -> Result<Vec<Pair>, Box<dyn std::error::Error>> {
         let names: &[&str] = if axle {
@@ -144,7 +155,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let y: Vec<Vec<f64>> = if axle {
             let m = AxleModel::new(l, &setup.nominal_truth, &setup.ratios, setup.nominal)?;
-            let [f, r, t] = m.simulate(&setup.nominal as &Theta)?;
+            let [f, r, t] = m.simulate(&theta)?;
             vec![r, f, t]
         } else {
             let m = LongitudinalModel::new(
@@ -154,7 +165,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 setup.nominal,
                 Default::default(),
             )?;
-            let y = m.simulate(&setup.nominal as &Theta)?;
+            let y = m.simulate(&theta)?;
             vec![y.vehicle_speed, y.engine_speed]
         };
         let mut out = Vec::new();
@@ -309,5 +320,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("  true {n:<17} {}", rms(&sim(&with_truth(&[n]))?));
     }
     println!("  all (against truth)    {}", rms(&sim(&with_truth(&all))?));
+    if !axle && std::env::var_os("TRUTH_RESIDUAL_SHUFFLE").is_some() {
+        // the recorded slope's own shuffle: the engine speed's part above ~1 Hz (minus a
+        // centred 1 s mean) of the model fed the recorded slope minus the model fed the true
+        // one, against the same part of the residual, per gear on the compared rows
+        let hp = |y: &[f64]| -> Vec<f64> {
+            (0..y.len())
+                .map(|i| {
+                    let w: Vec<f64> = y[i.saturating_sub(25)..(i + 26).min(y.len())]
+                        .iter()
+                        .copied()
+                        .filter(|x| x.is_finite())
+                        .collect();
+                    y[i] - w.iter().sum::<f64>() / w.len().max(1) as f64
+                })
+                .collect()
+        };
+        let rec = sim(&log)?;
+        let tru = sim(&with_truth(&["road_slope"]))?;
+        let (wm, wr, wt) = (&rec[1].0, &rec[1].1, &tru[1].1);
+        let spurious = hp(&wr.iter().zip(wt).map(|(a, b)| a - b).collect::<Vec<_>>());
+        let resid = hp(&wm.iter().zip(wr).map(|(a, b)| a - b).collect::<Vec<_>>());
+        println!("gear | rows | engine speed >1 Hz, rad/s RMS: recorded − true slope | residual");
+        for g in 1..=16 {
+            let idx: Vec<usize> = (0..t.len())
+                .filter(|&i| {
+                    masks[1][i] && gear[i].round() as usize == g && t[i] >= t0 && t[i] < t1
+                })
+                .filter(|&i| spurious[i].is_finite() && resid[i].is_finite())
+                .collect();
+            if idx.is_empty() {
+                continue;
+            }
+            let r = |v: &[f64]| {
+                (idx.iter().map(|&i| v[i] * v[i]).sum::<f64>() / idx.len() as f64).sqrt()
+            };
+            println!(
+                "{g:4} | {:5} | {:.3} | {:.3}",
+                idx.len(),
+                r(&spurious),
+                r(&resid)
+            );
+        }
+    }
     Ok(())
 }

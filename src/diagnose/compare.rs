@@ -249,6 +249,51 @@ pub fn longitudinal_rows(log: &DriveLog) -> Vec<bool> {
     (0..a.len()).map(|i| a[i] && b[i] && c[i]).collect()
 }
 
+/// Name of the engine speed compared on [`actuation_rows`] (the noise floor's copies and the
+/// explain step's clutch-actuation view; not a located signal).
+pub const ACTUATION_CHANNEL: &str = "engine_speed_actuated";
+
+/// Rows where the clutch is actuated — the rows [`longitudinal_rows`] leaves out within
+/// ±[`CLUTCH_TRANSITION_HALFWIDTH_S`] of a clutch transition — with the engine coupled (a
+/// gear engaged, the clutch not fully open, as [`engine_speed_rows`]), away from service-brake
+/// steps and input gaps as the longitudinal rows are. `clutch_slip`'s fingerprint is here
+/// (diagnosis.md: "engine speed mismatch while clutch actuated"): a worn clutch lets the engine
+/// run up while it closes. The speed condition (the model's minimum) is the caller's.
+pub fn actuation_rows(log: &DriveLog) -> Vec<bool> {
+    let away = away_from_events(log, "clutch_position", 0.02, CLUTCH_TRANSITION_HALFWIDTH_S);
+    let b = away_from_steps(
+        log,
+        "brake_force",
+        BRAKE_STEP_N,
+        STEP_WINDOW_S,
+        CLUTCH_TRANSITION_HALFWIDTH_S,
+    );
+    let c = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
+    let coupled = coupled_rows(log);
+    (0..away.len())
+        .map(|i| !away[i] && b[i] && c[i] && coupled[i])
+        .collect()
+}
+
+/// Rows with a gear engaged and the clutch not fully open (below 98 %), gaps held/filled.
+fn coupled_rows(log: &DriveLog) -> Vec<bool> {
+    use crate::schema::Interpolation;
+    use crate::signal::distance::fill_gaps;
+    let clutch = log
+        .signal("clutch_position")
+        .and_then(|c| fill_gaps(c, Interpolation::Linear));
+    let gear = log
+        .signal("gear")
+        .and_then(|g| fill_gaps(g, Interpolation::Hold));
+    (0..log.len())
+        .map(|i| {
+            let open = clutch.as_ref().is_some_and(|c| c[i] >= 0.98);
+            let neutral = gear.as_ref().is_some_and(|g| g[i].round() < 1.0);
+            !open && !neutral
+        })
+        .collect()
+}
+
 /// Rows after an input gap that still do not count, s ([`longitudinal_rows`], [`axle_rows`]).
 pub const INPUT_GAP_TAIL_S: f64 = 1.0;
 
@@ -340,21 +385,12 @@ pub const STEP_WINDOW_S: f64 = 0.3;
 /// (measured on clean synthetic drives: a steady 5–7 rad/s offset through every coasting
 /// phase). The vehicle speed still counts there.
 pub fn engine_speed_rows(log: &DriveLog) -> Vec<bool> {
-    use crate::schema::Interpolation;
-    use crate::signal::distance::fill_gaps;
-    let mut ok = longitudinal_rows(log);
-    let clutch = log
-        .signal("clutch_position")
-        .and_then(|c| fill_gaps(c, Interpolation::Linear));
-    let gear = log
-        .signal("gear")
-        .and_then(|g| fill_gaps(g, Interpolation::Hold));
-    for (i, o) in ok.iter_mut().enumerate() {
-        let open = clutch.as_ref().is_some_and(|c| c[i] >= 0.98);
-        let neutral = gear.as_ref().is_some_and(|g| g[i].round() < 1.0);
-        *o = *o && !open && !neutral;
-    }
-    ok
+    let coupled = coupled_rows(log);
+    longitudinal_rows(log)
+        .iter()
+        .zip(&coupled)
+        .map(|(a, b)| *a && *b)
+        .collect()
 }
 
 /// What the nominal models say about one recording.
@@ -416,4 +452,74 @@ pub fn compare_at(
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::Signal;
+
+    /// 10 s at 50 Hz, gear 7: the clutch (10 Hz, held on the grid as the ingest holds it)
+    /// open until 2 s, closing over 2.0–2.6 s, closed after; neutral from 8 s.
+    fn shift_log() -> DriveLog {
+        let n = 500;
+        let clutch: Vec<f64> = (0..n)
+            .map(|k| {
+                let t = (k - k % 5) as f64 * 0.02;
+                if t < 2.0 {
+                    1.0
+                } else if t < 2.6 {
+                    1.0 - (t - 2.0) / 0.6
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let gear: Vec<f64> = (0..n).map(|k| if k < 400 { 7.0 } else { 0.0 }).collect();
+        let signals = [
+            ("clutch_position", "1", clutch),
+            ("gear", "1", gear),
+            ("engine_speed", "rad/s", vec![150.0; n]),
+            ("vehicle_speed", "m/s", vec![10.0; n]),
+        ]
+        .into_iter()
+        .map(|(name, unit, values)| Signal {
+            name: name.into(),
+            unit: unit.into(),
+            values,
+        })
+        .collect();
+        DriveLog {
+            timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
+            signals,
+            ..DriveLog::default()
+        }
+    }
+
+    #[test]
+    fn actuation_rows_are_the_coupled_rows_the_longitudinal_rows_leave_out_at_the_clutch() {
+        let log = shift_log();
+        let t = log.seconds_from_start();
+        let act = actuation_rows(&log);
+        let steady = longitudinal_rows(&log);
+        let engine = engine_speed_rows(&log);
+        let h = CLUTCH_TRANSITION_HALFWIDTH_S;
+        // boundaries: the transition samples 2.1 … 2.6 s ± h; the clutch leaves fully open at
+        // 2.1 s; neutral from 8 s
+        let edges = [2.1 - h, 2.6 + h, 2.1, 8.0];
+        let mut counted = 0;
+        for i in 0..log.len() {
+            assert!(!(act[i] && engine[i]), "row {i}: the speeds compare it too");
+            if edges.iter().any(|e| (t[i] - e).abs() < 0.015) {
+                continue;
+            }
+            let near = t[i] > 2.1 - h && t[i] < 2.6 + h;
+            assert_eq!(steady[i], !near, "row {i} at {} s", t[i]);
+            let coupled = t[i] > 2.1 && t[i] < 8.0;
+            assert_eq!(act[i], near && coupled, "row {i} at {} s", t[i]);
+            counted += usize::from(act[i]);
+        }
+        // 2.1 … 3.1 s but for the rows next to the edges
+        assert!(counted >= 45, "{counted}");
+    }
 }

@@ -26,7 +26,9 @@
 //! change), not assumed. The unit is a *view* of a model ([`super::problem::View`]): the
 //! longitudinal model's speeds, its shuffle modes (one sample per clutch engagement,
 //! [`super::modal_channel`]), its torque reversals (the engine's speed against the wheels,
-//! one sample per reversal, [`super::reversal_channel`]), the axle model's bellow pressures.
+//! one sample per reversal, [`super::reversal_channel`]), the engine speed while the clutch
+//! is actuated (scored for `clutch_slip` alone, [`super::problem::ViewKind::only_for`]), the
+//! axle model's bellow pressures.
 //! An effect is fitted and scored on the views it changes, so the shuffle modes count for the
 //! shaft stiffness and the mass (which move them) and the reversals for the lash, the
 //! stiffness and the torque signal's delay, and neither dilutes the speeds' figures for an
@@ -34,7 +36,8 @@
 //! those views of each view's weighted mean square; within a view every signal counts alike
 //! (weights `σ_c`: step 2's noise floor when given, else the signal's train RMS residual at
 //! the round's parameters; an engagement's own standard error for the modes, a reversal's
-//! noise and floor for the reversals; [`super::problem`]).
+//! noise and floor for the reversals, each actuated row's own null variance for the clutch;
+//! [`super::problem`]).
 //!
 //! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
 //! advance holds")
@@ -435,7 +438,11 @@ pub fn oracle_check(
         .map(|y| Arc::new(y.clone()))
         .collect();
     let ev = Evaluator::new(problem, theta, &bases, noise_floor, row_dt(problem));
-    let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
+    let own: Vec<bool> = ev
+        .models
+        .iter()
+        .map(|v| v.domain == e.domain() && v.serves(e))
+        .collect();
     if !own.contains(&true) {
         return Ok(None);
     }

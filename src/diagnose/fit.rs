@@ -219,6 +219,16 @@ pub struct ModelView {
     /// A view with its own term of the deviance ([`Evaluator::deviance`],
     /// [`super::problem::ViewKind::own_term`]).
     pub own_term: bool,
+    /// The one effect the view is scored for ([`super::problem::ViewKind::only_for`]).
+    pub only_for: Option<Effect>,
+}
+
+impl ModelView {
+    /// Whether `e` is fitted and scored on this view (when it changes it): any effect, or the
+    /// view's one effect.
+    pub fn serves(&self, e: Effect) -> bool {
+        self.only_for.is_none_or(|x| x == e)
+    }
 }
 
 /// Simulated outputs of every model in use at one parameter value, with the weighted mean
@@ -271,6 +281,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
                 chans: v.chans.clone(),
                 sigmas: problem.sigmas(&v.chans, y, noise_floor),
                 own_term: v.kind.own_term(),
+                only_for: v.kind.only_for(),
             })
             .collect();
         Self {
@@ -658,7 +669,7 @@ pub struct Screen {
 fn may_change(ev: &Evaluator<'_, '_>, e: Effect) -> Active {
     ev.models
         .iter()
-        .map(|v| v.domain == e.domain() || e.domain() == Domain::Longitudinal)
+        .map(|v| (v.domain == e.domain() || e.domain() == Domain::Longitudinal) && v.serves(e))
         .collect()
 }
 

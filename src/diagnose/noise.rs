@@ -1488,6 +1488,10 @@ pub struct ModelSet<'a> {
     pub longitudinal: Option<LongitudinalConfig>,
     /// Run the axle model.
     pub axle: bool,
+    /// Also compare the engine speed on the clutch-actuated rows
+    /// ([`super::compare::actuation_rows`], as [`super::compare::ACTUATION_CHANNEL`]): its
+    /// floor weights the explain step's clutch-actuation view; it is not located.
+    pub actuation: bool,
 }
 
 const PRESSURES: [&str; 3] = [
@@ -1520,6 +1524,7 @@ impl<'a> ModelSet<'a> {
             nominal,
             longitudinal: long.then(LongitudinalConfig::default),
             axle,
+            actuation: false,
         }
     }
 
@@ -1580,7 +1585,7 @@ impl<'a> ModelSet<'a> {
         let am: Option<[Vec<f64>; 3]> = meas.try_into().ok();
         let av: Option<[Vec<bool>; 3]> = valid.try_into().ok();
         let engine_valid = super::compare::engine_speed_rows(log);
-        Ok(compare_at(
+        let mut out = compare_at(
             long.as_ref(),
             axle.as_ref(),
             theta,
@@ -1588,7 +1593,34 @@ impl<'a> ModelSet<'a> {
             &engine_valid,
             am.as_ref(),
             av.as_ref(),
-        )?)
+        )?;
+        if let (true, Some(cfg), Some(v)) = (
+            self.actuation,
+            &self.longitudinal,
+            log.signal("vehicle_speed"),
+        ) {
+            if let Some(es) = out.iter().find(|c| c.name == "engine_speed") {
+                let act = super::compare::actuation_rows(log);
+                let w = log.signal("engine_speed");
+                let valid = (0..n)
+                    .map(|i| {
+                        act[i]
+                            && v[i].is_finite()
+                            && v[i] >= cfg.min_speed_mps
+                            && w.is_some_and(|w| w[i].is_finite())
+                    })
+                    .collect();
+                let c = Compared {
+                    name: super::compare::ACTUATION_CHANNEL.into(),
+                    unit: es.unit.clone(),
+                    measured: es.measured.clone(),
+                    simulated: es.simulated.clone(),
+                    valid,
+                };
+                out.push(c);
+            }
+        }
+        Ok(out)
     }
 }
 

@@ -12,7 +12,12 @@
 //!   engagement ([`super::modal_channel`]), when at least two engagements fall in each part;
 //!   and `reversal_relative_speed`, an events channel: the engine's speed against the wheels
 //!   at each engine-torque reversal with the clutch closed, one weighted sample per reversal
-//!   ([`super::reversal_channel`]), when at least one reversal falls in each part;
+//!   ([`super::reversal_channel`]), when at least one reversal falls in each part; and
+//!   `engine_speed_actuated`: the engine speed on the rows the other two speeds leave out
+//!   while the clutch is actuated ([`super::compare::actuation_rows`]), each row weighted by
+//!   its own null variance from the noise floor's copies ([`Problem::with_actuation`]), when
+//!   the diagnosis computed that floor and each part has at least [`MIN_SAMPLES_PER_PART`]
+//!   such rows;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
 //!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
@@ -25,8 +30,12 @@
 //! fitted and scored on the views it changes materially ([`super::explain`]), so a view that
 //! only a few effects can move (the modes: the stiffness and the mass; the reversals: the
 //! lash, the stiffness, the torque signal's delay) never dilutes the figures of the others.
-//! The speeds and the pressures are pooled in the deviance as largely redundant; the modes and
-//! the reversals are terms of their own ([`ViewKind::own_term`]).
+//! The speeds and the pressures are pooled in the deviance as largely redundant; the modes,
+//! the reversals and the clutch actuation are terms of their own ([`ViewKind::own_term`]).
+//! The clutch-actuation view is fitted and scored for `clutch_slip` alone
+//! ([`ViewKind::only_for`]): it is that effect's catalogue fingerprint, on rows the nominal
+//! model reproduces only to the 10 Hz clutch's timing, and every other longitudinal effect
+//! moves them a little without carrying its evidence there.
 //!
 //! # Train / held-out split: alternating blocks in time
 //! The drive is cut into contiguous blocks of whole longitudinal windows (block length
@@ -52,10 +61,12 @@
 //! (step 2, locate) and otherwise the channel's train RMS residual at the current parameters.
 //! The weighted RMSE is its square root. An events channel has `σ_c = 1` and weights each
 //! sample by its own `1/s_i²` ([`Channel::events`]), so its mean square is that of the
-//! standardised residuals. RMSE, MAE and fit % per signal are unweighted, in the
+//! standardised residuals; so does the clutch-actuation channel per row
+//! ([`Channel::row_weights`]), whose whiteness and effective sample count are those of its
+//! standardised residual series. RMSE, MAE and fit % per signal are unweighted, in the
 //! signal's SI unit ([`metrics`]).
 
-use super::catalogue::Domain;
+use super::catalogue::{Domain, Effect};
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
 use super::modal::ModalConfig;
 use super::modal_channel::{self, ModeSample};
@@ -191,6 +202,10 @@ pub struct Channel {
     pub train_idx: Vec<usize>,
     /// Valid held-out rows.
     pub held_idx: Vec<usize>,
+    /// Per-row weights `w_i = 1/σ_i²` of a time series whose rows have their own null
+    /// variance (the clutch-actuation view, [`Problem::with_actuation`]; the channel's `σ_c`
+    /// is 1); `None`: every row weighs 1.
+    pub row_weights: Option<Vec<f64>>,
 }
 
 /// The per-sample weights of an events channel ([`Channel::events`]): `w_i = 1/s_i²` for a
@@ -212,7 +227,11 @@ impl Channel {
     /// Weight of row `i` within the channel: 1 for a time series, the sample's `1/s_i²` for
     /// an events channel.
     pub fn weight(&self, i: usize) -> f64 {
-        self.events.as_ref().map_or(1.0, |w| w.0[i])
+        match (&self.events, &self.row_weights) {
+            (Some(w), _) => w.0[i],
+            (None, Some(w)) => w[i],
+            (None, None) => 1.0,
+        }
     }
 
     /// The valid rows of `part`.
@@ -266,6 +285,9 @@ pub enum ViewKind {
     Reversals,
     /// The three bellow pressures.
     Pressures,
+    /// The engine speed while the clutch is actuated ([`Problem::with_actuation`]), scored
+    /// for `clutch_slip` alone ([`ViewKind::only_for`]).
+    ClutchActuation,
 }
 
 impl ViewKind {
@@ -273,7 +295,22 @@ impl ViewKind {
     /// the modes and the reversals are other quantities than the speeds and the pressures,
     /// which are pooled as largely redundant.
     pub fn own_term(self) -> bool {
-        matches!(self, ViewKind::ShuffleModes | ViewKind::Reversals)
+        matches!(
+            self,
+            ViewKind::ShuffleModes | ViewKind::Reversals | ViewKind::ClutchActuation
+        )
+    }
+
+    /// The one effect a view is fitted and scored for, when it is not every effect that
+    /// changes it: the clutch-actuation view is `clutch_slip`'s fingerprint (diagnosis.md),
+    /// on rows the nominal model reproduces only to the 10 Hz clutch's timing, which every
+    /// longitudinal effect moves a little; scored for all of them it would dilute their
+    /// held-out figures with rows that carry none of their evidence.
+    pub fn only_for(self) -> Option<Effect> {
+        match self {
+            ViewKind::ClutchActuation => Some(Effect::ClutchSlip),
+            _ => None,
+        }
     }
 }
 
@@ -387,6 +424,7 @@ impl<'a> Problem<'a> {
             }
             Channel {
                 events: None,
+                row_weights: None,
                 name: name.into(),
                 unit,
                 domain,
@@ -573,6 +611,99 @@ impl<'a> Problem<'a> {
         })
     }
 
+    /// Adds the clutch-actuation view: the engine speed on the rows where the clutch is
+    /// actuated ([`super::compare::actuation_rows`], the vehicle at the longitudinal model's
+    /// minimum speed or faster), each row weighted by its own null variance `variance`
+    /// (rad²/s² on the log's rows, NaN where a row does not count: the noise floor's copies of
+    /// [`super::compare::ACTUATION_CHANNEL`], which carry the 10 Hz clutch's sampling phase).
+    /// The rows the speeds leave out because the model's clutch closes only to a 0.1 s sample
+    /// are where a worn clutch shows (diagnosis.md: "engine speed mismatch while clutch
+    /// actuated"); weighted by what that timing alone explains, they score about 1 on a drive
+    /// the model reproduces. The view is its own deviance term, scored for `clutch_slip`
+    /// alone ([`ViewKind::only_for`]), and used when each part has at least
+    /// [`MIN_SAMPLES_PER_PART`] such rows; otherwise the problem is returned unchanged.
+    pub fn with_actuation(mut self, variance: &[f64]) -> Self {
+        let Some(m) = &self.long else {
+            return self;
+        };
+        let n = self.log.len();
+        if variance.len() != n {
+            return self;
+        }
+        let Some(speeds) = self.views.iter().position(|v| v.kind == ViewKind::Speeds) else {
+            return self;
+        };
+        let act = super::compare::actuation_rows(self.log);
+        let v = m.measured_speed();
+        let w = m.measured_engine_speed();
+        let raw = self.log.signal("engine_speed").unwrap_or(&[]);
+        let min_speed = LongitudinalConfig::default().min_speed_mps;
+        let mut weights = vec![0.0; n];
+        let mut valid = vec![false; n];
+        let (mut train_idx, mut held_idx) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let var = variance[i];
+            if act[i]
+                && v[i] >= min_speed
+                && raw.get(i).is_some_and(|x| x.is_finite())
+                && var.is_finite()
+                && var > 0.0
+            {
+                weights[i] = 1.0 / var;
+                valid[i] = true;
+                if self.split.heldout[i] {
+                    held_idx.push(i);
+                } else {
+                    train_idx.push(i);
+                }
+            }
+        }
+        if train_idx.len() < MIN_SAMPLES_PER_PART || held_idx.len() < MIN_SAMPLES_PER_PART {
+            return self;
+        }
+        let engine = self.nominal_outputs[speeds][1].clone();
+        let ch = Channel {
+            events: None,
+            row_weights: Some(weights),
+            name: super::compare::ACTUATION_CHANNEL.into(),
+            unit: "rad/s",
+            domain: Domain::Longitudinal,
+            measured: w.to_vec(),
+            valid,
+            train_idx,
+            held_idx,
+        };
+        // after the longitudinal channels and views, before the axle model's
+        let at = self
+            .channels
+            .iter()
+            .take_while(|c| c.domain == Domain::Longitudinal)
+            .count();
+        for view in self.views.iter_mut() {
+            for c in view.chans.iter_mut() {
+                if *c >= at {
+                    *c += 1;
+                }
+            }
+        }
+        self.channels.insert(at, ch);
+        let vat = self
+            .views
+            .iter()
+            .take_while(|v| v.domain == Domain::Longitudinal)
+            .count();
+        self.views.insert(
+            vat,
+            View {
+                domain: Domain::Longitudinal,
+                kind: ViewKind::ClutchActuation,
+                chans: vec![at],
+            },
+        );
+        self.nominal_outputs.insert(vat, vec![engine]);
+        self
+    }
+
     /// Outputs of every view at the nominal parameters ([`Problem::views`] order; per view its
     /// channels' simulations).
     pub fn nominal_outputs(&self) -> &[Vec<Vec<f64>>] {
@@ -666,7 +797,11 @@ impl<'a> Problem<'a> {
     ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
         let wants = |k: ViewKind| self.views.iter().zip(which).any(|(v, w)| *w && v.kind == k);
         let long = match &self.long {
-            Some(m) if wants(ViewKind::Speeds) || wants(ViewKind::Reversals) => {
+            Some(m)
+                if wants(ViewKind::Speeds)
+                    || wants(ViewKind::Reversals)
+                    || wants(ViewKind::ClutchActuation) =>
+            {
                 Some(m.simulate(theta)?)
             }
             _ => None,
@@ -704,6 +839,9 @@ impl<'a> Problem<'a> {
                     )]
                 }),
                 (true, ViewKind::Pressures) => axle.clone(),
+                (true, ViewKind::ClutchActuation) => {
+                    long.as_ref().map(|o| vec![o.engine_speed.clone()])
+                }
             });
         }
         Ok(out)
@@ -724,7 +862,7 @@ impl<'a> Problem<'a> {
             .zip(outputs)
             .map(|(&c, y)| {
                 let ch = &self.channels[c];
-                if ch.events.is_some() {
+                if ch.events.is_some() || ch.row_weights.is_some() {
                     return 1.0;
                 }
                 match noise_floor.and_then(|m| m.get(&ch.name)) {
@@ -873,7 +1011,11 @@ pub fn whiteness(
             pw += q.sqrt() * ms / (sg * sg);
             continue;
         }
-        let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - y[i]).collect();
+        // standardised by the row's own weight (1 but for a row-weighted channel)
+        let r: Vec<f64> = rows
+            .iter()
+            .map(|&i| (ch.measured[i] - y[i]) * ch.weight(i).sqrt())
+            .collect();
         let e0: f64 = r.iter().map(|x| x * x).sum();
         if e0 <= 0.0 {
             continue;
@@ -945,7 +1087,10 @@ pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
     if n < 2 || ch.events.is_some() {
         return n as f64;
     }
-    let r: Vec<f64> = rows.iter().map(|&i| ch.measured[i] - sim[i]).collect();
+    let r: Vec<f64> = rows
+        .iter()
+        .map(|&i| (ch.measured[i] - sim[i]) * ch.weight(i).sqrt())
+        .collect();
     let mean = r.iter().sum::<f64>() / n as f64;
     let mut planner = RealFftPlanner::<f64>::new();
     let mut acov: Vec<f64> = Vec::new();
@@ -999,6 +1144,7 @@ mod tests {
         let n = measured.len();
         Channel {
             events: None,
+            row_weights: None,
             name: "x".into(),
             unit: "1",
             domain: Domain::Longitudinal,

@@ -797,7 +797,8 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
     };
     // blind from here: the drive file and the nominal vehicle file beside it
     let t0 = std::time::Instant::now();
-    let diagnosed = (|| -> Result<(Diagnosis, DriveLog, VehicleFile), String> {
+    type Diagnosed = (Diagnosis, Option<Vec<f64>>, DriveLog, VehicleFile);
+    let diagnosed = (|| -> Result<Diagnosed, String> {
         let vf = VehicleFile::load(&g.vehicle).map_err(|e| e.to_string())?;
         let opts = crate::pipeline::ingest_stage::IngestConfig::default()
             .options(&[], Some(&vf))
@@ -810,14 +811,14 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
             .join("diagnoses")
             .join(format!("case-{:04}", case.index));
         write_outputs(&dir, &d, &log, "fleetdyn prove").map_err(|e| e.to_string())?;
-        Ok((d.diagnosis, log, vf))
+        Ok((d.diagnosis, d.actuation_variance, log, vf))
     })();
     let seconds = t0.elapsed().as_secs_f64();
     match diagnosed {
-        Ok((d, log, vf)) => {
+        Ok((d, act, log, vf)) => {
             // the scorer's own look, with the answer: could the rule see the hidden effect?
             let oracle = match g.truth.injection {
-                Some(inj) => oracle(&log, &vf, &d, inj.effect, inj.truth)
+                Some(inj) => oracle(&log, &vf, &d, act.as_deref(), inj.effect, inj.truth)
                     .map_err(|e| fail("oracle", e))
                     .map(Some),
                 None => Ok(None),
@@ -837,16 +838,19 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
 }
 
 /// [`super::explain::oracle_check`] of `effect` at `truth` on the drive `log`, weighted by the
-/// diagnosis' noise floor, with the problem the diagnosis built (same setup, same split).
+/// diagnosis' noise floor, with the problem the diagnosis built (same setup, split and views).
 fn oracle(
     log: &DriveLog,
     vf: &VehicleFile,
     d: &Diagnosis,
+    actuation_variance: Option<&[f64]>,
     effect: Effect,
     truth: f64,
 ) -> Result<super::explain::OracleCheck, String> {
     let setup = super::setup::Setup::new(log, vf).map_err(|e| e.to_string())?;
-    let problem = setup.problem(log).map_err(|e| e.to_string())?;
+    let problem = setup
+        .problem(log, actuation_variance)
+        .map_err(|e| e.to_string())?;
     // slope_quantization's parameter is the sensor resolution the cure reconstructs with
     // (extended.rs), its nominal the model's assumed 0.1 % (setup.rs): the truth is a value
     super::explain::oracle_check(&problem, Some(&d.noise_floor), effect, truth)

@@ -39,7 +39,7 @@ use super::modal::{compare_modes, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::problem::ExplainError;
 use super::setup::Setup;
-use crate::diagnose::compare::Comparison;
+use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
 use crate::io::OutputError;
 use crate::model::vehicle::VehicleFile;
 use crate::report::axle_plot::PlotError;
@@ -133,6 +133,10 @@ pub struct Diagnosed {
     pub models: ModelsUsed,
     /// Shuffle modes per clutch engagement (`None` without an engine-speed comparison).
     pub modal: Option<ModalComparison>,
+    /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
+    /// where a row does not count; `None` without the longitudinal model): the weights of
+    /// the explain step's clutch-actuation view ([`super::problem::Problem::new`]).
+    pub actuation_variance: Option<Vec<f64>>,
 }
 
 /// Which models the diagnosis used.
@@ -213,10 +217,22 @@ pub fn diagnose(
     cfg: &DiagnoseConfig,
 ) -> Result<Diagnosed, DiagnoseError> {
     let setup = Setup::new(log, vehicle)?;
-    let models = ModelSet::for_log(log, &setup.nominal_truth, &setup.ratios, setup.nominal);
-    let floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
+    let models = ModelSet {
+        actuation: true,
+        ..ModelSet::for_log(log, &setup.nominal_truth, &setup.ratios, setup.nominal)
+    };
+    let mut floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
+    // the clutch-actuated engine speed is not located: its floor only weights the explain
+    // step's clutch-actuation view
+    let actuation_variance = floors
+        .floors
+        .iter()
+        .position(|f| f.signal == ACTUATION_CHANNEL)
+        .map(|k| floors.floors.remove(k).null_variance);
+    let mut signals = models.compared(log, &setup.nominal)?;
+    signals.retain(|c| c.name != ACTUATION_CHANNEL);
     let cmp = Comparison {
-        signals: models.compared(log, &setup.nominal)?,
+        signals,
         conditions: setup.conditions.clone(),
     };
     let lcfg = LocateConfig {
@@ -251,7 +267,7 @@ pub fn diagnose(
             }
             m
         });
-    let problem = setup.problem(log)?;
+    let problem = setup.problem(log, actuation_variance.as_deref())?;
     let noise_floor = floors.summary();
     let explanation = explain(
         &problem,
@@ -314,6 +330,7 @@ pub fn diagnose(
             slope_resolution: setup.slope_resolution,
         },
         modal,
+        actuation_variance,
     })
 }
 

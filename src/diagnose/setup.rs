@@ -61,23 +61,30 @@ fn column(log: &DriveLog, name: &str, interp: Interpolation) -> Option<Vec<f64>>
 impl Setup {
     /// The explain step's problem for `log` with this setup: the diagnosis' models, 20 s
     /// windows and alternating split ([`super::problem::Problem::new`] with the default
-    /// [`LongitudinalConfig`]). The diagnosis and the proof's oracle check both build it here,
-    /// so they score the same split.
+    /// [`LongitudinalConfig`]), with the clutch-actuation view when `actuation_variance` (the
+    /// noise floor's per-row null variance of the clutch-actuated engine speed) is given
+    /// ([`super::problem::Problem::with_actuation`]). The diagnosis and the proof's oracle
+    /// check both build it here, so they score the same split and views.
     ///
     /// # Errors
     /// [`super::problem::ExplainError`] from [`super::problem::Problem::new`].
     pub fn problem<'a>(
         &'a self,
         log: &'a DriveLog,
+        actuation_variance: Option<&[f64]>,
     ) -> Result<super::problem::Problem<'a>, super::problem::ExplainError> {
-        super::problem::Problem::new(
+        let p = super::problem::Problem::new(
             log,
             &self.nominal_truth,
             &self.ratios,
             self.nominal,
             LongitudinalConfig::default(),
             None,
-        )
+        )?;
+        Ok(match actuation_variance {
+            Some(v) => p.with_actuation(v),
+            None => p,
+        })
     }
 
     /// Sets up the diagnosis of `log` with the nominal `vehicle`.

@@ -430,3 +430,79 @@ fn bad_inputs_are_typed_errors() {
     assert!(v["split"]["block_s"].as_f64().unwrap() >= 20.0);
     assert!(v["rule"]["min_heldout_gain"].as_f64().unwrap() > 0.0);
 }
+
+/// The clutch-actuation view (`Problem::with_actuation`): added after the longitudinal views
+/// with its rows weighted by their own null variance, scored for `clutch_slip` alone, its
+/// nominal output the speeds' engine speed; the axle view still reads the pressures.
+#[test]
+fn the_clutch_actuation_view_is_weighted_per_row_and_serves_the_clutch_alone() {
+    use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
+    use fleetdyn::diagnose::problem::{Part, ViewKind};
+    let dir = tempfile::tempdir().unwrap();
+    let d = synth_drive(
+        &fixture(VEHICLE),
+        "city-se",
+        3.0,
+        2,
+        &dir.path().join("drive"),
+        &DriveConfig::default(),
+        None,
+    )
+    .unwrap();
+    let vf = VehicleFile::load(&d.vehicle).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.01);
+    let cfg = LongitudinalConfig::default();
+    let plain = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None).unwrap();
+    let n_views = plain.views().len();
+    let n = d.log.len();
+    // a variance of the wrong length changes nothing
+    let same = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None)
+        .unwrap()
+        .with_actuation(&[4.0; 3]);
+    assert_eq!(same.views(), plain.views());
+    let p = plain.with_actuation(&vec![4.0; n]);
+    assert_eq!(p.views().len(), n_views + 1);
+    let k = p
+        .views()
+        .iter()
+        .position(|v| v.kind == ViewKind::ClutchActuation)
+        .unwrap();
+    assert_eq!(
+        ViewKind::ClutchActuation.only_for(),
+        Some(Effect::ClutchSlip)
+    );
+    assert!(p.views()[..k]
+        .iter()
+        .all(|v| v.domain == Domain::Longitudinal));
+    assert!(p.views()[k + 1..].iter().all(|v| v.domain == Domain::Axle));
+    let view = &p.views()[k];
+    let ch = &p.channels()[view.chans[0]];
+    assert_eq!(ch.name, ACTUATION_CHANNEL);
+    assert!(ch.rows(Part::Train).len() >= 100 && ch.rows(Part::Heldout).len() >= 100);
+    for &i in ch.rows(Part::Train).iter().chain(ch.rows(Part::Heldout)) {
+        assert_eq!(ch.weight(i), 0.25);
+    }
+    // every other view still reads its own channels
+    for v in p.views() {
+        for &c in &v.chans {
+            let name = &p.channels()[c].name;
+            match v.kind {
+                ViewKind::Pressures => assert!(name.starts_with("bellow_pressure"), "{name}"),
+                ViewKind::Speeds => assert!(name.ends_with("_speed"), "{name}"),
+                _ => {}
+            }
+        }
+    }
+    // its nominal output is the speeds' engine speed, and simulating it gives the same
+    let speeds = p
+        .views()
+        .iter()
+        .position(|v| v.kind == ViewKind::Speeds)
+        .unwrap();
+    assert_eq!(p.nominal_outputs()[k][0], p.nominal_outputs()[speeds][1]);
+    let which: Vec<bool> = (0..p.views().len()).map(|m| m == k).collect();
+    let sim = p.simulate_views(&which, &nominal).unwrap();
+    assert_eq!(sim[k].as_ref().unwrap()[0], p.nominal_outputs()[k][0]);
+}

@@ -9,12 +9,13 @@
 //!   rolling_resistance, vehicle_mass, grade_offset, engine_torque_offset,
 //!   bogie_torque_reaction, load_transfer_height, air_spring_nonlinearity, cg_position,
 //!   tyre_stiffness, grade_load_transfer, driveline_compliance through the shuffle
-//!   frequencies after clutch engagements, and driveline_backlash through the engine's speed
-//!   against the wheels at torque reversals) are named first;
+//!   frequencies after clutch engagements, driveline_backlash through the engine's speed
+//!   against the wheels at torque reversals, and clutch_slip through the engine speed while
+//!   the clutch is actuated) are named first;
 //! - no drive confidently names a wrong effect: a catalogue drive's first finding is its
 //!   hidden effect or lists it in its ambiguity set, or the drive has no finding (an effect
-//!   the recorded signals cannot identify — here the clutch slip of case 9 — ends as `none`
-//!   or `unexplained`, never as another effect);
+//!   the recorded signals cannot identify — here the slope quantisation of case 4 — ends as
+//!   `none` or `unexplained`, never as another effect);
 //! - drives without effect get no finding (the false-positive target);
 //! - out-of-catalogue drives get no catalogue finding and a mismatch located on the stretch;
 //! - correctly named drives: every fit improves the held-out RMSE of its quoted signal, the
@@ -22,15 +23,14 @@
 //!   the hidden change) is at most 20 %;
 //! - the scorer's oracle check (the hidden effect set to its truth, nothing fitted, rules 1
 //!   and 2 of the acceptance rule): every identified effect is visible to the rule, and the
-//!   clutch slip (`clutch_slip`, case 9: its flare falls inside a clutch transition) is not —
-//!   at its truth it changes the held-out weighted RMSE by less than 5 %, so no diagnosis
-//!   bound by the rule could name it on this drive.
+//!   slope quantisation (case 4: the cure cannot restore the rounding of constant grades) is
+//!   not, so no diagnosis bound by the rule could name it on this drive.
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;
 use fleetdyn::diagnose::prove::{run_proof, ProofConfig, ProofRun};
 
-const IDENTIFIED: [&str; 12] = [
+const IDENTIFIED: [&str; 13] = [
     "rolling_resistance",
     "vehicle_mass",
     "grade_offset",
@@ -43,10 +43,11 @@ const IDENTIFIED: [&str; 12] = [
     "grade_load_transfer",
     "driveline_compliance",
     "driveline_backlash",
+    "clutch_slip",
 ];
 
-/// Effects whose truth barely changes the compared outputs on these drives.
-const NOT_VISIBLE: [&str; 1] = ["clutch_slip"];
+/// Effects whose truth does not pass the acceptance rule's data tests on these drives.
+const NOT_VISIBLE: [&str; 1] = ["slope_quantization"];
 
 /// Runs the proof `cfg` with the seed 002 truck on 2 jobs into a temporary folder.
 fn proof(cfg: &ProofConfig) -> (tempfile::TempDir, ProofRun) {
@@ -83,7 +84,7 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
                 assert_eq!(s.oracle_visible, Some(true), "{case}: oracle gain {gain}");
             }
             if NOT_VISIBLE.contains(&s.hidden) {
-                assert!(gain.abs() < 0.05, "{case}: oracle gain {gain}");
+                assert!(gain < 0.25, "{case}: oracle gain {gain}");
                 assert_eq!(s.oracle_visible, Some(false), "{case}");
             }
         } else {
