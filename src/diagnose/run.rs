@@ -9,7 +9,9 @@
 //! 2. Compare ([`ModelSet::compared`]): longitudinal model in 20 s windows re-initialised from the
 //!    measured state (open-loop drift never spans more than a window), axle model open loop.
 //! 3. Noise floor ([`noise_floors`]): blind sensor-noise estimates from the recording's own
-//!    native samples, propagated through the model by Monte-Carlo copies.
+//!    native samples, propagated through the model by Monte-Carlo copies; the same copies
+//!    give the engine speed's null variance on the clutch-actuated rows, which weights the
+//!    explain step's clutch-actuation view and is not located.
 //! 4. Locate ([`locate`]): windows in time, stretches in distance, bands, coherence, lags,
 //!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule. Then
 //!    the shuffle modes after clutch engagements ([`super::modal`]): when their drive-level test
@@ -135,7 +137,7 @@ pub struct Diagnosed {
     pub modal: Option<ModalComparison>,
     /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
     /// where a row does not count; `None` without the longitudinal model): the weights of
-    /// the explain step's clutch-actuation view ([`super::problem::Problem::new`]).
+    /// the explain step's clutch-actuation view ([`super::problem::Problem::with_actuation`]).
     pub actuation_variance: Option<Vec<f64>>,
 }
 
