@@ -4,13 +4,14 @@
 //! variance from the noise floor's copies (which jitter the 10 Hz clutch's sampling phase).
 //! Per case of a proof folder: rows per part of the diagnosis' split, and the weighted mean
 //! square of each part at the nominal parameters and with the hidden effect at its truth
-//! (what `Problem::with_actuation` scores; docs/events.md).
+//! (what `Problem::with_actuation` scores; docs/events.md). `ACTUATION_MIN_SPEED_MPS=x` takes
+//! the rows from `x` m/s instead of 1 m/s (the launches from standstill).
 //!
 //! ```text
 //! cargo run --release --example actuation_view -- DIR case-0009 case-0016 …
 //! ```
 use fleetdyn::diagnose::compare::{self, Compared};
-use fleetdyn::diagnose::extended::{LongitudinalModel, Theta};
+use fleetdyn::diagnose::extended::Theta;
 use fleetdyn::diagnose::noise::{noise_floors_with, NoiseConfig, NoiseError};
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::table::DriveLog;
@@ -19,15 +20,15 @@ use std::path::PathBuf;
 #[allow(dead_code)]
 mod proof_dir;
 
-/// The rows of the clutch-actuation view: `compare::actuation_rows` at 1 m/s or faster with a
-/// recorded engine speed (as `Problem::with_actuation` takes them).
-fn actuation_rows(log: &DriveLog) -> Vec<bool> {
+/// The rows of the clutch-actuation view: `compare::actuation_rows` at `min_speed` or faster
+/// (1 m/s: as `Problem::with_actuation` takes them) with a recorded engine speed.
+fn actuation_rows(log: &DriveLog, min_speed: f64) -> Vec<bool> {
     let act = compare::actuation_rows(log);
     let (Some(v), Some(w)) = (log.signal("vehicle_speed"), log.signal("engine_speed")) else {
         return vec![false; log.len()];
     };
     (0..log.len())
-        .map(|i| act[i] && v[i] >= 1.0 && w[i].is_finite())
+        .map(|i| act[i] && v[i].is_finite() && v[i] >= min_speed && w[i].is_finite())
         .collect()
 }
 
@@ -35,22 +36,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a: Vec<String> = std::env::args().skip(1).collect();
     let (dir, cases) = a.split_first().ok_or("usage: actuation_view DIR CASE…")?;
     let dir = PathBuf::from(dir);
+    // ACTUATION_MIN_SPEED_MPS=x: rows from x m/s (launches), instead of the view's 1 m/s
+    let min_speed: f64 = std::env::var("ACTUATION_MIN_SPEED_MPS")
+        .ok()
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(1.0);
     println!("case | label | rows train / held-out | MS nominal train, held-out | MS truth train, held-out");
     for case in cases {
         let (vf, log) = proof_dir::load(&dir, case)?;
         let ans = proof_dir::answer(&dir, case);
         let setup = Setup::new(&log, &vf)?;
         let sim = |l: &DriveLog, th: &Theta| -> Result<Vec<f64>, NoiseError> {
-            let m = LongitudinalModel::new(
-                l,
-                &setup.nominal_truth,
-                &setup.ratios,
-                setup.nominal,
-                Default::default(),
-            )?;
-            Ok(m.simulate(th)?.engine_speed)
+            match setup.longitudinal_model(l)? {
+                Some(m) => Ok(m.simulate(th)?.engine_speed),
+                None => Ok(vec![f64::NAN; l.len()]),
+            }
         };
-        let act = actuation_rows(&log);
+        let act = actuation_rows(&log, min_speed);
         let floors = noise_floors_with(&log, &NoiseConfig::default(), |l| {
             Ok(vec![Compared {
                 name: "engine_speed".into(),

@@ -55,6 +55,25 @@ pub struct DriveLog {
 }
 
 impl DriveLog {
+    /// A log on an evenly spaced time base from 0 (`step_ns` apart) with the columns
+    /// `(name, unit, values)`, all as long as the first; no metadata. For logs built in code
+    /// (tests, studies); a reader builds its log from the file instead.
+    pub fn from_columns(step_ns: i64, columns: Vec<(&str, &str, Vec<f64>)>) -> DriveLog {
+        let n = columns.first().map_or(0, |c| c.2.len());
+        DriveLog {
+            timestamp_ns: (0..n as i64).map(|k| k * step_ns).collect(),
+            signals: columns
+                .into_iter()
+                .map(|(name, unit, values)| Signal {
+                    name: name.into(),
+                    unit: unit.into(),
+                    values,
+                })
+                .collect(),
+            ..DriveLog::default()
+        }
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.timestamp_ns.len()

@@ -237,16 +237,24 @@ fn away_from_input_gaps(log: &DriveLog, after_s: f64) -> Vec<bool> {
 /// Also left out: ±[`CLUTCH_TRANSITION_HALFWIDTH_S`] around a service-brake step
 /// ([`BRAKE_STEP_N`]), and input gaps with [`INPUT_GAP_TAIL_S`] after them.
 pub fn longitudinal_rows(log: &DriveLog) -> Vec<bool> {
-    let a = away_from_events(log, "clutch_position", 0.02, CLUTCH_TRANSITION_HALFWIDTH_S);
-    let b = away_from_steps(
+    let (clutch, known) = clutch_and_known_rows(log);
+    (0..clutch.len()).map(|i| clutch[i] && known[i]).collect()
+}
+
+/// Rows away from a clutch transition, and rows away from a service-brake step and an input
+/// gap, each ±[`CLUTCH_TRANSITION_HALFWIDTH_S`] ([`longitudinal_rows`], [`actuation_rows`]).
+fn clutch_and_known_rows(log: &DriveLog) -> (Vec<bool>, Vec<bool>) {
+    let clutch = away_from_events(log, "clutch_position", 0.02, CLUTCH_TRANSITION_HALFWIDTH_S);
+    let brake = away_from_steps(
         log,
         "brake_force",
         BRAKE_STEP_N,
         STEP_WINDOW_S,
         CLUTCH_TRANSITION_HALFWIDTH_S,
     );
-    let c = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
-    (0..a.len()).map(|i| a[i] && b[i] && c[i]).collect()
+    let gaps = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
+    let known = brake.iter().zip(&gaps).map(|(b, g)| *b && *g).collect();
+    (clutch, known)
 }
 
 /// Name of the engine speed compared on [`actuation_rows`] (the noise floor's copies and the
@@ -260,18 +268,10 @@ pub const ACTUATION_CHANNEL: &str = "engine_speed_actuated";
 /// (diagnosis.md: "engine speed mismatch while clutch actuated"): a worn clutch lets the engine
 /// run up while it closes. The speed condition (the model's minimum) is the caller's.
 pub fn actuation_rows(log: &DriveLog) -> Vec<bool> {
-    let away = away_from_events(log, "clutch_position", 0.02, CLUTCH_TRANSITION_HALFWIDTH_S);
-    let b = away_from_steps(
-        log,
-        "brake_force",
-        BRAKE_STEP_N,
-        STEP_WINDOW_S,
-        CLUTCH_TRANSITION_HALFWIDTH_S,
-    );
-    let c = away_from_input_gaps(log, INPUT_GAP_TAIL_S);
+    let (clutch, known) = clutch_and_known_rows(log);
     let coupled = coupled_rows(log);
-    (0..away.len())
-        .map(|i| !away[i] && b[i] && c[i] && coupled[i])
+    (0..clutch.len())
+        .map(|i| !clutch[i] && known[i] && coupled[i])
         .collect()
 }
 
@@ -457,7 +457,6 @@ pub fn compare_at(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::Signal;
 
     /// 10 s at 50 Hz, gear 7: the clutch (10 Hz, held on the grid as the ingest holds it)
     /// open until 2 s, closing over 2.0–2.6 s, closed after; neutral from 8 s.
@@ -476,24 +475,15 @@ mod tests {
             })
             .collect();
         let gear: Vec<f64> = (0..n).map(|k| if k < 400 { 7.0 } else { 0.0 }).collect();
-        let signals = [
-            ("clutch_position", "1", clutch),
-            ("gear", "1", gear),
-            ("engine_speed", "rad/s", vec![150.0; n]),
-            ("vehicle_speed", "m/s", vec![10.0; n]),
-        ]
-        .into_iter()
-        .map(|(name, unit, values)| Signal {
-            name: name.into(),
-            unit: unit.into(),
-            values,
-        })
-        .collect();
-        DriveLog {
-            timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
-            signals,
-            ..DriveLog::default()
-        }
+        DriveLog::from_columns(
+            20_000_000,
+            vec![
+                ("clutch_position", "1", clutch),
+                ("gear", "1", gear),
+                ("engine_speed", "rad/s", vec![150.0; n]),
+                ("vehicle_speed", "m/s", vec![10.0; n]),
+            ],
+        )
     }
 
     #[test]

@@ -944,26 +944,16 @@ pub(crate) mod tests {
     }
 
     fn log_with(clutch: Vec<f64>, gear: Vec<f64>, w: Vec<f64>) -> DriveLog {
-        use crate::table::Signal;
         let n = clutch.len();
-        let signals = [
-            ("clutch_position", "1", clutch),
-            ("gear", "1", gear),
-            ("engine_speed", "rad/s", w),
-            ("vehicle_speed", "m/s", vec![10.0; n]),
-        ]
-        .into_iter()
-        .map(|(name, unit, values)| Signal {
-            name: name.into(),
-            unit: unit.into(),
-            values,
-        })
-        .collect();
-        DriveLog {
-            timestamp_ns: (0..n as i64).map(|k| k * 20_000_000).collect(),
-            signals,
-            ..DriveLog::default()
-        }
+        DriveLog::from_columns(
+            20_000_000,
+            vec![
+                ("clutch_position", "1", clutch),
+                ("gear", "1", gear),
+                ("engine_speed", "rad/s", w),
+                ("vehicle_speed", "m/s", vec![10.0; n]),
+            ],
+        )
     }
 
     /// 10 s at 50 Hz: clutch open until 3 s, then closed; gear 7; ringing engine speed.

@@ -22,7 +22,7 @@ use fleetdyn::diagnose::explain::{explain, verdict, ExplainConfig, Explanation, 
 use fleetdyn::diagnose::extended::{LongitudinalConfig, Theta};
 use fleetdyn::diagnose::problem::{ExplainError, Problem};
 use fleetdyn::model::vehicle::VehicleFile;
-use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect};
+use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::{EffectChoice, TruthModel};
 use std::path::Path;
 use std::time::Instant;
@@ -369,13 +369,14 @@ fn results_do_not_depend_on_the_thread_count() {
     assert!(f["metrics"]["bellow_pressure_front"]["fit_percent"]["heldout_after"].is_f64());
 }
 
-#[test]
-fn bad_inputs_are_typed_errors() {
+/// A nominal city-se drive of `km` (seed 2) with its gear ratios, nominal truth model and
+/// parameters; the folder lives as long as the returned guard.
+fn nominal_city_drive(km: f64) -> (tempfile::TempDir, SynthDrive, Vec<f64>, TruthModel, Theta) {
     let dir = tempfile::tempdir().unwrap();
     let d = synth_drive(
         &fixture(VEHICLE),
         "city-se",
-        1.0,
+        km,
         2,
         &dir.path().join("drive"),
         &DriveConfig::default(),
@@ -386,6 +387,12 @@ fn bad_inputs_are_typed_errors() {
     let ratios = vf.gearbox.ratios.clone();
     let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
+    (dir, d, ratios, truth, nominal)
+}
+
+#[test]
+fn bad_inputs_are_typed_errors() {
+    let (_dir, d, ratios, truth, nominal) = nominal_city_drive(1.0);
     let cfg = LongitudinalConfig::default();
     // no pressures: the axle model is left out, the longitudinal one used
     let mut log = d.log.clone();
@@ -438,21 +445,7 @@ fn bad_inputs_are_typed_errors() {
 fn the_clutch_actuation_view_is_weighted_per_row_and_serves_the_clutch_alone() {
     use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
     use fleetdyn::diagnose::problem::{Part, ViewKind};
-    let dir = tempfile::tempdir().unwrap();
-    let d = synth_drive(
-        &fixture(VEHICLE),
-        "city-se",
-        3.0,
-        2,
-        &dir.path().join("drive"),
-        &DriveConfig::default(),
-        None,
-    )
-    .unwrap();
-    let vf = VehicleFile::load(&d.vehicle).unwrap();
-    let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
-    let nominal = Theta::nominal(&truth, 0.01);
+    let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
     let cfg = LongitudinalConfig::default();
     let plain = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None).unwrap();
     let n_views = plain.views().len();
