@@ -27,7 +27,8 @@
 //! longitudinal model's speeds, its shuffle modes (one sample per clutch engagement,
 //! [`super::modal_channel`]), its torque reversals (the engine's speed against the wheels,
 //! one sample per reversal, [`super::reversal_channel`]), the engine speed while the clutch
-//! is actuated (scored for `clutch_slip` alone, [`super::problem::ViewKind::only_for`]), the
+//! is actuated (scored for `clutch_slip` and `signal_delay` alone,
+//! [`super::problem::ViewKind::only_for`]), the
 //! axle model's bellow pressures.
 //! An effect is fitted and scored on the views it changes, so the shuffle modes count for the
 //! shaft stiffness and the mass (which move them) and the reversals for the lash, the

@@ -219,15 +219,15 @@ pub struct ModelView {
     /// A view with its own term of the deviance ([`Evaluator::deviance`],
     /// [`super::problem::ViewKind::own_term`]).
     pub own_term: bool,
-    /// The one effect the view is scored for ([`super::problem::ViewKind::only_for`]).
-    pub only_for: Option<Effect>,
+    /// The effects the view is scored for ([`super::problem::ViewKind::only_for`]).
+    pub only_for: Option<&'static [Effect]>,
 }
 
 impl ModelView {
-    /// Whether `e` is fitted and scored on this view (when it changes it): any effect, or the
-    /// view's one effect.
+    /// Whether `e` is fitted and scored on this view (when it changes it): any effect, or one
+    /// of the view's own.
     pub fn serves(&self, e: Effect) -> bool {
-        self.only_for.is_none_or(|x| x == e)
+        self.only_for.is_none_or(|x| x.contains(&e))
     }
 }
 

@@ -32,10 +32,11 @@
 //! lash, the stiffness, the torque signal's delay) never dilutes the figures of the others.
 //! The speeds and the pressures are pooled in the deviance as largely redundant; the modes,
 //! the reversals and the clutch actuation are terms of their own ([`ViewKind::own_term`]).
-//! The clutch-actuation view is fitted and scored for `clutch_slip` alone
-//! ([`ViewKind::only_for`]): it is that effect's catalogue fingerprint, on rows the nominal
-//! model reproduces only to the 10 Hz clutch's timing, and every other longitudinal effect
-//! moves them a little without carrying its evidence there.
+//! The clutch-actuation view is fitted and scored for `clutch_slip` and `signal_delay` alone
+//! ([`ViewKind::only_for`]): it is the worn clutch's catalogue fingerprint and where a
+//! delayed torque signal's ramps meet every shift, on rows the nominal model reproduces only
+//! to the 10 Hz clutch's timing, and every other longitudinal effect moves them a little
+//! without carrying its evidence there.
 //!
 //! # Train / held-out split: alternating blocks in time
 //! The drive is cut into contiguous blocks of whole longitudinal windows (block length
@@ -286,7 +287,7 @@ pub enum ViewKind {
     /// The three bellow pressures.
     Pressures,
     /// The engine speed while the clutch is actuated ([`Problem::with_actuation`]), scored
-    /// for `clutch_slip` alone ([`ViewKind::only_for`]).
+    /// for `clutch_slip` and `signal_delay` alone ([`ViewKind::only_for`]).
     ClutchActuation,
 }
 
@@ -301,14 +302,15 @@ impl ViewKind {
         )
     }
 
-    /// The one effect a view is fitted and scored for, when it is not every effect that
-    /// changes it: the clutch-actuation view is `clutch_slip`'s fingerprint (diagnosis.md),
-    /// on rows the nominal model reproduces only to the 10 Hz clutch's timing, which every
-    /// longitudinal effect moves a little; scored for all of them it would dilute their
-    /// held-out figures with rows that carry none of their evidence.
-    pub fn only_for(self) -> Option<Effect> {
+    /// The effects a view is fitted and scored for, when it is not every effect that changes
+    /// it: the clutch-actuation view serves `clutch_slip`, whose catalogue fingerprint it is
+    /// (diagnosis.md), and `signal_delay`, whose delayed torque ramps land against the clutch
+    /// at every shift — rows the nominal model reproduces only to the 10 Hz clutch's timing,
+    /// which every other longitudinal effect moves a little without carrying its evidence
+    /// there; scored for all of them it would dilute their held-out figures.
+    pub fn only_for(self) -> Option<&'static [Effect]> {
         match self {
-            ViewKind::ClutchActuation => Some(Effect::ClutchSlip),
+            ViewKind::ClutchActuation => Some(&[Effect::ClutchSlip, Effect::SignalDelay]),
             _ => None,
         }
     }
@@ -620,7 +622,7 @@ impl<'a> Problem<'a> {
     /// are where a worn clutch shows (diagnosis.md: "engine speed mismatch while clutch
     /// actuated"); weighted by what that timing alone explains, they score about 1 on a drive
     /// the model reproduces. The view is its own deviance term, scored for `clutch_slip`
-    /// alone ([`ViewKind::only_for`]), and used when each part has at least
+    /// and `signal_delay` alone ([`ViewKind::only_for`]), and used when each part has at least
     /// [`MIN_SAMPLES_PER_PART`] such rows; otherwise the problem is returned unchanged.
     pub fn with_actuation(mut self, variance: &[f64]) -> Self {
         let Some(m) = &self.long else {

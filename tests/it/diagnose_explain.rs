@@ -439,10 +439,11 @@ fn bad_inputs_are_typed_errors() {
 }
 
 /// The clutch-actuation view (`Problem::with_actuation`): added after the longitudinal views
-/// with its rows weighted by their own null variance, scored for `clutch_slip` alone, its
-/// nominal output the speeds' engine speed; the axle view still reads the pressures.
+/// with its rows weighted by their own null variance, scored for `clutch_slip` and
+/// `signal_delay` alone, its nominal output the speeds' engine speed; the axle view still
+/// reads the pressures.
 #[test]
-fn the_clutch_actuation_view_is_weighted_per_row_and_serves_the_clutch_alone() {
+fn the_clutch_actuation_view_is_weighted_per_row_and_serves_its_own_effects() {
     use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
     use fleetdyn::diagnose::problem::{Part, ViewKind};
     let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
@@ -462,10 +463,22 @@ fn the_clutch_actuation_view_is_weighted_per_row_and_serves_the_clutch_alone() {
         .iter()
         .position(|v| v.kind == ViewKind::ClutchActuation)
         .unwrap();
-    assert_eq!(
-        ViewKind::ClutchActuation.only_for(),
-        Some(Effect::ClutchSlip)
-    );
+    // the evaluator fits and scores the view for its own effects only
+    let bases: Vec<std::sync::Arc<Vec<Vec<f64>>>> = p
+        .nominal_outputs()
+        .iter()
+        .map(|y| std::sync::Arc::new(y.clone()))
+        .collect();
+    let ev = fleetdyn::diagnose::fit::Evaluator::new(&p, nominal, &bases, None, 0.02);
+    for e in Effect::ALL {
+        let own = matches!(e, Effect::ClutchSlip | Effect::SignalDelay);
+        assert_eq!(ev.models[k].serves(e), own, "{e:?}");
+        assert!(ev
+            .models
+            .iter()
+            .enumerate()
+            .all(|(m, v)| m == k || v.serves(e)));
+    }
     assert!(p.views()[..k]
         .iter()
         .all(|v| v.domain == Domain::Longitudinal));
