@@ -226,7 +226,8 @@ pub enum Part {
 
 impl Channel {
     /// Weight of row `i` within the channel: 1 for a time series, the sample's `1/s_i²` for
-    /// an events channel.
+    /// an events channel, the row's own `1/σ_i²` for a row-weighted one
+    /// ([`Channel::row_weights`]).
     pub fn weight(&self, i: usize) -> f64 {
         match (&self.events, &self.row_weights) {
             (Some(w), _) => w.0[i],
@@ -293,8 +294,8 @@ pub enum ViewKind {
 
 impl ViewKind {
     /// Whether the view is its own term of the deviance ([`super::fit::Evaluator::deviance`]):
-    /// the modes and the reversals are other quantities than the speeds and the pressures,
-    /// which are pooled as largely redundant.
+    /// the modes, the reversals and the clutch-actuated engine speed are other quantities (or
+    /// other rows) than the speeds and the pressures, which are pooled as largely redundant.
     pub fn own_term(self) -> bool {
         matches!(
             self,
