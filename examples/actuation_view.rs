@@ -20,18 +20,6 @@ use std::path::PathBuf;
 #[allow(dead_code)]
 mod proof_dir;
 
-/// The rows of the clutch-actuation view: `compare::actuation_rows` at `min_speed` or faster
-/// (1 m/s: as `Problem::with_actuation` takes them) with a recorded engine speed.
-fn actuation_rows(log: &DriveLog, min_speed: f64) -> Vec<bool> {
-    let act = compare::actuation_rows(log);
-    let (Some(v), Some(w)) = (log.signal("vehicle_speed"), log.signal("engine_speed")) else {
-        return vec![false; log.len()];
-    };
-    (0..log.len())
-        .map(|i| act[i] && v[i].is_finite() && v[i] >= min_speed && w[i].is_finite())
-        .collect()
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a: Vec<String> = std::env::args().skip(1).collect();
     let (dir, cases) = a.split_first().ok_or("usage: actuation_view DIR CASE…")?;
@@ -52,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 None => Ok(vec![f64::NAN; l.len()]),
             }
         };
-        let act = actuation_rows(&log, min_speed);
+        let act = compare::actuation_channel_rows(&log, min_speed);
         let floors = noise_floors_with(&log, &NoiseConfig::default(), |l| {
             Ok(vec![Compared {
                 name: "engine_speed".into(),

@@ -275,6 +275,20 @@ pub fn actuation_rows(log: &DriveLog) -> Vec<bool> {
         .collect()
 }
 
+/// The rows of the clutch-actuation channel: [`actuation_rows`] with a recorded vehicle speed
+/// of at least `min_speed_mps` (the longitudinal model's minimum) and a recorded engine speed
+/// — the rows the noise floor compares it on ([`super::noise::ModelSet::compared`]) and the
+/// explain step's view scores ([`super::problem::Problem::with_actuation`]).
+pub fn actuation_channel_rows(log: &DriveLog, min_speed_mps: f64) -> Vec<bool> {
+    let act = actuation_rows(log);
+    let (Some(v), Some(w)) = (log.signal("vehicle_speed"), log.signal("engine_speed")) else {
+        return vec![false; log.len()];
+    };
+    (0..log.len())
+        .map(|i| act[i] && v[i].is_finite() && v[i] >= min_speed_mps && w[i].is_finite())
+        .collect()
+}
+
 /// Rows with a gear engaged and the clutch not fully open (below 98 %), gaps held/filled.
 fn coupled_rows(log: &DriveLog) -> Vec<bool> {
     use crate::schema::Interpolation;

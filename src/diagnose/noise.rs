@@ -1594,28 +1594,14 @@ impl<'a> ModelSet<'a> {
             am.as_ref(),
             av.as_ref(),
         )?;
-        if let (true, Some(cfg), Some(v)) = (
-            self.actuation,
-            &self.longitudinal,
-            log.signal("vehicle_speed"),
-        ) {
+        if let (true, Some(cfg)) = (self.actuation, &self.longitudinal) {
             if let Some(es) = out.iter().find(|c| c.name == "engine_speed") {
-                let act = super::compare::actuation_rows(log);
-                let w = log.signal("engine_speed");
-                let valid = (0..n)
-                    .map(|i| {
-                        act[i]
-                            && v[i].is_finite()
-                            && v[i] >= cfg.min_speed_mps
-                            && w.is_some_and(|w| w[i].is_finite())
-                    })
-                    .collect();
                 let c = Compared {
                     name: super::compare::ACTUATION_CHANNEL.into(),
                     unit: es.unit.clone(),
                     measured: es.measured.clone(),
                     simulated: es.simulated.clone(),
-                    valid,
+                    valid: super::compare::actuation_channel_rows(log, cfg.min_speed_mps),
                 };
                 out.push(c);
             }

@@ -615,8 +615,8 @@ impl<'a> Problem<'a> {
     }
 
     /// Adds the clutch-actuation view: the engine speed on the rows where the clutch is
-    /// actuated ([`super::compare::actuation_rows`], the vehicle at the longitudinal model's
-    /// minimum speed or faster), each row weighted by its own null variance `variance`
+    /// actuated ([`super::compare::actuation_channel_rows`], the vehicle at the longitudinal
+    /// model's minimum speed or faster), each row weighted by its own null variance `variance`
     /// (rad²/s² on the log's rows, NaN where a row does not count: the noise floor's copies of
     /// [`super::compare::ACTUATION_CHANNEL`], which carry the 10 Hz clutch's sampling phase).
     /// The rows the speeds leave out because the model's clutch closes only to a 0.1 s sample
@@ -636,22 +636,17 @@ impl<'a> Problem<'a> {
         let Some(speeds) = self.views.iter().position(|v| v.kind == ViewKind::Speeds) else {
             return self;
         };
-        let act = super::compare::actuation_rows(self.log);
-        let v = m.measured_speed();
+        let act = super::compare::actuation_channel_rows(
+            self.log,
+            LongitudinalConfig::default().min_speed_mps,
+        );
         let w = m.measured_engine_speed();
-        let raw = self.log.signal("engine_speed").unwrap_or(&[]);
-        let min_speed = LongitudinalConfig::default().min_speed_mps;
         let mut weights = vec![0.0; n];
         let mut valid = vec![false; n];
         let (mut train_idx, mut held_idx) = (Vec::new(), Vec::new());
         for i in 0..n {
             let var = variance[i];
-            if act[i]
-                && v[i] >= min_speed
-                && raw.get(i).is_some_and(|x| x.is_finite())
-                && var.is_finite()
-                && var > 0.0
-            {
+            if act[i] && var.is_finite() && var > 0.0 {
                 weights[i] = 1.0 / var;
                 valid[i] = true;
                 if self.split.heldout[i] {
