@@ -257,7 +257,7 @@ fn clutch_and_known_rows(log: &DriveLog) -> (Vec<bool>, Vec<bool>) {
     (clutch, known)
 }
 
-/// Name of the engine speed compared on [`actuation_rows`] (the noise floor's copies and the
+/// Name of the engine speed compared on [`actuation_channel_rows`] (the noise floor's copies and the
 /// explain step's clutch-actuation view; not a located signal).
 pub const ACTUATION_CHANNEL: &str = "engine_speed_actuated";
 
