@@ -257,8 +257,8 @@ fn clutch_and_known_rows(log: &DriveLog) -> (Vec<bool>, Vec<bool>) {
     (clutch, known)
 }
 
-/// Name of the engine speed compared on [`actuation_channel_rows`] (the noise floor's copies and the
-/// explain step's clutch-actuation view; not a located signal).
+/// Name of the engine speed compared on [`actuation_channel_rows`] (the noise floor's copies
+/// and the explain step's clutch-actuation view; not a located signal).
 pub const ACTUATION_CHANNEL: &str = "engine_speed_actuated";
 
 /// Rows where the clutch is actuated — the rows [`longitudinal_rows`] leaves out within

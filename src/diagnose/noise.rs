@@ -1489,8 +1489,8 @@ pub struct ModelSet<'a> {
     /// Run the axle model.
     pub axle: bool,
     /// Also compare the engine speed on the clutch-actuated rows
-    /// ([`super::compare::actuation_channel_rows`], as [`super::compare::ACTUATION_CHANNEL`]): its
-    /// floor weights the explain step's clutch-actuation view; it is not located.
+    /// ([`super::compare::actuation_channel_rows`], as [`super::compare::ACTUATION_CHANNEL`]):
+    /// its floor weights the explain step's clutch-actuation view; it is not located.
     pub actuation: bool,
 }
 

@@ -14,8 +14,9 @@
 //!   at each engine-torque reversal with the clutch closed, one weighted sample per reversal
 //!   ([`super::reversal_channel`]), when at least one reversal falls in each part; and
 //!   `engine_speed_actuated`: the engine speed on the rows the other two speeds leave out
-//!   while the clutch is actuated ([`super::compare::actuation_channel_rows`]), each row weighted by
-//!   its own null variance from the noise floor's copies ([`Problem::with_actuation`]), when
+//!   while the clutch is actuated ([`super::compare::actuation_channel_rows`]), each row
+//!   weighted by its own null variance from the noise floor's copies
+//!   ([`Problem::with_actuation`]), when
 //!   the diagnosis computed that floor and each part has at least [`MIN_SAMPLES_PER_PART`]
 //!   such rows;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
