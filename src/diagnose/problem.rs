@@ -16,9 +16,8 @@
 //!   `engine_speed_actuated`: the engine speed on the rows the other two speeds leave out
 //!   while the clutch is actuated ([`super::compare::actuation_channel_rows`]), each row
 //!   weighted by its own null variance from the noise floor's copies
-//!   ([`Problem::with_actuation`]), when
-//!   the diagnosis computed that floor and each part has at least [`MIN_SAMPLES_PER_PART`]
-//!   such rows;
+//!   ([`Problem::with_actuation`]), when the diagnosis computed that floor and each part has
+//!   at least [`MIN_SAMPLES_PER_PART`] such rows;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
 //!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
 //!
