@@ -1,0 +1,72 @@
+//! Study: the weighted mean square of each view of a proof drive's own model, on the training
+//! and held-out parts, as the hidden effect's parameter runs over a grid (nothing fitted; the
+//! diagnosis' noise floor as the weights, the clutch-actuation view's per-row floor computed
+//! again as the diagnosis computes it): whether the fit's optimum and the truth share a basin.
+//!
+//! ```text
+//! cargo run --release --example param_scan -- DIR case-0005 0.0 0.5 11
+//! ```
+use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
+use fleetdyn::diagnose::fit::Evaluator;
+use fleetdyn::diagnose::noise::{noise_floors, ModelSet, NoiseConfig};
+use fleetdyn::diagnose::setup::Setup;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+#[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one lists no cases
+mod proof_dir;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let [dir, case, lo, hi, n] = a.as_slice() else {
+        return Err("usage: param_scan DIR CASE FROM TO POINTS".into());
+    };
+    let (lo, hi, n): (f64, f64, usize) = (lo.parse()?, hi.parse()?, n.parse()?);
+    let dir = PathBuf::from(dir);
+    let (vf, log) = proof_dir::load(&dir, case)?;
+    let ans = proof_dir::answer(&dir, case);
+    let (e, truth) = ans.effect.ok_or("not a catalogue case")?;
+    let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
+        dir.join("diagnoses").join(case).join("diagnosis.json"),
+    )?)?;
+    let floor: BTreeMap<String, f64> = serde_json::from_value(d["noise_floor"].clone())?;
+    let setup = Setup::new(&log, &vf)?;
+    let models = ModelSet {
+        actuation: true,
+        ..ModelSet::for_log(&log, &setup.nominal_truth, &setup.ratios, setup.nominal)
+    };
+    let floors = noise_floors(&log, &models, &setup.nominal, &NoiseConfig::default())?;
+    let actuation = floors
+        .get(ACTUATION_CHANNEL)
+        .map(|f| f.null_variance.clone());
+    let problem = setup.problem(&log, actuation.as_deref())?;
+    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+        .nominal_outputs()
+        .iter()
+        .map(|y| Arc::new(y.clone()))
+        .collect();
+    let t = problem.times();
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let ev = Evaluator::new(&problem, *problem.nominal(), &bases, Some(&floor), dt);
+    let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
+    let base = ev.eval_outputs(f64::NAN, bases);
+    println!("{case} [{}], truth {truth}", ans.label);
+    let kinds: Vec<String> = problem
+        .views()
+        .iter()
+        .filter(|v| v.domain == e.domain())
+        .map(|v| format!("{:?}", v.kind))
+        .collect();
+    println!("value | per view train MS, held-out MS: {}", kinds.join(", "));
+    for k in 0..n {
+        let x = lo + (hi - lo) * k as f64 / (n.max(2) - 1) as f64;
+        let at = ev.eval(&base, &own, e, x)?;
+        let cells: Vec<String> = (0..ev.models.len())
+            .filter(|&m| own[m])
+            .map(|m| format!("{:.3} {:.3}", at.train[m], at.heldout[m]))
+            .collect();
+        println!("{x:.4} | {}", cells.join(" | "));
+    }
+    Ok(())
+}
