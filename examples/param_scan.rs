@@ -58,7 +58,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filter(|v| v.domain == e.domain())
         .map(|v| format!("{:?}", v.kind))
         .collect();
-    println!("value | per view train MS, held-out MS: {}", kinds.join(", "));
+    println!(
+        "value | per view train MS, held-out MS: {}",
+        kinds.join(", ")
+    );
     for k in 0..n {
         let x = lo + (hi - lo) * k as f64 / (n.max(2) - 1) as f64;
         let at = ev.eval(&base, &own, e, x)?;
