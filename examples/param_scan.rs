@@ -12,7 +12,6 @@ use fleetdyn::diagnose::noise::{noise_floors, ModelSet, NoiseConfig};
 use fleetdyn::diagnose::setup::Setup;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::Arc;
 #[path = "common/proof_dir.rs"]
 #[allow(dead_code)] // the study examples share it; this one lists no cases
 mod proof_dir;
@@ -41,16 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(ACTUATION_CHANNEL)
         .map(|f| f.null_variance.clone());
     let problem = setup.problem(&log, actuation.as_deref())?;
-    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
-        .nominal_outputs()
-        .iter()
-        .map(|y| Arc::new(y.clone()))
-        .collect();
-    let t = problem.times();
-    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    let ev = Evaluator::new(&problem, *problem.nominal(), &bases, Some(&floor), dt);
+    let (ev, base) = Evaluator::at_nominal(&problem, Some(&floor));
     let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
-    let base = ev.eval_outputs(f64::NAN, bases);
     println!("{case} [{}], truth {truth}", ans.label);
     let kinds: Vec<String> = problem
         .views()

@@ -11,7 +11,6 @@ use fleetdyn::diagnose::fit::Evaluator;
 use fleetdyn::diagnose::setup::Setup;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::Arc;
 #[path = "common/proof_dir.rs"]
 #[allow(dead_code)] // the study examples share it; this one lists no cases
 mod proof_dir;
@@ -32,16 +31,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let floor: BTreeMap<String, f64> = serde_json::from_value(d["noise_floor"].clone())?;
     let setup = Setup::new(&log, &vf)?;
     let problem = setup.problem(&log, None)?; // without the clutch-actuation view (its floor is not computed here)
-    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
-        .nominal_outputs()
-        .iter()
-        .map(|y| Arc::new(y.clone()))
-        .collect();
-    let t = problem.times();
-    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    let ev = Evaluator::new(&problem, *problem.nominal(), &bases, Some(&floor), dt);
+    let (ev, base) = Evaluator::at_nominal(&problem, Some(&floor));
     let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();
-    let base = ev.eval_outputs(f64::NAN, bases);
     let at = ev.eval(&base, &own, e, truth)?;
     for (m, v) in problem.views().iter().enumerate() {
         let only: Vec<bool> = (0..ev.models.len()).map(|k| k == m).collect();

@@ -432,13 +432,7 @@ pub fn oracle_check(
     e: Effect,
     value: f64,
 ) -> Result<Option<OracleCheck>, ExplainError> {
-    let theta = *problem.nominal();
-    let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
-        .nominal_outputs()
-        .iter()
-        .map(|y| Arc::new(y.clone()))
-        .collect();
-    let ev = Evaluator::new(problem, theta, &bases, noise_floor, row_dt(problem));
+    let (ev, base) = Evaluator::at_nominal(problem, noise_floor);
     let own: Vec<bool> = ev
         .models
         .iter()
@@ -447,7 +441,6 @@ pub fn oracle_check(
     if !own.contains(&true) {
         return Ok(None);
     }
-    let base = ev.eval_outputs(f64::NAN, bases);
     let at = ev.eval(&base, &own, e, value)?;
     // the own model's views the effect changes, as the screen's probe finds them
     let active: Vec<bool> = (0..ev.models.len())
@@ -489,15 +482,6 @@ fn heldout_gain(
     }
 }
 
-fn row_dt(problem: &Problem<'_>) -> f64 {
-    let t = problem.times();
-    if t.len() > 1 {
-        (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
-    } else {
-        1.0
-    }
-}
-
 /// Explains `problem` (module documentation).
 ///
 /// # Errors
@@ -514,7 +498,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
     }
     let mut theta = *problem.nominal();
     let nominal = *problem.nominal();
-    let dt_s = row_dt(problem);
+    let dt_s = problem.row_spacing_s();
     let mut excluded: Vec<Effect> = Vec::new();
     let mut rounds = Vec::new();
     let mut findings: Vec<Finding> = Vec::new();

@@ -314,6 +314,29 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         }
     }
 
+    /// The evaluator of `problem` at its nominal parameters, weighted by `noise_floor` and the
+    /// nominal outputs ([`Problem::sigmas`]), with those outputs evaluated: where a diagnosis'
+    /// first round starts, and what the proof's oracle check and the study examples score.
+    pub fn at_nominal(
+        problem: &'p Problem<'a>,
+        noise_floor: Option<&std::collections::BTreeMap<String, f64>>,
+    ) -> (Self, Eval) {
+        let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+            .nominal_outputs()
+            .iter()
+            .map(|y| Arc::new(y.clone()))
+            .collect();
+        let ev = Self::new(
+            problem,
+            *problem.nominal(),
+            &bases,
+            noise_floor,
+            problem.row_spacing_s(),
+        );
+        let base = ev.eval_outputs(f64::NAN, bases);
+        (ev, base)
+    }
+
     fn ms(&self, m: usize, y: &[Vec<f64>], part: Part) -> f64 {
         let v = &self.models[m];
         weighted_ms(self.problem.channels(), &v.chans, &v.sigmas, y, part)

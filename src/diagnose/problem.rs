@@ -738,6 +738,16 @@ impl<'a> Problem<'a> {
         &self.t_s
     }
 
+    /// Mean row spacing, s (1 for fewer than two rows): the lag unit of the whiteness test.
+    pub fn row_spacing_s(&self) -> f64 {
+        let t = &self.t_s;
+        if t.len() > 1 {
+            (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+        } else {
+            1.0
+        }
+    }
+
     /// Models in use.
     pub fn domains(&self) -> Vec<Domain> {
         let mut d = Vec::new();
