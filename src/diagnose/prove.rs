@@ -804,7 +804,8 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
     };
     // blind from here: the drive file and the nominal vehicle file beside it
     let t0 = std::time::Instant::now();
-    // the contract, the actuated rows' null variance (the oracle's view weights), the log, the vehicle
+    // the contract, the actuated rows' null variance (the oracle's view weights), the log and
+    // the vehicle
     type BlindResult = (Diagnosis, Option<Vec<f64>>, DriveLog, VehicleFile);
     let diagnosed = (|| -> Result<BlindResult, String> {
         let vf = VehicleFile::load(&g.vehicle).map_err(|e| e.to_string())?;
