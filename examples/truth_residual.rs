@@ -28,16 +28,14 @@
 //! ```
 use fleetdyn::diagnose::compare;
 use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel};
-use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
 use fleetdyn::diagnose::setup::Setup;
-use fleetdyn::signal::interp_linear;
-use fleetdyn::synth::drive::{drive_truth, synth_drive, HiddenEffect, DRIVE_START_NS};
-use fleetdyn::synth::effects::EffectChoice;
 use fleetdyn::table::DriveLog;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
 #[allow(dead_code)] // the study examples share it; this one lists no cases
 mod proof_dir;
+#[path = "common/proof_truth.rs"]
+mod proof_truth;
 
 /// A compared signal's measured and simulated values on the log's rows.
 type Pair = (Vec<f64>, Vec<f64>);
@@ -52,44 +50,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (t0, t1): (f64, f64) = (from.parse()?, to.parse()?);
     let dir = PathBuf::from(dir);
     let (vf, log) = proof_dir::load(&dir, case)?;
-    let ans: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
-        dir.join("answers").join(format!("{case}.json")),
-    )?)?;
-    let index: usize = case.trim_start_matches("case-").parse()?;
-    let drive_seed = ans["seed"].as_u64().ok_or("answer without seed")?;
-    let cfg = ProofConfig {
-        seed: drive_seed - index as u64,
-        drives: index + 1,
-        ..ProofConfig::default()
-    };
-    let pc = plan(&cfg).pop().ok_or("empty plan")?;
-    println!(
-        "{case} [{}] {} {} km seed {}",
-        proof_dir::answer(&dir, case).label,
-        pc.rules,
-        pc.length_km,
-        pc.seed
-    );
-    let choice = match proof_dir::answer(&dir, case).effect {
-        Some((e, v)) => EffectChoice::Given(e, Some(v)),
-        None if ans["out_of_catalogue"].is_null() => EffectChoice::None,
-        None => EffectChoice::LocalRollingResistance,
-    };
-    let tmp = std::env::temp_dir().join(format!("truth_residual-{case}-{}", std::process::id()));
-    let r = synth_drive(
-        &dir.join("drives").join(case).join("vehicle.toml"),
-        pc.rules,
-        pc.length_km,
-        pc.seed,
-        &tmp,
-        &drive_config(&pc, &cfg),
-        Some(&HiddenEffect {
-            choice,
-            answer_path: tmp.join("answer.json"),
-        }),
-    )?;
-    let truth = drive_truth(&r.drive, r.axles.as_ref());
-    let _ = std::fs::remove_dir_all(&tmp);
+    let answer = proof_dir::answer(&dir, case);
+    let ct = proof_truth::CaseTruth::regenerate(&dir, case, &log, &answer.label, answer.effect)?;
+    println!("{}", ct.heading);
+    let truth = &ct.truth;
     if std::env::var_os("TRUTH_RESIDUAL_INPUTS").is_some() {
         // the truth's inputs every 0.25 s of the stretch
         let names: Vec<&str> = truth.columns.iter().map(|(n, _)| n.as_str()).collect();
@@ -110,19 +74,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let t = log.seconds_from_start();
-    let off = (log.timestamp_ns[0] - DRIVE_START_NS) as f64 * 1e-9
-        + std::env::var("TRUTH_RESIDUAL_SHIFT_S")
-            .ok()
-            .and_then(|x| x.parse::<f64>().ok())
-            .unwrap_or(0.0);
-    let true_col = |name: &str| -> Option<Vec<f64>> {
-        let (_, y) = truth.columns.iter().find(|(n, _)| n == name)?;
-        Some(
-            t.iter()
-                .map(|&x| interp_linear(&truth.t_s, y, x + off))
-                .collect(),
-        )
-    };
+    let shift = std::env::var("TRUTH_RESIDUAL_SHIFT_S")
+        .ok()
+        .and_then(|x| x.parse::<f64>().ok())
+        .unwrap_or(0.0);
+    let true_col = |name: &str| ct.column_on(name, &t, shift);
     let with_truth = |names: &[&str]| -> DriveLog {
         let mut l = log.clone();
         for s in l.signals.iter_mut() {

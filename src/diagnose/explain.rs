@@ -830,7 +830,7 @@ fn sentence(
             if v >= 0.0 { "nose-up" } else { "nose-down" }
         ),
         SlopeQuantization => format!(
-            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: the quantised slope excites shuffle the recording lacks; its dequantised slope (smoothed within the sensor's cells) fits better",
+            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: fed the sensor's steps the model sees grade the road does not have (and shuffle the steps excite); the slope reconstructed within the sensor's cells, widened by its noise, fits better",
             100.0 * v,
             100.0 * nominal
         ),

@@ -15,12 +15,13 @@
 //!   `M(t + τ) − ΔM` (`signal_delay`, `engine_torque_offset`);
 //! - `slope_quantization`'s parameter is the slope sensor's resolution `Δ` (tan α per step): a
 //!   value above the nominal resolution replaces the recorded slope by its consistent
-//!   reconstruction from cells of width `Δ` on the 1 m distance grid
-//!   ([`crate::signal::dequantise`]; a zero-phase spatial reconstruction, the kind of cure the
-//!   catalogue names), so the model no longer sees the steps. The seed 000 §5 low-pass
+//!   reconstruction from cells of width `Δ` on the 1 m distance grid, each widened by the
+//!   sensor's noise as the recording shows it ([`crate::signal::dequantise`]; a zero-phase
+//!   spatial reconstruction, the kind of cure the catalogue names; [`SlopeGrid::cured`]), so
+//!   the model no longer sees the steps. The seed 000 §5 low-pass
 //!   (4·10⁻³ 1/m) it replaces removed real grade on city hills (measured on the proof's seed 1
 //!   city drives: 0.013–0.019 rms of grade removed against 0.005 of quantisation error); the
-//!   reconstruction never moves a sample more than `Δ/2`.
+//!   reconstruction never moves a sample more than `Δ/2` plus the noise's σ.
 //!
 //! # Outputs
 //! [`LongitudinalModel::simulate`]: vehicle and engine speed on the log's rows, from windows
@@ -38,6 +39,7 @@
 //! the log's rows, open loop from the steady state (the suspension is stable, nothing drifts).
 
 use super::catalogue::Effect;
+use super::noise::{estimate_sensor_noise, grid_step_s, SampleKind};
 use crate::model::axle::AxleParams;
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
@@ -51,6 +53,7 @@ use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::{scenario_from_log, RecordedError};
 use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
+use std::sync::{Arc, Mutex, OnceLock};
 use thiserror::Error;
 
 /// Why an extended model cannot be built or run.
@@ -232,37 +235,101 @@ pub struct SlopeGrid {
     step_m: f64,
     /// The log's time ↔ distance map.
     map: DistanceMap,
+    /// The slope sensor's white noise, estimated blind from the recording
+    /// ([`estimate_sensor_noise`]; its flicker rate on a coarse step), tan α (0 when it cannot
+    /// be estimated).
+    noise_sigma: f64,
+    /// The last cure ([`SlopeGrid::cured`]) by the bits of its resolution: a fit that has
+    /// accepted `slope_quantization` simulates every later candidate on the same cure.
+    last: Arc<Mutex<Option<CachedCure>>>,
 }
+
+/// A cure's resolution (its bits) and the cured slope on the log's rows.
+type CachedCure = (u64, Vec<f64>);
 
 impl SlopeGrid {
     /// The grid of `log`'s slope (`None` without a slope column or when the drive is too short
     /// to resample).
     pub fn new(log: &DriveLog) -> Option<SlopeGrid> {
-        log.signal("road_slope")?;
+        let recorded = log.signal("road_slope")?;
         let d = resample_to_distance(log, &ResampleConfig::default()).ok()?;
         let raw = fill_gaps(d.signal("road_slope")?, Interpolation::Hold)?;
+        let noise_sigma = grid_step_s(log)
+            .ok()
+            .and_then(|dt| {
+                estimate_sensor_noise(
+                    "road_slope",
+                    "1",
+                    recorded,
+                    dt,
+                    SampleKind::of_column("road_slope"),
+                )
+                .ok()
+            })
+            .map(|e| e.sigma_white)
+            .filter(|s| s.is_finite())
+            .unwrap_or(0.0);
         Some(SlopeGrid {
             raw,
             step_m: d.step_m,
             map: d.map,
+            noise_sigma,
+            last: Arc::default(),
         })
     }
 
+    /// The slope sensor's estimated white noise, tan α.
+    pub fn noise_sigma(&self) -> f64 {
+        self.noise_sigma
+    }
+
     /// The slope with a sensor resolution of `resolution` (tan α per step) undone, on the
-    /// log's rows ([`dequantise`] on the grid, mapped back through the time ↔ distance map);
-    /// `None` for a resolution that is not finite and positive.
+    /// log's rows: [`dequantise`] on the grid with its default settings and every cell widened
+    /// by the sensor's estimated noise (a reading flipped by noise lies within about σ of its
+    /// cell, not inside it), mapped back through the time ↔ distance map; `None` for a
+    /// resolution that is not finite and positive.
     pub fn cured(&self, resolution: f64) -> Option<Vec<f64>> {
-        let g = dequantise(&self.raw, resolution, &DequantiseConfig::default()).ok()?;
+        let key = resolution.to_bits();
+        // a poisoned lock (a thread panicked while holding it) only loses the kept cure
+        if let Ok(g) = self.last.lock() {
+            if let Some((k, v)) = g.as_ref() {
+                if *k == key {
+                    return Some(v.clone());
+                }
+            }
+        }
+        let v = self.cured_with(
+            resolution,
+            &DequantiseConfig {
+                cell_margin: self.noise_sigma,
+                ..DequantiseConfig::default()
+            },
+        )?;
+        if let Ok(mut g) = self.last.lock() {
+            *g = Some((key, v.clone()));
+        }
+        Some(v)
+    }
+
+    /// [`SlopeGrid::cured`] with the reconstruction's settings `cfg` (its cell margin as given).
+    pub fn cured_with(&self, resolution: f64, cfg: &DequantiseConfig) -> Option<Vec<f64>> {
+        let g = dequantise(&self.raw, resolution, cfg).ok()?;
         Some(self.map.to_time_axis(&g, self.step_m))
     }
 }
 
-/// The slope `theta` asks for: the cure of `grid` at `theta`'s slope resolution when it is
-/// above `nominal`'s, else `None` (the recorded slope).
-fn cured_slope(grid: Option<&SlopeGrid>, theta: &Theta, nominal: &Theta) -> Option<Vec<f64>> {
+/// The slope `theta` asks for: the cure of `log`'s slope grid (built in `grid` on first use)
+/// at `theta`'s slope resolution when it is above `nominal`'s, else `None` (the recorded
+/// slope).
+fn cured_slope(
+    log: &DriveLog,
+    grid: &OnceLock<Option<SlopeGrid>>,
+    theta: &Theta,
+    nominal: &Theta,
+) -> Option<Vec<f64>> {
     let r = theta.get(Effect::SlopeQuantization);
     if r > nominal.get(Effect::SlopeQuantization) {
-        grid?.cured(r)
+        grid.get_or_init(|| SlopeGrid::new(log)).as_ref()?.cured(r)
     } else {
         None
     }
@@ -307,7 +374,8 @@ pub struct LongitudinalModel<'a> {
     nominal_truth: &'a TruthModel,
     ratios: &'a [f64],
     nominal: Theta,
-    slope_grid: Option<SlopeGrid>,
+    /// The recorded slope's grid, built when a cure first asks for it ([`cured_slope`]).
+    slope_grid: OnceLock<Option<SlopeGrid>>,
     t: Vec<f64>,
     starts: Vec<f64>,
     v_meas: Vec<f64>,
@@ -449,7 +517,7 @@ impl<'a> LongitudinalModel<'a> {
             nominal_truth,
             ratios,
             nominal,
-            slope_grid: SlopeGrid::new(log),
+            slope_grid: OnceLock::new(),
             starts: window_starts(log, cfg.window_s),
             t,
             v_meas,
@@ -559,7 +627,7 @@ impl<'a> LongitudinalModel<'a> {
     pub fn simulate(&self, theta: &Theta) -> Result<LongitudinalOutputs, ExtendedError> {
         let tm = self.plant(theta)?;
         let p: &DrivelineParams = &tm.driveline;
-        let cured = cured_slope(self.slope_grid.as_ref(), theta, &self.nominal);
+        let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
         let log = corrected_log(self.log, theta, cured.as_deref());
         let file = log.meta.source_file.clone();
         let rec = scenario_from_log(
@@ -654,7 +722,8 @@ pub struct AxleModel<'a> {
     nominal_truth: &'a TruthModel,
     ratios: &'a [f64],
     nominal: Theta,
-    slope_grid: Option<SlopeGrid>,
+    /// The recorded slope's grid, built when a cure first asks for it ([`cured_slope`]).
+    slope_grid: OnceLock<Option<SlopeGrid>>,
     cfg: AxleRecordConfig,
 }
 
@@ -687,7 +756,7 @@ impl<'a> AxleModel<'a> {
             nominal_truth,
             ratios,
             nominal,
-            slope_grid: SlopeGrid::new(log),
+            slope_grid: OnceLock::new(),
             cfg: AxleRecordConfig::default(),
         })
     }
@@ -712,7 +781,7 @@ impl<'a> AxleModel<'a> {
         }
         let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
         let d = &tm.driveline;
-        let cured = cured_slope(self.slope_grid.as_ref(), theta, &self.nominal);
+        let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
         let log = corrected_log(self.log, theta, cured.as_deref());
         let rec = axle_inputs_from_log(
             &log,
