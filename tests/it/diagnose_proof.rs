@@ -196,8 +196,9 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
     assert_eq!(clean.hidden, "none");
     assert!(clean.findings.is_empty(), "{clean:?}");
     assert_eq!(clean.verdict, Verdict::NoSignificantMismatch, "{clean:?}");
-    // the slope sensor: named first, its held-out error lower (measured: ratio 0.53, the
-    // truth's rule-1 gain 0.29 against the rule's 0.25)
+    // the slope sensor: named first, its held-out error lower by at least the acceptance
+    // rule's 25 % (bound 0.75: what acceptance itself requires; measured: ratio 0.53, the
+    // truth's rule-1 gain 0.29)
     let slope = by(48);
     assert_eq!(slope.hidden, "slope_quantization");
     assert!(slope.correct, "{:?}", slope.findings);
