@@ -432,16 +432,10 @@ pub fn oracle_check(
     e: Effect,
     value: f64,
 ) -> Result<Option<OracleCheck>, ExplainError> {
-    let (ev, base) = Evaluator::at_nominal(problem, noise_floor);
-    let own: Vec<bool> = ev
-        .models
-        .iter()
-        .map(|v| v.domain == e.domain() && v.serves(e))
-        .collect();
-    if !own.contains(&true) {
+    let Some(OwnModelAt { ev, own, base, at }) = own_model_at(problem, noise_floor, e, value)?
+    else {
         return Ok(None);
-    }
-    let at = ev.eval(&base, &own, e, value)?;
+    };
     // the own model's views the effect changes, as the screen's probe finds them
     let active: Vec<bool> = (0..ev.models.len())
         .map(|m| own[m] && ev.changed(m, &at, &base))
@@ -456,6 +450,64 @@ pub fn oracle_check(
         passes_heldout: gain >= rule.min_heldout_gain,
         passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
     }))
+}
+
+/// Before/after RMSE of the signals of `e`'s own model that `e` changes, with `e`'s parameter
+/// at `value` (all others nominal, as a first finding is fitted), measured against
+/// `reference` instead of the recording: one column per log row for each signal it names
+/// (the others are left out), on the rows and train/held-out parts the recording's
+/// comparison uses. The models run as the diagnosis runs them (built from the recording,
+/// on its inputs); only what their outputs are scored against changes.
+///
+/// The proof passes the generator's noise-free truth of the compared signals, so that a
+/// finding's held-out improvement can be read apart from the sensor noise that bounds the
+/// recording's own figure ([`super::prove::CaseScore::noise_free_heldout_ratio`]); the
+/// diagnosis never calls it. With the recorded columns as `reference` and a first finding's
+/// value it returns that finding's own-model `fit` entries, bit for bit
+/// (tests/it/diagnose_explain.rs).
+///
+/// # Errors
+/// [`ExplainError`] when a model fails at the nominal parameters or at `value`.
+pub fn fits_against(
+    problem: &Problem<'_>,
+    e: Effect,
+    value: f64,
+    reference: &BTreeMap<String, Vec<f64>>,
+) -> Result<BTreeMap<String, SignalFit>, ExplainError> {
+    Ok(match own_model_at(problem, None, e, value)? {
+        Some(m) => signal_fits(problem, &m.base.outputs, &m.at.outputs, Some(reference)).0,
+        None => BTreeMap::new(),
+    })
+}
+
+/// `e`'s own model at the nominal parameters and with `e` at `value` (the others nominal).
+struct OwnModelAt<'p, 'a> {
+    ev: Evaluator<'p, 'a>,
+    /// The views of `e`'s own model that serve it.
+    own: Vec<bool>,
+    base: Eval,
+    at: Eval,
+}
+
+/// [`OwnModelAt`] for `e` at `value`, weighted by `noise_floor`; `None` when no view of
+/// `e`'s model is in use.
+fn own_model_at<'p, 'a>(
+    problem: &'p Problem<'a>,
+    noise_floor: Option<&BTreeMap<String, f64>>,
+    e: Effect,
+    value: f64,
+) -> Result<Option<OwnModelAt<'p, 'a>>, ExplainError> {
+    let (ev, base) = Evaluator::at_nominal(problem, noise_floor);
+    let own: Vec<bool> = ev
+        .models
+        .iter()
+        .map(|v| v.domain == e.domain() && v.serves(e))
+        .collect();
+    if !own.contains(&true) {
+        return Ok(None);
+    }
+    let at = ev.eval(&base, &own, e, value)?;
+    Ok(Some(OwnModelAt { ev, own, base, at }))
 }
 
 /// Rule 1's figure: the relative fall from `before` to `after` of the held-out weighted RMSE of
@@ -588,7 +640,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         // accept: new parameters; the fit's simulation holds every model's new outputs
         let before = std::mem::replace(&mut bases, best.outputs.clone());
         theta.set(e, f.value);
-        let (fit, met) = signal_fits(problem, &before, &bases);
+        let (fit, met) = signal_fits(problem, &before, &bases, None);
         let evidence = Evidence {
             round,
             domain: f.domain,
@@ -701,11 +753,14 @@ fn candidate_fit(
     }
 }
 
-/// Per-signal fits of the signals whose simulation changed from `before` to `after`.
+/// Per-signal fits of the signals whose simulation changed from `before` to `after`, against
+/// the recording — or, with `reference`, against those columns instead (one value per log
+/// row, on the channel's own rows and parts) for the signals it names, the others left out.
 fn signal_fits(
     problem: &Problem<'_>,
     before: &[Arc<Vec<Vec<f64>>>],
     after: &[Arc<Vec<Vec<f64>>>],
+    reference: Option<&BTreeMap<String, Vec<f64>>>,
 ) -> (BTreeMap<String, SignalFit>, BTreeMap<String, SignalMetrics>) {
     let mut fit = BTreeMap::new();
     let mut met = BTreeMap::new();
@@ -715,7 +770,21 @@ fn signal_fits(
             if yb == ya {
                 continue;
             }
-            let ch = &problem.channels()[c];
+            let recorded = &problem.channels()[c];
+            let swapped;
+            let ch = match reference {
+                None => recorded,
+                Some(r) => match r.get(&recorded.name) {
+                    Some(values) if values.len() == recorded.measured.len() => {
+                        swapped = super::problem::Channel {
+                            measured: values.clone(),
+                            ..recorded.clone()
+                        };
+                        &swapped
+                    }
+                    _ => continue,
+                },
+            };
             let [tb, ta, hb, ha] = [
                 metrics(ch, yb, Part::Train),
                 metrics(ch, ya, Part::Train),

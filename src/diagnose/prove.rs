@@ -24,8 +24,13 @@
 //! - false-positive rate: no-effect drives with any finding;
 //! - parameter error: `|fitted − truth| / |truth − nominal|`, relative to the hidden change
 //!   (stricter than relative to the value: a 30 % drag change fitted at 25 % is a 17 % error);
-//! - held-out: the first finding's held-out RMSE after/before per signal, the worst signal of
-//!   the effect's domain;
+//! - held-out: the first finding's held-out RMSE after/before per signal of the effect's
+//!   domain, the most improved (the quoted signal) and the least;
+//! - noise-free held-out: the quoted signal's ratio again, scored against the generator's
+//!   noise-free signal instead of the recording, with the fitted value and with the hidden
+//!   truth ([`CaseScore::noise_free_heldout_ratio`], [`CaseScore::noise_free_truth_ratio`]):
+//!   it tells a drive whose ratio the recording's noise holds up from one no fit of the effect
+//!   could halve on the recorded inputs;
 //! - out-of-catalogue drives pass when the verdict is `unexplained` or a mismatch overlaps the
 //!   stretch without any catalogue effect being named.
 
@@ -174,6 +179,9 @@ pub struct GeneratedCase {
     pub answer: PathBuf,
     /// The answer's content.
     pub truth: ProofTruth,
+    /// The generator's noise-free signals (kept apart like the answer; the scorer's
+    /// [`CaseScore::noise_free_heldout_ratio`] reads them).
+    pub signals: crate::synth::can::Truth,
 }
 
 /// The generator settings of `case`'s drive: a fine (0.1 %) slope sensor, `cfg`'s dropouts and
@@ -230,6 +238,7 @@ pub fn generate(
             injection: r.injection,
             stretch: r.truth.stretch,
         },
+        signals: crate::synth::drive::drive_truth(&r.drive, r.axles.as_ref()),
     })
 }
 
@@ -284,6 +293,22 @@ pub struct CaseScore {
     /// Catalogue effects: rules 1 and 2 of the acceptance rule hold at the truth — the
     /// recorded signals show the effect to the rule on this drive.
     pub oracle_visible: Option<bool>,
+    /// [`Self::heldout_ratio`] measured against the generator's noise-free signals instead of
+    /// the recording ([`super::explain::fits_against`]): the first finding's fitted value, its
+    /// own model, the same rows and held-out blocks, the same (quoted) signal — when that
+    /// signal is recorded directly (speed, engine speed also on the clutch-actuated rows,
+    /// bellow pressures); `None` when it is an event view's (shuffle frequency, reversal
+    /// speed), which has no noise-free twin. Only the outputs' noise is taken away:
+    /// the models still run on the recorded, noisy inputs. The recording's ratio cannot fall
+    /// below about `σ/RMSE_before` for an output sensor's noise `σ`; this one is bounded only
+    /// by what the recorded inputs leave unknown. Computed after the blind diagnosis, outside
+    /// its time; `None` without a finding.
+    pub noise_free_heldout_ratio: Option<f64>,
+    /// Catalogue effects: the same ratio with the hidden effect set to its truth instead of a
+    /// fitted value (what a perfect fit would show against the noise-free signals, on the
+    /// recorded inputs): on the quoted signal when the first finding names the hidden effect,
+    /// else on the most improved directly recorded signal of its own model.
+    pub noise_free_truth_ratio: Option<f64>,
     /// Generator attempts (more than 1 when the drive was drawn again, see [`run_proof`]).
     pub attempts: u32,
 }
@@ -320,14 +345,9 @@ pub fn score(
     };
     // the first finding's own model: axle effects change the bellow pressures
     let ratios: Vec<f64> = first
-        .map(|f| {
-            let axle = Effect::from_id(&f.effect).is_ok_and(|e| e.domain() == Domain::Axle);
-            f.fit
-                .iter()
-                .filter(|(sig, _)| sig.starts_with("bellow_pressure") == axle)
-                .filter(|(_, e)| e.heldout_before > 0.0)
-                .map(|(_, e)| e.heldout_after / e.heldout_before)
-                .collect()
+        .and_then(|f| {
+            let e = Effect::from_id(&f.effect).ok()?;
+            Some(own_ratios(e, &f.fit, contract_held).map(|r| r.1).collect())
         })
         .unwrap_or_default();
     let heldout_ratio = ratios.iter().copied().reduce(f64::min);
@@ -362,6 +382,8 @@ pub fn score(
         seconds,
         oracle_heldout_gain: None,
         oracle_visible: None,
+        noise_free_heldout_ratio: None,
+        noise_free_truth_ratio: None,
         attempts: 1,
     }
 }
@@ -414,6 +436,16 @@ pub struct ProofSummary {
     pub heldout_halved: f64,
     /// Median held-out RMSE ratio after/before of the quoted signal, correctly named drives.
     pub median_heldout_ratio: Option<f64>,
+    /// Correctly named drives whose quoted signal's held-out RMSE did not halve.
+    pub not_halved: usize,
+    /// Of those, the ones whose error against the noise-free signal did halve
+    /// ([`CaseScore::noise_free_heldout_ratio`] ≤ 0.5): the recording's noise held the
+    /// recorded ratio up.
+    pub not_halved_noise_free_halved: usize,
+    /// Of those, the others whose error against the noise-free signal would not halve with
+    /// the hidden truth set either ([`CaseScore::noise_free_truth_ratio`] > 0.5): no fit of
+    /// the effect could halve it on the recorded inputs.
+    pub not_halved_truth_cannot: usize,
     /// Out-of-catalogue drives passing, share.
     pub out_of_catalogue_ok: f64,
     /// Out-of-catalogue drives with a mismatch located on the stretch, share.
@@ -478,6 +510,10 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
         .collect();
     let n_ooc = ooc.len() + failed_of(&|h| h == "out_of_catalogue");
     let correct: Vec<&&CaseScore> = catalogue.iter().filter(|s| s.correct).collect();
+    let not_halved: Vec<&&&CaseScore> = correct
+        .iter()
+        .filter(|s| s.heldout_ratio.is_some_and(|r| r > 0.5))
+        .collect();
     let visible: Vec<&&CaseScore> = catalogue
         .iter()
         .filter(|s| s.oracle_visible == Some(true))
@@ -529,6 +565,16 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
             correct.len(),
         ),
         median_heldout_ratio: median(correct.iter().filter_map(|s| s.heldout_ratio).collect()),
+        not_halved: not_halved.len(),
+        not_halved_noise_free_halved: not_halved
+            .iter()
+            .filter(|s| s.noise_free_heldout_ratio.is_some_and(|r| r <= 0.5))
+            .count(),
+        not_halved_truth_cannot: not_halved
+            .iter()
+            .filter(|s| s.noise_free_heldout_ratio.is_some_and(|r| r > 0.5))
+            .filter(|s| s.noise_free_truth_ratio.is_some_and(|r| r > 0.5))
+            .count(),
         out_of_catalogue_ok: share(
             ooc.iter()
                 .filter(|s| s.out_of_catalogue_ok == Some(true))
@@ -652,6 +698,14 @@ impl ProofSummary {
         );
         let _ = writeln!(
             s,
+            "| of the correctly named drives not halved: halved against the noise-free signal / not halved there even at the truth | {} of {} / {} of {} |",
+            self.not_halved_noise_free_halved,
+            self.not_halved,
+            self.not_halved_truth_cannot,
+            self.not_halved
+        );
+        let _ = writeln!(
+            s,
             "| out-of-catalogue drives unexplained or located without a name | {} |",
             pct(self.out_of_catalogue_ok)
         );
@@ -680,9 +734,9 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| case | seed | road | km | min | hidden | truth (nominal) | named | findings | verdict | fitted | param. error | held-out ratio | oracle gain | diagnosis s |"
+        "| case | seed | road | km | min | hidden | truth (nominal) | named | findings | verdict | fitted | param. error | held-out ratio | noise-free ratio (at the truth) | oracle gain | diagnosis s |"
     );
-    let _ = writeln!(s, "|{}", "---|".repeat(15));
+    let _ = writeln!(s, "|{}", "---|".repeat(16));
     let num = |x: Option<f64>, d: usize| x.map_or(String::new(), |v| format!("{v:.d$}"));
     for c in scores {
         let truth = match (c.truth_value, c.nominal_value) {
@@ -691,7 +745,7 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |",
+            "| {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |",
             c.index,
             c.seed,
             c.rules,
@@ -705,6 +759,12 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
             num(c.fitted_value, 4),
             num(c.parameter_error, 2),
             num(c.heldout_ratio, 2),
+            match (c.noise_free_heldout_ratio, c.noise_free_truth_ratio) {
+                (Some(f), Some(t)) => format!("{f:.2} ({t:.2})"),
+                (Some(f), None) => format!("{f:.2}"),
+                (None, Some(t)) => format!("({t:.2})"),
+                (None, None) => String::new(),
+            },
             match (c.oracle_heldout_gain, c.oracle_visible) {
                 (Some(g), Some(v)) => format!("{g:.2}{}", if v { "" } else { " (not visible)" }),
                 _ => String::new(),
@@ -715,7 +775,7 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
     for f in failed {
         let _ = writeln!(
             s,
-            "| {} | | | | | {} | | failed ({}) | {} | | | | | | |",
+            "| {} | | | | | {} | | failed ({}) | {} | | | | | | | |",
             f.index,
             f.hidden,
             f.stage,
@@ -768,7 +828,7 @@ pub struct ProofRun {
 }
 
 enum CaseOutcome {
-    Scored(CaseScore),
+    Scored(Box<CaseScore>),
     Failed(FailedCase),
 }
 
@@ -825,46 +885,159 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
     let seconds = t0.elapsed().as_secs_f64();
     match diagnosed {
         Ok((d, act, log, vf)) => {
-            // the scorer's own look, with the answer: could the rule see the hidden effect?
-            let oracle = match g.truth.injection {
-                Some(inj) => oracle(&log, &vf, &d, act.as_deref(), inj.effect, inj.truth)
-                    .map_err(|e| fail("oracle", e))
-                    .map(Some),
-                None => Ok(None),
-            };
-            match oracle {
-                Ok(oracle) => CaseOutcome::Scored(CaseScore {
+            // the scorer's own look, with the answer: could the rule see the hidden effect,
+            // and what did the finding do against the noise-free signals?
+            match scorer_look(&log, &vf, &d, act.as_deref(), &g) {
+                Ok(look) => CaseOutcome::Scored(Box::new(CaseScore {
                     attempts: attempt + 1,
-                    oracle_heldout_gain: oracle.map(|o| o.heldout_gain),
-                    oracle_visible: oracle.map(|o| o.visible()),
+                    oracle_heldout_gain: look.oracle.map(|o| o.heldout_gain),
+                    oracle_visible: look.oracle.map(|o| o.visible()),
+                    noise_free_heldout_ratio: look.noise_free_fitted,
+                    noise_free_truth_ratio: look.noise_free_truth,
                     ..score(&g.case, &g.truth, &d, log.duration_s(), seconds)
-                }),
-                Err(failed) => failed,
+                })),
+                Err(e) => fail("oracle", e),
             }
         }
         Err(e) => fail("diagnose", e),
     }
 }
 
-/// [`super::explain::oracle_check`] of `effect` at `truth` on the drive `log`, weighted by the
-/// diagnosis' noise floor, with the problem the diagnosis built (same setup, split and views).
-fn oracle(
+/// What the scorer finds with the answer, after the blind diagnosis ([`scorer_look`]).
+struct ScorerLook {
+    /// [`super::explain::oracle_check`] of the hidden effect at its truth.
+    oracle: Option<super::explain::OracleCheck>,
+    /// [`CaseScore::noise_free_heldout_ratio`].
+    noise_free_fitted: Option<f64>,
+    /// [`CaseScore::noise_free_truth_ratio`].
+    noise_free_truth: Option<f64>,
+}
+
+/// The scorer's look at a diagnosed drive, with the problem the diagnosis built (same setup,
+/// split and views): [`super::explain::oracle_check`] of the hidden effect at its truth,
+/// weighted by the diagnosis' noise floor, and its noise-free ratio (catalogue effects); the
+/// first finding's noise-free ratio (drives with a finding).
+fn scorer_look(
     log: &DriveLog,
     vf: &VehicleFile,
     d: &Diagnosis,
     actuation_variance: Option<&[f64]>,
-    effect: Effect,
-    truth: f64,
-) -> Result<super::explain::OracleCheck, String> {
+    g: &GeneratedCase,
+) -> Result<ScorerLook, String> {
     let setup = super::setup::Setup::new(log, vf).map_err(|e| e.to_string())?;
     let problem = setup
         .problem(log, actuation_variance)
         .map_err(|e| e.to_string())?;
     // slope_quantization's parameter is the sensor resolution the cure reconstructs with
     // (extended.rs), its nominal the model's assumed 0.1 % (setup.rs): the truth is a value
-    super::explain::oracle_check(&problem, Some(&d.noise_floor), effect, truth)
-        .map_err(|e| e.to_string())?
-        .ok_or_else(|| format!("{}: its model is not in use on this drive", effect.id()))
+    let oracle = match g.truth.injection {
+        Some(inj) => Some(
+            super::explain::oracle_check(&problem, Some(&d.noise_floor), inj.effect, inj.truth)
+                .map_err(|e| e.to_string())?
+                .ok_or_else(|| {
+                    format!("{}: its model is not in use on this drive", inj.effect.id())
+                })?,
+        ),
+        None => None,
+    };
+    let reference = noise_free_reference(log, &g.signals);
+    // against the noise-free reference: the ratio of `signal`, or without one the most
+    // improved own-model signal
+    let ratio = |e: Effect, value: f64, signal: Option<&str>| -> Result<Option<f64>, String> {
+        let fits = super::explain::fits_against(&problem, e, value, &reference)
+            .map_err(|err| err.to_string())?;
+        Ok(
+            own_ratios(e, &fits, |m| (m.heldout_before, m.heldout_after))
+                .filter(|(sig, _)| signal.is_none_or(|q| q == *sig))
+                .map(|(_, r)| r)
+                .reduce(f64::min),
+        )
+    };
+    // the first finding, its value and the signal the proof scores it on (the quoted one)
+    let first = d.findings.first().and_then(|f| {
+        let e = Effect::from_id(&f.effect).ok()?;
+        let value = f.parameters.get(e.parameter())?.value;
+        let quoted = own_ratios(e, &f.fit, contract_held)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(sig, _)| sig.to_string())?;
+        Some((e, value, quoted))
+    });
+    let noise_free_fitted = match &first {
+        Some((e, value, quoted)) => ratio(*e, *value, Some(quoted))?,
+        None => None,
+    };
+    let noise_free_truth = match (g.truth.injection, &first) {
+        (Some(inj), Some((e, _, quoted))) if *e == inj.effect => {
+            ratio(inj.effect, inj.truth, Some(quoted))?
+        }
+        (Some(inj), _) => ratio(inj.effect, inj.truth, None)?,
+        (None, _) => None,
+    };
+    Ok(ScorerLook {
+        oracle,
+        noise_free_fitted,
+        noise_free_truth,
+    })
+}
+
+/// `(signal, held-out RMSE after/before)` of the signals of `e`'s own model in `fits` (axle
+/// effects: the bellow pressures; longitudinal: the others) with a non-zero error before —
+/// what [`score`] takes its held-out ratios from; `held` reads an entry's held-out RMSE
+/// `(before, after)`.
+fn own_ratios<T>(
+    e: Effect,
+    fits: &BTreeMap<String, T>,
+    held: fn(&T) -> (f64, f64),
+) -> impl Iterator<Item = (&str, f64)> {
+    let axle = e.domain() == Domain::Axle;
+    fits.iter()
+        .filter(move |(sig, _)| sig.starts_with("bellow_pressure") == axle)
+        .map(move |(sig, m)| (sig.as_str(), held(m)))
+        .filter(|(_, (before, _))| *before > 0.0)
+        .map(|(sig, (before, after))| (sig, after / before))
+}
+
+/// The held-out RMSE `(before, after)` of a contract fit entry.
+fn contract_held(m: &super::contract::FitEntry) -> (f64, f64) {
+    (m.heldout_before, m.heldout_after)
+}
+
+/// The signals a diagnosis compares that the generator knows without noise (the recorded
+/// speed, engine speed and bellow pressures, and the engine speed again as the clutch view's
+/// [`super::compare::ACTUATION_CHANNEL`]), on the rows of `log`: the truth `signals` read at
+/// each row's time (linear between the truth's samples; the log's clock starts at
+/// [`crate::synth::drive::DRIVE_START_NS`] = the truth's 0 s).
+fn noise_free_reference(
+    log: &DriveLog,
+    signals: &crate::synth::can::Truth,
+) -> BTreeMap<String, Vec<f64>> {
+    const COMPARED: [&str; 5] = [
+        "vehicle_speed",
+        "engine_speed",
+        "bellow_pressure_front",
+        "bellow_pressure_rear",
+        "bellow_pressure_tag",
+    ];
+    let mut reference: BTreeMap<String, Vec<f64>> = signals
+        .columns
+        .iter()
+        .filter(|(name, _)| COMPARED.contains(&name.as_str()))
+        .map(|(name, y)| {
+            let values = log
+                .timestamp_ns
+                .iter()
+                .map(|&ns| {
+                    let t = (ns - crate::synth::drive::DRIVE_START_NS) as f64 * 1e-9;
+                    crate::signal::interp_linear(&signals.t_s, y, t)
+                })
+                .collect();
+            (name.clone(), values)
+        })
+        .collect();
+    if let Some(engine) = reference.get("engine_speed").cloned() {
+        reference.insert(super::compare::ACTUATION_CHANNEL.to_string(), engine);
+    }
+    reference
 }
 
 /// Runs the proof of `cfg` with the vehicle file `vehicle` into `out` on `jobs` threads:
@@ -911,7 +1084,7 @@ pub fn run_proof(
     let mut failed = Vec::new();
     for o in outcomes {
         match o {
-            CaseOutcome::Scored(s) => scores.push(s),
+            CaseOutcome::Scored(s) => scores.push(*s),
             CaseOutcome::Failed(f) => failed.push(f),
         }
     }
@@ -1032,6 +1205,16 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
         OutColumn::f64("parameter_error", "1", f(&|c| o(c.parameter_error))),
         OutColumn::f64("heldout_ratio", "1", f(&|c| o(c.heldout_ratio))),
         OutColumn::f64("heldout_ratio_worst", "1", f(&|c| o(c.heldout_ratio_worst))),
+        OutColumn::f64(
+            "noise_free_heldout_ratio",
+            "1",
+            f(&|c| o(c.noise_free_heldout_ratio)),
+        ),
+        OutColumn::f64(
+            "noise_free_truth_ratio",
+            "1",
+            f(&|c| o(c.noise_free_truth_ratio)),
+        ),
         OutColumn {
             name: "out_of_catalogue_ok".into(),
             unit: "1".into(),
@@ -1200,5 +1383,54 @@ mod tests {
             md.contains("| catalogue effects named correctly | 50.0 % (1 of 2) |"),
             "{md}"
         );
+    }
+
+    #[test]
+    fn drives_not_halved_are_told_apart_by_their_noise_free_ratios() {
+        let named = |ratio: f64, noise_free: Option<f64>, truth: Option<f64>| CaseScore {
+            heldout_ratio: Some(ratio),
+            noise_free_heldout_ratio: noise_free,
+            noise_free_truth_ratio: truth,
+            ..score(
+                &ProofCase {
+                    index: 0,
+                    seed: 1,
+                    rules: "highway-se",
+                    length_km: 3.0,
+                    hidden: Hidden::Effect(Effect::AeroDrag),
+                },
+                &ProofTruth {
+                    hidden: Hidden::Effect(Effect::AeroDrag),
+                    injection: Some(Injection {
+                        effect: Effect::AeroDrag,
+                        nominal: 5.0,
+                        truth: 6.0,
+                    }),
+                    stretch: None,
+                },
+                &diag(Some(("aero_drag", 5.9)), Verdict::Explained),
+                600.0,
+                1.0,
+            )
+        };
+        let sum = summarize(
+            &[
+                named(0.2, Some(0.1), Some(0.1)),   // halved: not counted
+                named(0.55, Some(0.25), Some(0.2)), // the recording's noise held it up
+                named(0.6, Some(0.6), Some(0.58)),  // not even the truth halves it
+                named(0.6, Some(0.6), Some(0.3)),   // the fit fell short of the truth
+                named(0.7, None, None),             // an event view: no noise-free twin
+            ],
+            &[],
+        );
+        assert_eq!(
+            (
+                sum.not_halved,
+                sum.not_halved_noise_free_halved,
+                sum.not_halved_truth_cannot
+            ),
+            (4, 1, 1)
+        );
+        assert!(sum.to_markdown().contains("| 1 of 4 / 1 of 4 |"));
     }
 }

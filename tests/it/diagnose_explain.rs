@@ -18,12 +18,15 @@
 
 use crate::common::fixture;
 use fleetdyn::diagnose::catalogue::{Domain, Effect};
-use fleetdyn::diagnose::explain::{explain, verdict, ExplainConfig, Explanation, Verdict};
+use fleetdyn::diagnose::explain::{
+    explain, fits_against, verdict, ExplainConfig, Explanation, SignalFit, Verdict,
+};
 use fleetdyn::diagnose::extended::{LongitudinalConfig, Theta};
 use fleetdyn::diagnose::problem::{ExplainError, Problem};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::{EffectChoice, TruthModel};
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -62,6 +65,9 @@ struct Answer {
 
 struct Run {
     x: Explanation,
+    /// The first finding's own-model signals refitted by `fits_against` with the recording's
+    /// own measured values as the reference (must reproduce the finding's `fit`).
+    refit: Option<BTreeMap<String, SignalFit>>,
     answer: Answer,
     duration_s: f64,
     elapsed_s: f64,
@@ -110,6 +116,15 @@ fn run(dir: &Path, road: Road, hidden: Option<(Effect, f64)>) -> Run {
     .unwrap();
     let x = explain(&p, &ExplainConfig::default()).unwrap();
     let elapsed_s = t0.elapsed().as_secs_f64();
+    let refit = x.findings.first().map(|f| {
+        let e = Effect::from_id(f.effect).unwrap();
+        let recorded: BTreeMap<String, Vec<f64>> = p
+            .channels()
+            .iter()
+            .map(|c| (c.name.clone(), c.measured.clone()))
+            .collect();
+        fits_against(&p, e, f.parameters[e.parameter()].value, &recorded).unwrap()
+    });
     let a: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&answer_path).unwrap()).unwrap();
     let answer = match a.get("effect") {
@@ -126,6 +141,7 @@ fn run(dir: &Path, road: Road, hidden: Option<(Effect, f64)>) -> Run {
     };
     Run {
         x,
+        refit,
         answer,
         duration_s: d.log.duration_s(),
         elapsed_s,
@@ -207,6 +223,19 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
     );
     assert!(f.sentence.contains(e.parameter()) && f.sentence.contains("held-out"));
     assert_eq!(verdict(&x.findings, true), Verdict::Explained);
+    // the proof's noise-free scoring (`fits_against`) given the recording itself as the
+    // reference scores the same simulation on the same rows: every own-model signal of the
+    // finding's table, bit for bit (same simulation, same arithmetic; `fits_against` may list
+    // more of the own model's signals — those the screen's probe did not count as changed)
+    let refit = r.refit.as_ref().expect("a finding was accepted");
+    for (name, fit) in f.fit.iter().filter(|(n, _)| own(n)) {
+        assert_eq!(
+            refit.get(name),
+            Some(fit),
+            "{}: fits_against with the recording as reference, {name}",
+            e.id()
+        );
+    }
 }
 
 #[test]

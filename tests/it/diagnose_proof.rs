@@ -205,6 +205,20 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
     assert_eq!(slope.verdict, Verdict::Explained, "{slope:?}");
     assert!(slope.heldout_ratio.unwrap() < 0.75, "{slope:?}");
     assert_eq!(slope.oracle_visible, Some(true), "{slope:?}");
+    // scored against the noise-free speed instead of the recording: the sensor's step is read
+    // off the recording, so the fitted value is the truth and both noise-free ratios are the
+    // same simulation (equal to rounding; measured 0.53 and 0.53, the recording's 0.53)
+    let (fitted, truth) = (
+        slope
+            .noise_free_heldout_ratio
+            .expect("the quoted speed has a noise-free twin"),
+        slope.noise_free_truth_ratio.expect("a catalogue drive"),
+    );
+    assert!((fitted - truth).abs() < 1e-9, "{slope:?}");
+    assert!(fitted < 1.0, "{slope:?}");
+    // no finding, no fitted ratio
+    assert_eq!(clean.noise_free_heldout_ratio, None, "{clean:?}");
+    assert_eq!(clean.noise_free_truth_ratio, None, "{clean:?}");
     assert_eq!(run.scores.len(), 4);
 }
 
