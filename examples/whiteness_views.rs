@@ -37,8 +37,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (m, v) in problem.views().iter().enumerate() {
         let only: Vec<bool> = (0..ev.models.len()).map(|k| k == m).collect();
         let (wb, wa) = (ev.whiteness(&base, &only), ev.whiteness(&at, &only));
+        // held-out samples of the view's channels (rows, or events for an events channel)
+        let held: Vec<usize> = v
+            .chans
+            .iter()
+            .map(|&c| problem.channels()[c].held_idx.len())
+            .collect();
         println!(
-            "{:?} {:?}: changed {}, held-out MS {:.4} -> {:.4}, Q/n {:.4} -> {:.4}, non-white {:.4} -> {:.4}",
+            "{:?} {:?} (held-out samples {held:?}): changed {}, held-out MS {:.4} -> {:.4}, Q/n {:.4} -> {:.4}, non-white {:.4} -> {:.4}",
             v.domain,
             v.kind,
             own[m] && ev.changed(m, &at, &base),
