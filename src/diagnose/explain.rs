@@ -463,8 +463,9 @@ pub fn oracle_check(
 /// finding's held-out improvement can be read apart from the sensor noise that bounds the
 /// recording's own figure ([`super::prove::CaseScore::noise_free_heldout_ratio`]); the
 /// diagnosis never calls it. With the recorded columns as `reference` and a first finding's
-/// value it returns that finding's own-model `fit` entries, bit for bit
-/// (tests/it/diagnose_explain.rs).
+/// value, its entries for the signals in that finding's own-model `fit` equal them bit for
+/// bit (tests/it/diagnose_explain.rs); it may list more of the own model's signals (those
+/// the screen's probe did not count as changed).
 ///
 /// # Errors
 /// [`ExplainError`] when a model fails at the nominal parameters or at `value`.
