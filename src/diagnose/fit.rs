@@ -699,7 +699,11 @@ pub struct Probe {
     pub fresh: bool,
     /// The largest single-effect reduction over the rungs of the effect's
     /// [`FitSpec::ladder`] (0 without a ladder): what makes it a candidate when larger than
-    /// this probe's own.
+    /// this probe's own. Measured against the train residual of the round that took the
+    /// probe (the first) and, like the probe, reused by later rounds — which recompute the
+    /// step's own reduction against their residual but not the rungs' (their probes are not
+    /// kept), so after an accepted finding a ladder effect may be fitted once more than a
+    /// fresh screen would ask; the acceptance rule still decides.
     pub ladder_reduction: f64,
 }
 
