@@ -453,13 +453,14 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     }
 
     /// Deviance of `x` against the reference `r` on the views of `active`,
-    /// `D = n_pooled ln(J_p(x)/J_p(r)) + Σ_own N_v (J_v(x) − J_v(r)) / max(1, J_v(r))` on the
-    /// train part: the
+    /// `D = n_pooled ln(J_p(x)/J_p(r)) + Σ_own N_v (J_v(x) − J_v(r)) / max(1, J_v(r))` on
+    /// `part` (the train part for every fit and interval; a switch's rule 3 adds the held-out
+    /// part's, [`super::explain`]): the
     /// speeds and pressures pooled (`J_p` the mean of their weighted mean squares, `n_pooled`
     /// their effective sample count — the fewest over their largely redundant channels,
     /// [`Evaluator::n_eff`], or the cluster count), and each own-term view (the shuffle modes,
     /// the torque reversals) as `N_v (J_v(x) − J_v(r)) / max(1, J_v(r))`, `N_v` its effective
-    /// train samples at `r` ([`effective_samples`]: the events) — the χ² difference of
+    /// samples of `part` at `r` ([`effective_samples`]: the events) — the χ² difference of
     /// samples whose variances are known (each event's own weight, the standardised mean
     /// square `J_v` is 1 at them), scaled by the reference's overdispersion when its residual
     /// exceeds them (a quasi-likelihood). Why not the profiled form `N_v ln(J_v(x)/J_v(r))` of
@@ -468,34 +469,31 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// proof's case 28, one train reversal: a 95 % lash interval of ±3.5 % around 0.030 rad,
     /// which the true 0.037 rad lies far outside). A group `x` and `r` both leave at zero
     /// cost adds nothing.
-    pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_pooled: f64) -> f64 {
+    pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_pooled: f64, part: Part) -> f64 {
         let pooled = self.pooled(active);
         let mut d = 0.0;
         if pooled.contains(&true) {
-            let (jx, jr) = (
-                self.cost(x, &pooled, Part::Train),
-                self.cost(r, &pooled, Part::Train),
-            );
-            if jx > 0.0 && jr > 0.0 {
+            let (jx, jr) = (self.cost(x, &pooled, part), self.cost(r, &pooled, part));
+            if jx > 0.0 && jr > 0.0 && n_pooled.is_finite() {
                 d += n_pooled.max(1.0) * (jx / jr).ln();
             }
         }
+        let (xs, rs) = match part {
+            Part::Train => (&x.train, &r.train),
+            Part::Heldout => (&x.heldout, &r.heldout),
+        };
         for (m, v) in self.models.iter().enumerate() {
-            if active[m] && v.own_term && x.train[m] > 0.0 && r.train[m] > 0.0 {
+            if active[m] && v.own_term && xs[m] > 0.0 && rs[m] > 0.0 {
                 let n = v
                     .chans
                     .iter()
                     .enumerate()
                     .map(|(k, &c)| {
-                        effective_samples(
-                            &self.problem.channels()[c],
-                            &r.outputs[m][k],
-                            Part::Train,
-                        )
+                        effective_samples(&self.problem.channels()[c], &r.outputs[m][k], part)
                     })
                     .fold(f64::INFINITY, f64::min);
                 if n.is_finite() {
-                    d += events_deviance(n, x.train[m], r.train[m]);
+                    d += events_deviance(n, xs[m], rs[m]);
                 }
             }
         }
@@ -581,11 +579,11 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         }
     }
 
-    /// Fewest effective train samples ([`effective_samples`]) over the channels of the pooled
+    /// Fewest effective samples of `part` ([`effective_samples`]) over the channels of the pooled
     /// views of `active` (the speeds, the pressures; an own-term view has its own count in
     /// [`Evaluator::deviance`]); when `active` has no pooled view, the fewest over its own-term
     /// views, so that the figure reported with a fit is always a sample count.
-    pub fn n_eff(&self, x: &Eval, active: &[bool]) -> f64 {
+    pub fn n_eff(&self, x: &Eval, active: &[bool], part: Part) -> f64 {
         let fewest = |own: bool| {
             let mut n = f64::INFINITY;
             for (m, v) in self.models.iter().enumerate() {
@@ -594,7 +592,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
                         n = n.min(effective_samples(
                             &self.problem.channels()[c],
                             &x.outputs[m][k],
-                            Part::Train,
+                            part,
                         ));
                     }
                 }
@@ -1215,7 +1213,7 @@ pub fn profile_interval(
             // the deviance above the threshold, on the scale of ln J
             match ev.eval(base, active, e, p) {
                 Ok(x) => {
-                    let d = ev.deviance(&x, best, active, n_eff);
+                    let d = ev.deviance(&x, best, active, n_eff, Part::Train);
                     if d.is_finite() {
                         (d - threshold) / n_eff
                     } else {
