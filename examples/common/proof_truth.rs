@@ -36,9 +36,17 @@ impl CaseTruth {
         )?)?;
         let index: usize = case.trim_start_matches("case-").parse()?;
         let drive_seed = ans["seed"].as_u64().ok_or("answer without seed")?;
+        // the plan's length range as the run recorded it (runs before it was recorded used
+        // the default)
+        let length_km = std::fs::read_to_string(dir.join("proof.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|run| Some((run["length_km"][0].as_f64()?, run["length_km"][1].as_f64()?)))
+            .unwrap_or(ProofConfig::default().length_km);
         let cfg = ProofConfig {
             seed: drive_seed - index as u64,
             drives: index + 1,
+            length_km,
             ..ProofConfig::default()
         };
         let pc = plan(&cfg).pop().ok_or("empty plan")?;

@@ -817,6 +817,11 @@ pub const MAX_ATTEMPTS: u32 = 3;
 pub struct ProofRun {
     /// Seed.
     pub seed: u64,
+    /// Drives of the plan (`--drives`).
+    pub drives: usize,
+    /// Shortest and longest drive of the plan, km (`--min-km`, `--max-km`): with the seed
+    /// they regenerate any case's drive.
+    pub length_km: (f64, f64),
     /// Worker threads.
     pub jobs: usize,
     /// Scored cases, in plan order.
@@ -1091,6 +1096,8 @@ pub fn run_proof(
     let summary = summarize(&scores, &failed);
     let run = ProofRun {
         seed: cfg.seed,
+        drives: cfg.drives,
+        length_km: cfg.length_km,
         jobs,
         scores,
         failed,

@@ -125,6 +125,13 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
         .unwrap()
         .contains("| hidden \\ named |"));
     assert!(dir.path().join("proof_cases.parquet").exists());
+    // proof.json records the plan (seed, drives, lengths): enough to regenerate any case
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("proof.json")).unwrap())
+            .unwrap();
+    assert_eq!(written["seed"], 1);
+    assert_eq!(written["drives"], 22);
+    assert_eq!(written["length_km"], serde_json::json!([3.0, 6.0]));
     for s in &run.scores {
         assert!(dir
             .path()
