@@ -24,7 +24,9 @@
 //! - the scorer's oracle check (the hidden effect set to its truth, nothing fitted, rules 1
 //!   and 2 of the acceptance rule): every identified effect is visible to the rule, and the
 //!   slope quantisation (case 4: the cure cannot restore the rounding of constant grades) is
-//!   not, so no diagnosis bound by the rule could name it on this drive.
+//!   not, so no diagnosis bound by the rule could name it on this drive;
+//! - the written outputs: the table, the case Parquet, `proof.json` with the plan (seed,
+//!   drives, lengths) that regenerates any case, one contract folder per case.
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;
