@@ -31,12 +31,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "bellow_pressure_rear",
         "bellow_pressure_tag",
     ];
+    // AXLE_RESIDUAL_BIN_S=x: bins of x s instead of 1 s
+    let bin: f64 = std::env::var("AXLE_RESIDUAL_BIN_S")
+        .ok()
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(1.0);
     let mut s = t0;
     while s < t1 {
         let idx: Vec<usize> = (0..t.len())
-            .filter(|&i| t[i] >= s && t[i] < s + 1.0)
+            .filter(|&i| t[i] >= s && t[i] < s + bin)
             .collect();
-        let mut line = format!("{s:6.1}");
+        let mut line = format!("{s:7.2}");
         for (k, n) in names.iter().enumerate() {
             let raw = log.signal(n).ok_or(format!("{case}: no {n}"))?;
             let (mut sm, mut sy, mut c) = (0.0, 0.0, 0);
@@ -59,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         println!("{line}");
-        s += 1.0;
+        s += bin;
     }
     Ok(())
 }
