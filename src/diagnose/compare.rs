@@ -326,7 +326,7 @@ pub const INPUT_GAP_TAIL_S: f64 = 1.0;
 /// residual (6–9× the floor) for ~1 s. And input gaps with [`INPUT_GAP_TAIL_S`] after them.
 ///
 /// Last, a stretch of counting rows shorter than [`MIN_AXLE_RUN_S`] between two left-out ones
-/// is left out too ([`drop_short_runs`]): it lies within the half-width of an event on each
+/// is left out too: it lies within the half-width of an event on each
 /// side, so in the ringing of both.
 pub fn axle_rows(log: &DriveLog) -> Vec<bool> {
     let a = away_from_events(log, "clutch_position", 0.02, SHIFT_HALFWIDTH_AXLE_S);
@@ -513,22 +513,22 @@ pub fn compare_at(
 mod tests {
     use super::*;
 
+    /// `n` rows at 50 Hz of a clutch (10 Hz, held on the grid as the ingest holds it) open
+    /// until 2 s, closing linearly over the next `closing_s`, closed after.
+    fn closing_clutch(n: usize, closing_s: f64) -> Vec<f64> {
+        (0..n)
+            .map(|k| {
+                let t = (k - k % 5) as f64 * 0.02;
+                (1.0 - (t - 2.0) / closing_s).clamp(0.0, 1.0)
+            })
+            .collect()
+    }
+
     /// 10 s at 50 Hz, gear 7: the clutch (10 Hz, held on the grid as the ingest holds it)
     /// open until 2 s, closing over 2.0–2.6 s, closed after; neutral from 8 s.
     fn shift_log() -> DriveLog {
         let n = 500;
-        let clutch: Vec<f64> = (0..n)
-            .map(|k| {
-                let t = (k - k % 5) as f64 * 0.02;
-                if t < 2.0 {
-                    1.0
-                } else if t < 2.6 {
-                    1.0 - (t - 2.0) / 0.6
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let clutch = closing_clutch(n, 0.6);
         let gear: Vec<f64> = (0..n).map(|k| if k < 400 { 7.0 } else { 0.0 }).collect();
         DriveLog::from_columns(
             20_000_000,
@@ -575,18 +575,7 @@ mod tests {
         // 4.8 s: the rows within 1 s of either are left out (1.1 … 3.4 s and 3.8 … 5.8 s),
         // which leaves the island 3.42 … 3.78 s, and that goes too
         let n = 500;
-        let clutch: Vec<f64> = (0..n)
-            .map(|k| {
-                let t = (k - k % 5) as f64 * 0.02;
-                if t < 2.0 {
-                    1.0
-                } else if t < 2.4 {
-                    1.0 - (t - 2.0) / 0.4
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let clutch = closing_clutch(n, 0.4);
         let gear: Vec<f64> = (0..n).map(|k| if k < 240 { 1.0 } else { 2.0 }).collect();
         let log = DriveLog::from_columns(
             20_000_000,
