@@ -382,18 +382,9 @@ pub const MIN_AXLE_RUN_S: f64 = SHIFT_HALFWIDTH_AXLE_S;
 /// are kept (nothing is known to ring there).
 fn drop_short_runs(ok: &mut [bool], t: &[f64], min_s: f64) {
     let n = ok.len().min(t.len());
-    let mut i = 0;
-    while i < n {
-        if !ok[i] {
-            i += 1;
-            continue;
-        }
-        let start = i;
-        while i < n && ok[i] {
-            i += 1;
-        }
-        if start > 0 && i < n && t[i] - t[start] < min_s {
-            ok[start..i].iter_mut().for_each(|o| *o = false);
+    for (a, b) in super::locate::runs(&ok[..n]) {
+        if a > 0 && b < n && t[b] - t[a] < min_s {
+            ok[a..b].iter_mut().for_each(|o| *o = false);
         }
     }
 }

@@ -702,7 +702,7 @@ fn band_power(freq: &[f64], psd: &[f64], lo: f64, hi: f64) -> (f64, usize) {
 }
 
 /// Contiguous runs `[a, b)` of `ok` rows.
-fn runs(ok: &[bool]) -> Vec<(usize, usize)> {
+pub(crate) fn runs(ok: &[bool]) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut i = 0;
     while i < ok.len() {
