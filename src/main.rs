@@ -218,6 +218,11 @@ enum Command {
         /// the whole plan of --drives and --seed.
         #[arg(long, value_delimiter = ',')]
         cases: Vec<usize>,
+        /// The drives' driving: `drawn`, a driver drawn per drive (acceleration, braking,
+        /// speed holding, torque tips, lift-offs, stop time); `fixed`, the generator's one
+        /// default driver for every drive (the README's tables dated before the drawn driving).
+        #[arg(long, default_value = "drawn", value_parser = ["drawn", "fixed"])]
+        driving: String,
     },
     /// Run a pipeline file (pipelines/*.toml) over its inputs, in parallel, into a
     /// hive-partitioned dataset with a run report; drives already done with the same input and
@@ -827,8 +832,9 @@ fn run_prove(
     output: PathBuf,
     jobs: Option<usize>,
     cases: Vec<usize>,
+    driving: &str,
 ) -> Result<(), Failure> {
-    use fleetdyn::diagnose::prove::{run_proof, ProofConfig};
+    use fleetdyn::diagnose::prove::{run_proof, Driving, ProofConfig};
     if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
         return Err(usage(anyhow::anyhow!(
             "--min-km {min_km} and --max-km {max_km} must be finite with 0.5 <= min <= max"
@@ -848,6 +854,11 @@ fn run_prove(
         seed,
         length_km: (min_km, max_km),
         only: cases,
+        driving: if driving == "fixed" {
+            Driving::Fixed
+        } else {
+            Driving::Drawn
+        },
         ..ProofConfig::default()
     };
     let jobs = jobs.unwrap_or_else(|| {
@@ -900,7 +911,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
             output,
             jobs,
             cases,
-        } => run_prove(drives, seed, min_km, max_km, vehicle, output, jobs, cases),
+            driving,
+        } => run_prove(
+            drives, seed, min_km, max_km, vehicle, output, jobs, cases, &driving,
+        ),
         Command::Ingest {
             inputs,
             dbc,

@@ -2,7 +2,7 @@
 //! inputs: the drive is generated again from the proof's plan (`diagnose::prove::plan`) with
 //! the case's answer, so every recorded column's truth is known (the diagnosis never sees it).
 
-use fleetdyn::diagnose::prove::{drive_config, plan, ProofConfig};
+use fleetdyn::diagnose::prove::{drive_config, plan, Driving, ProofConfig};
 use fleetdyn::signal::interp_linear;
 use fleetdyn::synth::can::Truth;
 use fleetdyn::synth::drive::{drive_truth, synth_drive, HiddenEffect, DRIVE_START_NS};
@@ -38,15 +38,23 @@ impl CaseTruth {
         let drive_seed = ans["seed"].as_u64().ok_or("answer without seed")?;
         // the plan's length range as the run recorded it (runs before it was recorded used
         // the default)
-        let length_km = std::fs::read_to_string(dir.join("proof.json"))
+        let run: Option<serde_json::Value> = std::fs::read_to_string(dir.join("proof.json"))
             .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|t| serde_json::from_str(&t).ok());
+        let length_km = run
+            .as_ref()
             .and_then(|run| Some((run["length_km"][0].as_f64()?, run["length_km"][1].as_f64()?)))
             .unwrap_or(ProofConfig::default().length_km);
+        // the driving as the run recorded it (runs before it was recorded drove fixed)
+        let driving = match run.as_ref().and_then(|run| run["driving"].as_str()) {
+            Some("drawn") => Driving::Drawn,
+            _ => Driving::Fixed,
+        };
         let cfg = ProofConfig {
             seed: drive_seed - index as u64,
             drives: index + 1,
             length_km,
+            driving,
             ..ProofConfig::default()
         };
         let pc = plan(&cfg).pop().ok_or("empty plan")?;

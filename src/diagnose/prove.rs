@@ -11,7 +11,10 @@
 //! [`ProofConfig::out_of_catalogue_per_cycle`] with the out-of-catalogue stretch of extra
 //! rolling resistance (2), so `22 k` drives hold every effect `k` times. The road rule set is drawn per case (highway-se, freeway-us, city-se, urban-us
 //! with weights 3:3:2:2 — fleet trucks drive mostly on highways), the length uniformly in
-//! [`ProofConfig::length_km`]. Every drive has the real-log conditions of issue 7 point 7:
+//! [`ProofConfig::length_km`]. The driving is drawn per case too ([`Driving::Drawn`],
+//! [`drive_config`]): how briskly the driver accelerates and brakes, how tightly they hold the
+//! speed, how much their foot varies the torque, how often they lift off while driving on, and
+//! how long they stand at a stop. Every drive has the real-log conditions of issue 7 point 7:
 //! multi-rate quantised CAN with noise, launches, stops and AMT shifts, standstills, CAN
 //! dropouts ([`ProofConfig::dropouts`]), and starts from an unknown state for the diagnosis.
 //! The slope sensor is fine (0.1 %) unless the case hides `slope_quantization`, which is then
@@ -40,6 +43,7 @@ use crate::model::vehicle::VehicleFile;
 use crate::road::rng::Xoshiro256StarStar;
 use crate::synth::can::Dropouts;
 use crate::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
+use crate::synth::driver::{DriverConfig, LiftOffs};
 use crate::synth::effects::{EffectChoice, Injection, ResistanceStretch};
 use crate::table::DriveLog;
 use serde::Serialize;
@@ -61,6 +65,8 @@ pub struct ProofConfig {
     pub clean_per_cycle: usize,
     /// Drives with the out-of-catalogue effect in each cycle of the plan.
     pub out_of_catalogue_per_cycle: usize,
+    /// How the drives' driving is chosen.
+    pub driving: Driving,
     /// Plan indices to run (each drive exactly as in the whole plan); empty: all `drives`.
     /// An index at or past `drives` matches no case and runs nothing (`fleetdyn prove --cases`
     /// rejects it with exit 2).
@@ -82,8 +88,65 @@ impl Default for ProofConfig {
             },
             clean_per_cycle: 4,
             out_of_catalogue_per_cycle: 2,
+            driving: Driving::Drawn,
             only: Vec::new(),
         }
+    }
+}
+
+/// How a proof's drives are driven.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Driving {
+    /// One driver for every drive: the generator's default [`DriverConfig`] (0.8 m/s² up,
+    /// 1.2 m/s² down, k_v = 0.5 1/s, ±5 % tips, 8 s at a stop, no lift-offs) — the proofs of
+    /// the README's tables dated before the drawn driving (`fleetdyn prove --driving fixed`).
+    Fixed,
+    /// A driver drawn per case from its drive seed ([`drawn_driver`]).
+    Drawn,
+}
+
+impl Driving {
+    /// The `--driving` value.
+    pub fn label(self) -> &'static str {
+        match self {
+            Driving::Fixed => "fixed",
+            Driving::Drawn => "drawn",
+        }
+    }
+}
+
+/// PRNG stream of the drawn driving (xored into the drive seed).
+const DRIVING_STREAM: u64 = 0x6472_6976_696E_6721;
+
+/// The driver of a proof drive with seed `seed` under [`Driving::Drawn`]: the generator's
+/// default driver with, drawn uniformly from the drive seed's own stream,
+/// - comfortable acceleration 0.5–1.2 m/s² (a loaded truck's gentle start to a brisk one;
+///   the 18.7 t seed 002 truck runs at full load in its upper gears at either end) and
+///   deceleration 0.9–1.5 m/s²;
+/// - speed-error gain 0.3–0.8 1/s;
+/// - tip amplitude ±3 % to ±20 % of the torque demand;
+/// - lift-offs ([`LiftOffs`]) every 20–120 s on average (each interval 0.5–1.5 times the
+///   drive's mean), 1–4 s long, above 5 m/s;
+/// - 5–20 s standing at each stop.
+///
+/// Only the driver changes: roads, stops, effects and their magnitudes, the sensors and their
+/// noise draw from their own streams and are the same under either [`Driving`].
+pub fn drawn_driver(seed: u64) -> DriverConfig {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(seed ^ DRIVING_STREAM);
+    let mean_lift_s = rng.uniform(20.0, 120.0);
+    DriverConfig {
+        accel_mps2: rng.uniform(0.5, 1.2),
+        decel_mps2: rng.uniform(0.9, 1.5),
+        speed_gain_per_s: rng.uniform(0.3, 0.8),
+        tip_fraction: rng.uniform(0.03, 0.2),
+        stop_dwell_s: rng.uniform(5.0, 20.0),
+        lift_offs: Some(LiftOffs {
+            interval_s: (0.5 * mean_lift_s, 1.5 * mean_lift_s),
+            duration_s: (1.0, 4.0),
+            min_speed_mps: 5.0,
+        }),
+        ..DriverConfig::default()
     }
 }
 
@@ -184,12 +247,18 @@ pub struct GeneratedCase {
     pub signals: crate::synth::can::Truth,
 }
 
-/// The generator settings of `case`'s drive: a fine (0.1 %) slope sensor, `cfg`'s dropouts and
-/// a stop every 1–3 km (by the drive seed), so every drive has standstills and launches.
+/// The generator settings of `case`'s drive: a fine (0.1 %) slope sensor, `cfg`'s dropouts, the
+/// driver of [`ProofConfig::driving`] and a stop every 1–3 km (by the drive seed), so every
+/// drive has standstills and launches.
 pub fn drive_config(case: &ProofCase, cfg: &ProofConfig) -> DriveConfig {
+    let driver = match cfg.driving {
+        Driving::Fixed => DriverConfig::default(),
+        Driving::Drawn => drawn_driver(case.seed),
+    };
     let mut dc = DriveConfig {
         slope_resolution: 0.001,
         dropouts: Some(cfg.dropouts),
+        driver,
         ..DriveConfig::default()
     };
     dc.driver.stop_every_m = Some(1000.0 + (case.seed % 3) as f64 * 1000.0);
@@ -822,6 +891,9 @@ pub struct ProofRun {
     /// Shortest and longest drive of the plan, km (`--min-km`, `--max-km`): with the seed
     /// they regenerate any case's drive.
     pub length_km: (f64, f64),
+    /// How the drives were driven (`--driving`): with the seed and the lengths it regenerates
+    /// any case's drive.
+    pub driving: Driving,
     /// Worker threads.
     pub jobs: usize,
     /// Scored cases, in plan order.
@@ -1098,6 +1170,7 @@ pub fn run_proof(
         seed: cfg.seed,
         drives: cfg.drives,
         length_km: cfg.length_km,
+        driving: cfg.driving,
         jobs,
         scores,
         failed,
@@ -1111,7 +1184,8 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
     use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
     let io = |path: PathBuf| move |source| ProveError::Io { path, source };
     let md = format!(
-        "# Diagnosis proof\n\n`fleetdyn prove --drives {} --seed {} --min-km {} --max-km {}{}`: \
+        "# Diagnosis proof\n\n`fleetdyn prove --drives {} --seed {} --min-km {} --max-km {} \
+         --driving {}{}`: \
          {} synthetic drives, each hiding one catalogue effect (random magnitude), nothing, or \
          the out-of-catalogue stretch of extra rolling resistance; diagnosed blind.\n\n{}\n\
          ## Cases\n\n{}",
@@ -1119,6 +1193,7 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
         cfg.seed,
         cfg.length_km.0,
         cfg.length_km.1,
+        cfg.driving.label(),
         if cfg.only.is_empty() {
             String::new()
         } else {
@@ -1246,7 +1321,8 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
         vehicle_id: None,
         source_file: "fleetdyn prove".into(),
         config_hash: crate::io::config_hash(&[format!("{cfg:?}").as_bytes()]),
-        extra: vec![],
+        // with the seed and the plan's lengths (proof.json) it regenerates any case's drive
+        extra: vec![("driving".into(), cfg.driving.label().into())],
     };
     write_table(&out.join("proof_cases.parquet"), &meta, &cols)?;
     Ok(())
@@ -1256,6 +1332,44 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
 mod tests {
     use super::*;
     use crate::diagnose::contract::{FindingEntry, FitEntry, ParameterEntry};
+
+    #[test]
+    fn drawn_drivers_are_the_seeds_own_and_within_their_ranges() {
+        let drivers: Vec<DriverConfig> = (1..200).map(drawn_driver).collect();
+        assert_eq!(drivers[0], drawn_driver(1));
+        for d in &drivers {
+            assert!((0.5..=1.2).contains(&d.accel_mps2));
+            assert!((0.9..=1.5).contains(&d.decel_mps2));
+            assert!((0.3..=0.8).contains(&d.speed_gain_per_s));
+            assert!((0.03..=0.2).contains(&d.tip_fraction));
+            assert!((5.0..=20.0).contains(&d.stop_dwell_s));
+            let l = d.lift_offs.unwrap();
+            assert!(l.interval_s.0 >= 10.0 && l.interval_s.1 <= 180.0);
+            assert_eq!(l.interval_s.1, 3.0 * l.interval_s.0);
+            // everything else is the generator's default driver
+            assert_eq!(d.stop_every_m, DriverConfig::default().stop_every_m);
+            assert_eq!(d.retarder, DriverConfig::default().retarder);
+        }
+        // the drives differ: brisk and gentle, nervous and steady feet
+        let (lo, hi) = drivers.iter().fold((f64::MAX, 0.0_f64), |(lo, hi), d| {
+            (lo.min(d.accel_mps2), hi.max(d.accel_mps2))
+        });
+        assert!(lo < 0.6 && hi > 1.1, "{lo}…{hi}");
+        // the fixed driving is the default driver, whatever the seed
+        let case = plan(&ProofConfig::default())[5].clone();
+        let fixed = ProofConfig {
+            driving: Driving::Fixed,
+            ..ProofConfig::default()
+        };
+        assert_eq!(drive_config(&case, &fixed).driver.accel_mps2, 0.8);
+        assert_eq!(drive_config(&case, &fixed).driver.lift_offs, None);
+        assert_eq!(
+            drive_config(&case, &ProofConfig::default())
+                .driver
+                .stop_every_m,
+            drive_config(&case, &fixed).driver.stop_every_m
+        );
+    }
 
     #[test]
     fn plan_cycles_the_catalogue_and_is_deterministic() {

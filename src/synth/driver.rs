@@ -52,6 +52,18 @@
 //! Every `U(3, 8)` s the torque demand's factor is redrawn as `1 + U(−tip, tip)`
 //! (`tip` = [`DriverConfig::tip_fraction`]), from a PRNG seeded with the drive's seed: the same
 //! seed gives the same variations.
+//!
+//! # Lift-offs
+//! With [`DriverConfig::lift_offs`] the driver now and then takes the foot off the pedal while
+//! driving on (anticipating traffic, cresting a hill): a lift-off starts
+//! [`LiftOffs::interval_s`] after the previous one's start (drawn `U(lo, hi)`), lasts
+//! [`LiftOffs::duration_s`] (drawn `U(lo, hi)`), and commands the torque fraction −1 — the
+//! engine's motoring drag `engine_min_torque_nm` when coupled — with no brake, in place of a
+//! positive torque demand. It is skipped (and the next one drawn) below
+//! [`LiftOffs::min_speed_mps`], on a braking curve, or when the driver would not ask for torque.
+//! Its end is a tip-in from drag: a torque reversal, as traffic makes them. The draws come from
+//! their own PRNG stream (`seed ^ LIFT_STREAM`), so a driver without lift-offs draws exactly
+//! the tip factors it drew before they existed.
 
 use super::retarder::RetarderConfig;
 use crate::model::driveline::DrivelineParams;
@@ -80,7 +92,23 @@ pub struct DriverConfig {
     pub retarder: Option<RetarderConfig>,
     /// Speed limits along the road (module doc); `None`: the cruise speed everywhere.
     pub speed_limits: Option<SpeedLimits>,
+    /// Lift-offs while driving on (module doc); `None`: none.
+    pub lift_offs: Option<LiftOffs>,
 }
+
+/// A driver's lift-offs (module doc). Times in s, each range `(lo, hi)` with `0 < lo ≤ hi`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiftOffs {
+    /// Time from one lift-off's start to the next one's, s, drawn `U(lo, hi)`.
+    pub interval_s: (f64, f64),
+    /// Length of a lift-off, s, drawn `U(lo, hi)`.
+    pub duration_s: (f64, f64),
+    /// No lift-off below this speed, m/s.
+    pub min_speed_mps: f64,
+}
+
+/// PRNG stream of the lift-off draws (xored into the drive's seed).
+const LIFT_STREAM: u64 = 0x6C69_6674_6F66_6673;
 
 /// Speed limits along a drive's travelled distance: `limit_mps[k]` (m/s, finite and > 0)
 /// holds on `[k·step_m, (k+1)·step_m)`, the last one beyond the grid's end.
@@ -107,7 +135,7 @@ impl SpeedLimits {
 impl Default for DriverConfig {
     /// No speed limit override, a stop every 1 km held 8 s, 0.8 m/s² up, 1.2 m/s² down,
     /// k_v = 0.5 1/s, ±5 % tip variations, a 30 kN holding brake, the default retarder, no
-    /// speed limits along the road.
+    /// speed limits along the road, no lift-offs.
     fn default() -> Self {
         Self {
             speed_limit_mps: None,
@@ -120,6 +148,7 @@ impl Default for DriverConfig {
             hold_brake_n: 30_000.0,
             retarder: Some(RetarderConfig::default()),
             speed_limits: None,
+            lift_offs: None,
         }
     }
 }
@@ -157,6 +186,10 @@ pub struct Driver {
     last_t_s: Option<f64>,
     /// Speed envelope on the speed-limit grid, m/s (module doc), if limits are set.
     envelope: Option<Vec<f64>>,
+    /// The lift-offs' own PRNG stream.
+    lift_rng: Xoshiro256StarStar,
+    /// The current or next lift-off, `[start, end)`, s.
+    lift: Option<(f64, f64)>,
 }
 
 impl Driver {
@@ -196,6 +229,37 @@ impl Driver {
             retarder_nm: 0.0,
             last_t_s: None,
             envelope,
+            lift_rng: Xoshiro256StarStar::seed_from_u64(seed ^ LIFT_STREAM),
+            lift: None,
+        }
+    }
+
+    /// Whether a lift-off holds at `t_s` (module doc), drawing the next one as time passes.
+    fn lifting_off(&mut self, t_s: f64) -> bool {
+        let Some(l) = self.cfg.lift_offs else {
+            return false;
+        };
+        let draw = |rng: &mut Xoshiro256StarStar, from: f64| {
+            let start = from + rng.uniform(l.interval_s.0, l.interval_s.1);
+            (start, start + rng.uniform(l.duration_s.0, l.duration_s.1))
+        };
+        let mut lift = match self.lift {
+            Some(w) => w,
+            None => draw(&mut self.lift_rng, t_s),
+        };
+        while t_s >= lift.1 {
+            lift = draw(&mut self.lift_rng, lift.0);
+        }
+        self.lift = Some(lift);
+        t_s >= lift.0
+    }
+
+    /// Skips the lift-off holding now (it could not be made); the next is drawn from its start.
+    fn skip_lift_off(&mut self, t_s: f64) {
+        if let Some((start, end)) = self.lift {
+            if t_s >= start && t_s < end {
+                self.lift = Some((start, t_s));
+            }
         }
     }
 
@@ -343,7 +407,19 @@ impl Driver {
         let f = m_eff * a + p.road_force(v_mps, slope, 0.0, false);
         let ratio = overall_ratio.max(1e-9);
         let mut wanted = none;
-        let (frac, brake) = if f > 0.0 {
+        let lifting = self.lifting_off(t_s);
+        let lift_ok = lifting
+            && f > 0.0
+            && a_ff == 0.0
+            && self.cfg.lift_offs.is_some_and(|l| v_mps >= l.min_speed_mps);
+        if lifting && !lift_ok {
+            self.skip_lift_off(t_s);
+        }
+        let c = &self.cfg;
+        let (frac, brake) = if lift_ok {
+            // foot off the pedal: the engine's motoring drag, no brake
+            (-1.0, 0.0)
+        } else if f > 0.0 {
             let m = f * p.wheel_radius_m / ratio;
             let full = p.engine_max_torque(w_e_rad_s).max(1.0);
             ((m / full * self.tip).clamp(0.0, 1.0), 0.0)
@@ -398,4 +474,98 @@ struct WantedBrake {
     retarder_force_n: f64,
     /// The service brake takes what the retarder does not deliver.
     service_takes_rest: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::vehicle::VehicleFile;
+
+    fn truck() -> DrivelineParams {
+        VehicleFile::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/vehicles/seed002-6x2-diesel.toml"
+        )))
+        .unwrap()
+        .driveline
+        .unwrap()
+    }
+
+    /// The lift-off windows of a driver asking for torque at a steady `v_mps` on a 2 % climb
+    /// in a high gear (ratio 3, 1200 rpm), over 0.1 s steps from 10 s to 2000 s: each window's
+    /// (start, end) in s, where the command is the drag fraction −1.
+    fn windows(lift: Option<LiftOffs>, v_mps: f64) -> (Vec<(f64, f64)>, Vec<DriverCommand>) {
+        let p = truck();
+        let cfg = DriverConfig {
+            stop_every_m: None,
+            lift_offs: lift,
+            ..DriverConfig::default()
+        };
+        let mut d = Driver::new(cfg, v_mps, 1.0e7, 7);
+        let (mut out, mut cmds, mut open) = (Vec::new(), Vec::new(), None);
+        for k in 100..20_000 {
+            let t = k as f64 * 0.1;
+            let c = d.command(&p, t, v_mps * t, v_mps, 0.02, 125.7, 3.0, true);
+            match (c.torque_fraction == -1.0, open) {
+                (true, None) => open = Some(t),
+                (false, Some(t0)) => {
+                    out.push((t0, t));
+                    open = None;
+                }
+                _ => {}
+            }
+            cmds.push(c);
+        }
+        (out, cmds)
+    }
+
+    const LIFTS: LiftOffs = LiftOffs {
+        interval_s: (20.0, 60.0),
+        duration_s: (1.0, 4.0),
+        min_speed_mps: 5.0,
+    };
+
+    #[test]
+    fn lift_offs_release_the_pedal_for_their_drawn_lengths_and_intervals() {
+        let (w, cmds) = windows(Some(LIFTS), 20.0);
+        // ~2000 s / 40 s mean interval: tens of lift-offs, none of them braking
+        assert!(w.len() >= 30 && w.len() <= 100, "{}", w.len());
+        for &(t0, t1) in &w {
+            // a window is whole 0.1 s steps: 1–4 s drawn, rounded up to the next step
+            assert!((0.99..=4.11).contains(&(t1 - t0)), "{t0}…{t1}");
+        }
+        for pair in w.windows(2) {
+            let gap = pair[1].0 - pair[0].0;
+            assert!((19.9..=60.1).contains(&gap), "{pair:?}");
+        }
+        assert!(cmds
+            .iter()
+            .all(|c| c.brake_n == 0.0 && c.retarder_nm == 0.0));
+        // between lift-offs the driver asks for torque as before
+        assert!(cmds.iter().filter(|c| c.torque_fraction > 0.0).count() > 15_000);
+    }
+
+    #[test]
+    fn no_lift_off_below_its_speed_or_without_lift_offs() {
+        assert!(windows(Some(LIFTS), 4.0).0.is_empty());
+        assert!(windows(None, 20.0).0.is_empty());
+    }
+
+    #[test]
+    fn lift_offs_leave_the_tip_draws_alone() {
+        // the torque demand outside the lift-offs is the same with and without them: the
+        // lift-offs draw from their own stream
+        let (w, with) = windows(Some(LIFTS), 20.0);
+        let (_, without) = windows(None, 20.0);
+        let lifted = |t: f64| w.iter().any(|&(t0, t1)| t >= t0 - 1e-9 && t < t1 - 1e-9);
+        let mut compared = 0;
+        for (k, (a, b)) in with.iter().zip(&without).enumerate() {
+            let t = (k + 100) as f64 * 0.1;
+            if !lifted(t) {
+                assert_eq!(a.torque_fraction, b.torque_fraction, "t = {t}");
+                compared += 1;
+            }
+        }
+        assert!(compared > 15_000);
+    }
 }

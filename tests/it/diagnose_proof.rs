@@ -1,5 +1,5 @@
-//! The reduced proof (issue 7 point 6): the first cycle of the README's proof — `fleetdyn prove
-//! --seed 1`, drives 0–21: every catalogue effect once at a random magnitude, four drives
+//! The reduced proof (issue 7 point 6): the first cycle of the README's fixed-driving proof —
+//! `fleetdyn prove --seed 1 --driving fixed`, drives 0–21: every catalogue effect once at a random magnitude, four drives
 //! without effect and two with rolling resistance raised on one stretch only — generated,
 //! diagnosed blind (the diagnosis reads the drive file and the nominal vehicle file; the
 //! answers are written apart and only the scorer reads them) and scored.
@@ -26,11 +26,15 @@
 //!   slope quantisation (case 4: the cure cannot restore the rounding of constant grades) is
 //!   not, so no diagnosis bound by the rule could name it on this drive;
 //! - the written outputs: the table, the case Parquet, `proof.json` with the plan (seed,
-//!   drives, lengths) that regenerates any case, one contract folder per case.
+//!   drives, lengths, driving) that regenerates any case, one contract folder per case.
+//!
+//! The same cycle under the drawn driving (`fleetdyn prove --seed 1`, the default: a driver
+//! drawn per drive) is pinned apart, with what it measured (README "Diagnosis proof").
+//! The mechanism pins below run their cases as the fixed-driving plan made them.
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;
-use fleetdyn::diagnose::prove::{run_proof, ProofConfig, ProofRun};
+use fleetdyn::diagnose::prove::{run_proof, Driving, ProofConfig, ProofRun};
 
 const IDENTIFIED: [&str; 13] = [
     "rolling_resistance",
@@ -69,6 +73,7 @@ fn proof(cfg: &ProofConfig) -> (tempfile::TempDir, ProofRun) {
 fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
     let (dir, run) = proof(&ProofConfig {
         drives: 22,
+        driving: Driving::Fixed,
         ..ProofConfig::default()
     });
     println!("{}", run.summary.to_markdown());
@@ -134,6 +139,7 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
     assert_eq!(written["seed"], 1);
     assert_eq!(written["drives"], 22);
     assert_eq!(written["length_km"], serde_json::json!([3.0, 6.0]));
+    assert_eq!(written["driving"], "fixed");
     for s in &run.scores {
         assert!(dir
             .path()
@@ -172,6 +178,97 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
     assert_eq!(checked, 2, "case 6 (lash) and case 7 (stiffness) are named");
 }
 
+/// Effects the drawn-driving cycle (`fleetdyn prove --seed 1`, drives 0–21) names first:
+/// [`IDENTIFIED`] but for the three whose drawn drives leave them unnamed (below), and the
+/// torque delay.
+fn identified_drawn(hidden: &str) -> bool {
+    const UNNAMED: [&str; 3] = ["driveline_compliance", "driveline_backlash", "clutch_slip"];
+    hidden == "signal_delay" || (IDENTIFIED.contains(&hidden) && !UNNAMED.contains(&hidden))
+}
+
+/// The first cycle under the drawn driving (`fleetdyn prove --seed 1`, drives 0–21: the same
+/// roads, effects and magnitudes as the fixed-driving cycle above, each drive with its own
+/// driver — acceleration, braking, speed holding, torque tips, lift-offs, stop time).
+/// Measured on this code (README "Diagnosis proof", drawn driving): eleven effects named
+/// first, aero drag named as `grade_offset` with itself in the ambiguity set, no clean or
+/// out-of-catalogue drive with a finding. What the drawn driving costs is pinned as a ratchet
+/// (these assertions hold while it stays, and still hold when it is mended): the slope
+/// quantisation of case 4 (invisible to the rule at its truth: oracle gain 0.23) is read as a
+/// `grade_offset` — the one wrong name of the cycle; case 9's worn clutch (−37 %) is visible
+/// at its truth (oracle gain 0.93) but no rung of the screen's ladder removes 10 % of the train
+/// error, so it ends without a finding; the lash of case 6 and the stiffness of case 7 do not
+/// pass the rule even at their truth on these drives' driving.
+#[test]
+fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_drives() {
+    let (dir, run) = proof(&ProofConfig {
+        drives: 22,
+        ..ProofConfig::default()
+    });
+    println!("{}", run.summary.to_markdown());
+    assert!(run.failed.is_empty(), "{:#?}", run.failed);
+    assert_eq!(run.scores.len(), 22);
+    let (mut ratios, mut errors, mut wrong) = (Vec::new(), Vec::new(), Vec::new());
+    let mut identified = 0;
+    for s in &run.scores {
+        let case = format!(
+            "case {} ({}, {}): {:?}",
+            s.index, s.hidden, s.rules, s.findings
+        );
+        match s.hidden {
+            "none" => {
+                assert!(s.findings.is_empty(), "false positive: {case}");
+                assert_eq!(s.verdict, Verdict::NoSignificantMismatch, "{case}");
+            }
+            "out_of_catalogue" => {
+                assert!(s.findings.is_empty(), "{case}");
+                assert_eq!(s.out_of_catalogue_located, Some(true), "{case}");
+            }
+            h => {
+                if identified_drawn(h) {
+                    assert!(s.correct, "not identified: {case}");
+                    assert_eq!(s.oracle_visible, Some(true), "{case}");
+                    identified += 1;
+                }
+                if !(s.correct || s.ambiguous_correct || s.findings.is_empty()) {
+                    wrong.push(s.index);
+                }
+                if s.correct {
+                    let r = s.heldout_ratio.unwrap();
+                    assert!(r < 1.0, "{case}: held-out ratio {r}");
+                    ratios.push(r);
+                    errors.push(s.parameter_error.unwrap());
+                }
+            }
+        }
+    }
+    assert_eq!(identified, 11);
+    // aero drag: named as the grade offset it cannot be told from on this drive, itself in
+    // the ambiguity set
+    assert!(run.scores[0].correct || run.scores[0].ambiguous_correct);
+    // at most case 4's slope quantisation is named as another effect
+    assert!(wrong.iter().all(|&i| i == 4), "wrong names: {wrong:?}");
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    assert!(median(ratios.clone()) <= 0.5, "{ratios:?}");
+    assert!(median(errors.clone()) <= 0.2, "{errors:?}");
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("proof.json")).unwrap())
+            .unwrap();
+    assert_eq!(written["driving"], "drawn");
+    assert!(std::fs::read_to_string(dir.path().join("proof.md"))
+        .unwrap()
+        .contains("--driving drawn"));
+    let cases = std::fs::File::open(dir.path().join("proof_cases.parquet")).unwrap();
+    let meta = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(cases)
+        .unwrap()
+        .schema()
+        .metadata()
+        .clone();
+    assert_eq!(meta.get("driving").map(String::as_str), Some("drawn"));
+}
+
 /// Four drives of the proof's later cycles, run exactly as in the whole plan
 /// (`--cases 27,48,49,60`): case 27 hides a torque-signal delay whose four torque reversals all
 /// fall in training blocks, so that only the engine speed while the clutch is actuated shows
@@ -188,6 +285,7 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
 fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mismatch() {
     let (_dir, run) = proof(&ProofConfig {
         only: vec![27, 48, 49, 60],
+        driving: Driving::Fixed,
         ..ProofConfig::default()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
@@ -240,6 +338,7 @@ fn a_large_delay_is_fitted_in_its_own_basin() {
     let (_dir, run) = proof(&ProofConfig {
         seed: 1001,
         only: vec![27],
+        driving: Driving::Fixed,
         ..ProofConfig::default()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
@@ -264,6 +363,7 @@ fn the_screen_probes_threshold_effects_across_their_range() {
     let (_dir, run) = proof(&ProofConfig {
         seed: 5001,
         only: vec![49, 53],
+        driving: Driving::Fixed,
         ..ProofConfig::default()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
@@ -290,6 +390,7 @@ fn a_switch_is_tested_on_every_row() {
     let (dir, run) = proof(&ProofConfig {
         seed: 5001,
         only: vec![26],
+        driving: Driving::Fixed,
         ..ProofConfig::default()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
