@@ -221,8 +221,8 @@ enum Command {
         /// The drives' driving: `drawn`, a driver drawn per drive (acceleration, braking,
         /// speed holding, torque tips, lift-offs, stop time); `fixed`, the generator's one
         /// default driver for every drive (the README's tables dated before the drawn driving).
-        #[arg(long, default_value = "drawn", value_parser = ["drawn", "fixed"])]
-        driving: String,
+        #[arg(long, value_enum, default_value = "drawn")]
+        driving: DrivingArg,
     },
     /// Run a pipeline file (pipelines/*.toml) over its inputs, in parallel, into a
     /// hive-partitioned dataset with a run report; drives already done with the same input and
@@ -557,6 +557,12 @@ enum RoadCommand {
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
+enum DrivingArg {
+    Drawn,
+    Fixed,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
 enum AxleScenarioArg {
     FullAcceleration,
     AuxBraking,
@@ -832,7 +838,7 @@ fn run_prove(
     output: PathBuf,
     jobs: Option<usize>,
     cases: Vec<usize>,
-    driving: &str,
+    driving: DrivingArg,
 ) -> Result<(), Failure> {
     use fleetdyn::diagnose::prove::{run_proof, Driving, ProofConfig};
     if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
@@ -854,10 +860,9 @@ fn run_prove(
         seed,
         length_km: (min_km, max_km),
         only: cases,
-        driving: if driving == "fixed" {
-            Driving::Fixed
-        } else {
-            Driving::Drawn
+        driving: match driving {
+            DrivingArg::Drawn => Driving::Drawn,
+            DrivingArg::Fixed => Driving::Fixed,
         },
         ..ProofConfig::default()
     };
@@ -913,7 +918,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             cases,
             driving,
         } => run_prove(
-            drives, seed, min_km, max_km, vehicle, output, jobs, cases, &driving,
+            drives, seed, min_km, max_km, vehicle, output, jobs, cases, driving,
         ),
         Command::Ingest {
             inputs,

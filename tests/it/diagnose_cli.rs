@@ -3,7 +3,8 @@
 //! with exactly the contract's keys, mismatch.parquet and findings.parquet with `unit` field
 //! metadata, report.md with the residual plots — and names the effect; a recording neither
 //! model can use fails with exit 1, a clear message and nothing written; a missing vehicle is
-//! a usage error (exit 2).
+//! a usage error (exit 2). `fleetdyn prove --driving` records its choice and rejects an unknown
+//! one.
 
 use crate::common::fixture;
 use fleetdyn::diagnose::catalogue::Effect;
@@ -212,4 +213,46 @@ fn unusable_recordings_fail_clearly_and_write_nothing() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--vehicle"));
+}
+
+/// `fleetdyn prove --driving`: the choice reaches the plan and is recorded where a rerun reads
+/// it (proof.json, the command line in proof.md, proof_cases.parquet's metadata); an unknown
+/// driving is a usage error (exit 2) that writes nothing.
+#[test]
+fn prove_records_its_driving_and_rejects_an_unknown_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("proof");
+    let o = out.to_str().unwrap();
+    // case 16 of the default plan: a clean drive, the quickest to diagnose
+    let run = fleetdyn(&["prove", "--driving", "fixed", "--cases", "16", "-o", o]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let written: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("proof.json")).unwrap()).unwrap();
+    assert_eq!(written["driving"], "fixed");
+    assert_eq!(written["scores"].as_array().unwrap().len(), 1);
+    assert!(std::fs::read_to_string(out.join("proof.md"))
+        .unwrap()
+        .contains("--driving fixed"));
+    let r =
+        SerializedFileReader::new(std::fs::File::open(out.join("proof_cases.parquet")).unwrap())
+            .unwrap();
+    let driving = r
+        .metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .unwrap()
+        .iter()
+        .find(|kv| kv.key == "driving")
+        .and_then(|kv| kv.value.clone());
+    assert_eq!(driving.as_deref(), Some("fixed"));
+
+    let other = dir.path().join("other");
+    let bad = fleetdyn(&["prove", "--driving", "bogus", "-o", other.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("drawn, fixed"));
+    assert!(!other.exists());
 }
