@@ -122,8 +122,8 @@ const DRIVING_STREAM: u64 = 0x6472_6976_696E_6721;
 /// The driver of a proof drive with seed `seed` under [`Driving::Drawn`]: the generator's
 /// default driver with, drawn uniformly from the drive seed's own stream,
 /// - comfortable acceleration 0.5–1.2 m/s² (a loaded truck's gentle start to a brisk one;
-///   the 18.7 t seed 002 truck runs at full load in its upper gears at either end) and
-///   deceleration 0.9–1.5 m/s²;
+///   at 1.2 m/s² the 18.7 t seed 002 truck reaches cruise in its top gear at full torque,
+///   `fleetdyn prove --seed 1` case 38) and deceleration 0.9–1.5 m/s²;
 /// - speed-error gain 0.3–0.8 1/s;
 /// - tip amplitude ±3 % to ±20 % of the torque demand;
 /// - lift-offs ([`LiftOffs`]) every 20–120 s on average (each interval 0.5–1.5 times the

@@ -415,6 +415,7 @@ impl Driver {
         if lifting && !lift_ok {
             self.skip_lift_off(t_s);
         }
+        // bound again: the lift-off draws above needed `self` mutably
         let c = &self.cfg;
         let (frac, brake) = if lift_ok {
             // foot off the pedal: the engine's motoring drag, no brake
