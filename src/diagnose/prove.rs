@@ -1083,8 +1083,10 @@ fn contract_held(m: &super::contract::FitEntry) -> (f64, f64) {
 /// speed, engine speed and bellow pressures, and the engine speed again as the clutch view's
 /// [`super::compare::ACTUATION_CHANNEL`]), on the rows of `log`: the truth `signals` read at
 /// each row's time (linear between the truth's samples; the log's clock starts at
-/// [`crate::synth::drive::DRIVE_START_NS`] = the truth's 0 s).
-fn noise_free_reference(
+/// [`crate::synth::drive::DRIVE_START_NS`] = the truth's 0 s). The reference
+/// [`super::explain::fits_against`] takes to score a fit against the noise-free signals;
+/// `signals` from [`crate::synth::drive::drive_truth`].
+pub fn noise_free_reference(
     log: &DriveLog,
     signals: &crate::synth::can::Truth,
 ) -> BTreeMap<String, Vec<f64>> {
