@@ -151,8 +151,9 @@ pub fn index(e: Effect) -> usize {
 /// The recording with the sensor effects of `theta` undone (see the module documentation);
 /// `cured_slope` is the recording's slope with `slope_quantization` undone
 /// ([`SlopeGrid::cured`]), used when given. The slope (recorded or cured) is read half its
-/// native period ahead, which undoes the hold's mean lag ([`held_period_s`] on the recorded
-/// slope; the cure is built from the held samples, so it carries the same lag). A service-brake force is read as a released brake (0) where
+/// native period ahead, which undoes the hold's mean lag (the period is the mean spacing of
+/// the recorded slope's changes, over those at most 1.5× their 10th percentile; the cure is
+/// built from the held samples, so it carries the same lag). A service-brake force is read as a released brake (0) where
 /// no sample within ±[`super::compare::BRAKE_EPISODE_HALFWIDTH_S`] reaches
 /// [`super::compare::BRAKE_RELEASED_BELOW_N`]; inside a braking episode every value counts,
 /// and so does every value at a standstill (recorded speed below the axle input's
