@@ -8,7 +8,7 @@ use fleetdyn::diagnose::extended::LongitudinalModel;
 use fleetdyn::diagnose::setup::Setup;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
-#[allow(dead_code)]
+#[allow(dead_code)] // the study examples share it; this one lists no cases
 mod proof_dir;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -22,6 +22,7 @@ use fleetdyn::diagnose::setup::Setup;
 use std::path::PathBuf;
 
 #[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one uses a part
 mod proof_dir;
 
 fn shift(c: &ModalComparison) -> Option<(f64, usize)> {

@@ -1,18 +1,19 @@
 //! Study: the oracle check's rule-1 figure (the relative fall of the own model's weighted RMSE
 //! with the hidden effect at its truth, nothing fitted) on the held-out part, on the training
 //! part and on both together, for proof cases: whether an effect invisible on the held-out
-//! blocks shows on the training blocks.
+//! blocks shows on the training blocks. With `ORACLE_FOLDS_WINDOWS=1` it lists first, per
+//! channel of the speeds view, the 20 s stretches whose nominal residual has a mean square
+//! above 4 in units of the channel's noise floor (`t` train, `h` held-out).
 //!
 //! ```text
 //! cargo run --release --example oracle_folds -- DIR [CASE …]
 //! ```
-use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
 use fleetdyn::diagnose::fit::Evaluator;
-use fleetdyn::diagnose::noise::{noise_floors, ModelSet, NoiseConfig};
+use fleetdyn::diagnose::problem::ViewKind;
 use fleetdyn::diagnose::setup::Setup;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one uses a part
 mod proof_dir;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -24,19 +25,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         };
         let (vf, log) = proof_dir::load(&dir, &case)?;
-        let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
-            dir.join("diagnoses").join(&case).join("diagnosis.json"),
-        )?)?;
-        let floor: BTreeMap<String, f64> = serde_json::from_value(d["noise_floor"].clone())?;
+        let floor = proof_dir::noise_floor(&dir, &case)?;
         let setup = Setup::new(&log, &vf)?;
-        let models = ModelSet {
-            actuation: true,
-            ..ModelSet::for_log(&log, &setup.nominal_truth, &setup.ratios, setup.nominal)
-        };
-        let floors = noise_floors(&log, &models, &setup.nominal, &NoiseConfig::default())?;
-        let actuation = floors
-            .get(ACTUATION_CHANNEL)
-            .map(|f| f.null_variance.clone());
+        let actuation = proof_dir::actuation_variance(&log, &setup)?;
         let problem = setup.problem(&log, actuation.as_deref())?;
         let (ev, base) = Evaluator::at_nominal(&problem, Some(&floor));
         let own: Vec<bool> = ev
@@ -65,7 +56,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         if std::env::var_os("ORACLE_FOLDS_WINDOWS").is_some() {
             // the speeds view's residual per 20 s, in units of each channel's floor
-            let v = &problem.views()[0];
+            let Some(sv) = problem
+                .views()
+                .iter()
+                .position(|v| v.kind == ViewKind::Speeds)
+            else {
+                continue;
+            };
+            let v = &problem.views()[sv];
             let t = problem.times();
             let nw = (t.last().copied().unwrap_or(0.0) / 20.0).ceil() as usize;
             for (k, &c) in v.chans.iter().enumerate() {
@@ -74,7 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let mut acc = vec![(0.0, 0usize, false); nw.max(1)];
                 for i in ch.train_idx.iter().chain(ch.held_idx.iter()) {
                     let w = ((t[*i] / 20.0) as usize).min(nw.max(1) - 1);
-                    let r = (ch.measured[*i] - base.outputs[0][k][*i]) / sig;
+                    let r = (ch.measured[*i] - base.outputs[sv][k][*i]) / sig;
                     acc[w].0 += r * r;
                     acc[w].1 += 1;
                     acc[w].2 = problem.split().heldout[*i];

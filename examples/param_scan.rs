@@ -6,11 +6,8 @@
 //! ```text
 //! cargo run --release --example param_scan -- DIR case-0005 0.0 0.5 11
 //! ```
-use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
 use fleetdyn::diagnose::fit::Evaluator;
-use fleetdyn::diagnose::noise::{noise_floors, ModelSet, NoiseConfig};
 use fleetdyn::diagnose::setup::Setup;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
 #[allow(dead_code)] // the study examples share it; this one lists no cases
@@ -26,19 +23,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (vf, log) = proof_dir::load(&dir, case)?;
     let ans = proof_dir::answer(&dir, case);
     let (e, truth) = ans.effect.ok_or("not a catalogue case")?;
-    let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
-        dir.join("diagnoses").join(case).join("diagnosis.json"),
-    )?)?;
-    let floor: BTreeMap<String, f64> = serde_json::from_value(d["noise_floor"].clone())?;
+    let floor = proof_dir::noise_floor(&dir, case)?;
     let setup = Setup::new(&log, &vf)?;
-    let models = ModelSet {
-        actuation: true,
-        ..ModelSet::for_log(&log, &setup.nominal_truth, &setup.ratios, setup.nominal)
-    };
-    let floors = noise_floors(&log, &models, &setup.nominal, &NoiseConfig::default())?;
-    let actuation = floors
-        .get(ACTUATION_CHANNEL)
-        .map(|f| f.null_variance.clone());
+    let actuation = proof_dir::actuation_variance(&log, &setup)?;
     let problem = setup.problem(&log, actuation.as_deref())?;
     let (ev, base) = Evaluator::at_nominal(&problem, Some(&floor));
     let own: Vec<bool> = ev.models.iter().map(|v| v.domain == e.domain()).collect();

@@ -14,6 +14,7 @@ use fleetdyn::diagnose::setup::Setup;
 use std::path::PathBuf;
 
 #[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one uses a part
 mod proof_dir;
 
 const RPM: f64 = 30.0 / std::f64::consts::PI;

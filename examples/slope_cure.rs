@@ -14,6 +14,7 @@ use fleetdyn::signal::dequantise::DequantiseConfig;
 use fleetdyn::table::DriveLog;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the study examples share it; this one uses a part
 mod proof_dir;
 #[path = "common/proof_truth.rs"]
 mod proof_truth;

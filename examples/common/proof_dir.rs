@@ -66,3 +66,32 @@ pub fn load(dir: &Path, case: &str) -> Result<(VehicleFile, DriveLog), Box<dyn E
     let log = fleetdyn::ingest::ingest_file(&d.join("drive.parquet"), &opts)?.log;
     Ok((vf, log))
 }
+
+/// The noise floor (`{"<signal>": floor}`) the proof's diagnosis of `case` wrote in its
+/// `diagnosis.json`: the weights the first round of the explain step used.
+pub fn noise_floor(
+    dir: &Path,
+    case: &str,
+) -> Result<std::collections::BTreeMap<String, f64>, Box<dyn Error>> {
+    let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
+        dir.join("diagnoses").join(case).join("diagnosis.json"),
+    )?)?;
+    Ok(serde_json::from_value(d["noise_floor"].clone())?)
+}
+
+/// The clutch-actuation view's per-row null variance of `log`, computed again as the
+/// diagnosis computes it (`diagnose::run`), for `Setup::problem`.
+pub fn actuation_variance(
+    log: &DriveLog,
+    setup: &fleetdyn::diagnose::setup::Setup,
+) -> Result<Option<Vec<f64>>, Box<dyn Error>> {
+    use fleetdyn::diagnose::noise::{noise_floors, ModelSet, NoiseConfig};
+    let models = ModelSet {
+        actuation: true,
+        ..ModelSet::for_log(log, &setup.nominal_truth, &setup.ratios, setup.nominal)
+    };
+    let floors = noise_floors(log, &models, &setup.nominal, &NoiseConfig::default())?;
+    Ok(floors
+        .get(fleetdyn::diagnose::compare::ACTUATION_CHANNEL)
+        .map(|f| f.null_variance.clone()))
+}

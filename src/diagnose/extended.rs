@@ -48,8 +48,9 @@
 //! under load); then, as with an open or actuated clutch, it starts slipping from the measured
 //! engine speed. A locked start takes its engine side from the measured engine speed too, the
 //! wheel from the vehicle speed, so that it starts in the phase of a running shuffle
-//! (`LongitudinalModel::measured_twist_rate`). [`AxleModel::simulate`]: the three bellow pressures on
-//! the log's rows, open loop from the steady state (the suspension is stable, nothing drifts).
+//! (`LongitudinalModel::measured_twist_rate`). [`AxleModel::simulate`]: the three bellow
+//! pressures on the log's rows, open loop from the steady state (the suspension is stable,
+//! nothing drifts).
 
 use super::catalogue::Effect;
 use super::noise::{estimate_sensor_noise, grid_step_s, SampleKind};
