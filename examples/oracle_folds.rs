@@ -1,7 +1,11 @@
 //! Study: the oracle check's rule-1 figure (the relative fall of the own model's weighted RMSE
 //! with the hidden effect at its truth, nothing fitted) on the held-out part, on the training
 //! part and on both together, for proof cases: whether an effect invisible on the held-out
-//! blocks shows on the training blocks. With `ORACLE_FOLDS_WINDOWS=1` it lists first, per
+//! blocks shows on the training blocks. Per view it prints the change at the truth
+//! (`chg`, [`Evaluator::change_ms`], which decides whether rules 1 and 2 score the view) and
+//! the weighted mean squares before → after on each part. The three figures are over every
+//! changed view of the own model, as the rule scored before the views it scores were chosen
+//! by their change. With `ORACLE_FOLDS_WINDOWS=1` it lists first, per
 //! channel of the speeds view, the 20 s stretches whose nominal residual has a mean square
 //! above 4 in units of the channel's noise floor (`t` train, `h` held-out).
 //!
@@ -45,8 +49,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 bh += base.heldout[m];
                 ah += at.heldout[m];
                 per.push(format!(
-                    "{:?} tr {:.3}->{:.3} ho {:.3}->{:.3}",
+                    "{:?} chg {:.2e} tr {:.3}->{:.3} ho {:.3}->{:.3}",
                     problem.views()[m].kind,
+                    ev.change_ms(m, &at, &base),
                     base.train[m],
                     at.train[m],
                     base.heldout[m],

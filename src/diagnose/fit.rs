@@ -426,6 +426,12 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// or rolling-resistance change moves them by parts per million — a view that would
     /// otherwise count for every longitudinal effect and set its sample count.
     pub fn changed(&self, m: usize, a: &Eval, b: &Eval) -> bool {
+        self.change_ms(m, a, b) > MATERIAL_CHANGE_MS
+    }
+
+    /// The weighted mean square of the change of model view `m`'s outputs from `b` to `a`
+    /// over all valid rows (the cost's weights; [`Evaluator::changed`]'s figure).
+    pub fn change_ms(&self, m: usize, a: &Eval, b: &Eval) -> f64 {
         let v = &self.models[m];
         let ch = self.problem.channels();
         let mut ms = 0.0;
@@ -440,7 +446,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             }
             ms += s / (n.max(1) as f64 * sg * sg);
         }
-        ms / v.chans.len().max(1) as f64 > MATERIAL_CHANGE_MS
+        ms / v.chans.len().max(1) as f64
     }
 
     /// The pooled views of `active` (its own-term views switched off).
@@ -555,22 +561,31 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// Whiteness of `x`'s held-out residual over the models of `active` (means of
     /// [`whiteness`]'s figures over the models).
     pub fn whiteness(&self, x: &Eval, active: &[bool]) -> Whiteness {
+        self.whiteness_on(x, active, &[Part::Heldout])
+    }
+
+    /// Whiteness of `x`'s residual on `parts` over the models of `active`: the means of
+    /// [`whiteness`]'s figures over the models and the parts (each part on its own, so that
+    /// no lag spans the boundary of two parts).
+    pub fn whiteness_on(&self, x: &Eval, active: &[bool], parts: &[Part]) -> Whiteness {
         let (mut q, mut p, mut n) = (0.0, 0.0, 0);
         for (m, v) in self.models.iter().enumerate() {
             if !active[m] {
                 continue;
             }
-            let w = whiteness(
-                self.problem.channels(),
-                &v.chans,
-                &v.sigmas,
-                &x.outputs[m],
-                Part::Heldout,
-                self.dt_s,
-            );
-            q += w.q_per_n;
-            p += w.nonwhite_power;
-            n += 1;
+            for &part in parts {
+                let w = whiteness(
+                    self.problem.channels(),
+                    &v.chans,
+                    &v.sigmas,
+                    &x.outputs[m],
+                    part,
+                    self.dt_s,
+                );
+                q += w.q_per_n;
+                p += w.nonwhite_power;
+                n += 1;
+            }
         }
         let n = n.max(1) as f64;
         Whiteness {

@@ -967,8 +967,8 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
             match scorer_look(&log, &vf, &d, act.as_deref(), &g) {
                 Ok(look) => CaseOutcome::Scored(Box::new(CaseScore {
                     attempts: attempt + 1,
-                    oracle_heldout_gain: look.oracle.map(|o| o.heldout_gain),
-                    oracle_visible: look.oracle.map(|o| o.visible()),
+                    oracle_heldout_gain: look.oracle.as_ref().map(|o| o.heldout_gain),
+                    oracle_visible: look.oracle.as_ref().map(|o| o.visible()),
                     noise_free_heldout_ratio: look.noise_free_fitted,
                     noise_free_truth_ratio: look.noise_free_truth,
                     ..score(&g.case, &g.truth, &d, log.duration_s(), seconds)
