@@ -8,8 +8,8 @@
 //! 2. **Screen** every applicable effect by a finite difference of the extended model with a
 //!    physically sized step and a least-squares fit of the train residual on its sensitivity,
 //!    alone and jointly ([`super::fit`]); candidates are those whose single-effect fit removes
-//!    more than [`super::fit::SCREEN_MIN_REDUCTION`] (10 %) of the weighted train SSE, ranked,
-//!    at most [`super::fit::MAX_FULL_FITS`] (6).
+//!    more than [`super::fit::SCREEN_MIN_REDUCTION`] (10 %) of the weighted train SSE (a
+//!    switch: any of every row's), ranked, at most [`super::fit::MAX_FULL_FITS`] (6).
 //! 3. **Fit** each candidate's parameter on the train part by Levenberg–Marquardt on the
 //!    re-simulated extended model (mode-aware: the hybrid simulation switches clutch modes and
 //!    gears itself), within its physical domain, in parallel across candidates; 95 % interval
@@ -65,9 +65,11 @@
 //!    alone, so its alternative is fixed before the outputs are looked at, and for a fixed
 //!    alternative the Gaussian log-likelihood ratio (known variance) `2 ln Λ` is `N(−D, 4D)`
 //!    under "no effect" (`D` the alternative's standardised squared distance), whose chance
-//!    of exceeding 3.84 is largest at `D = 3.84`: `P(Z > 1.96)` = 2.5 %; that the screen and
-//!    the on/off choice look at the train part first only makes passing rarer. Before, the switch was tested on the train part alone, as a fitted parameter
-//!    is, and five drives of the proof (seeds 2, 3, 5001, 7001) whose cure passed rules 1
+//!    of exceeding 3.84 is largest at `D = 3.84`: `P(Z > 1.96)` = 2.5 %. The screen, which
+//!    looks at the same rows first (a switch is screened on every row, [`super::fit`]), can
+//!    only make passing rarer: for one fixed alternative the chance that the screen selects
+//!    it and the test passes is at most the test's own. Before, the switch was tested on
+//!    the train part alone, as a fitted parameter is, and five drives of the proof (seeds 2, 3, 5001, 7001) whose cure passed rules 1
 //!    and 2 failed there (train statistics 0.7–3.4 against 3.84), the held-out blocks
 //!    holding more of the sensor's rounding than the train blocks. For the same reason a
 //!    switch's rules 1 and 2 score every row too (each part's weighted mean square summed,
