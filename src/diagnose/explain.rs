@@ -69,9 +69,10 @@
 //!    looks at the same rows first (a switch is screened on every row, [`super::fit`]), can
 //!    only make passing rarer: for one fixed alternative the chance that the screen selects
 //!    it and the test passes is at most the test's own. Before, the switch was tested on
-//!    the train part alone, as a fitted parameter is, and five drives of the proof (seeds 2, 3, 5001, 7001) whose cure passed rules 1
-//!    and 2 failed there (train statistics 0.7–3.4 against 3.84), the held-out blocks
-//!    holding more of the sensor's rounding than the train blocks. For the same reason a
+//!    the train part alone, as a fitted parameter is, and five drives of the proof (seeds
+//!    2, 3, 5001, 7001) whose cure passed rules 1 and 2 failed there (train statistics
+//!    0.7–3.4 against 3.84), the held-out blocks holding more of the sensor's rounding than
+//!    the train blocks. For the same reason a
 //!    switch's rules 1 and 2 score every row too (each part's weighted mean square summed,
 //!    each part's non-white power averaged): with nothing fitted, the train rows are as much
 //!    held out as the held-out ones, and a whole-percent sensor's rounding shows where the
@@ -241,12 +242,14 @@ pub struct CandidateFit {
     pub value: f64,
     /// Weighted RMSE per model whose outputs the effect changes (fitted on all of them).
     pub models: Vec<ModelScore>,
-    /// Relative fall of the held-out weighted RMSE of the effect's own model (rule 1).
+    /// Relative fall of the held-out weighted RMSE of the views of the effect's own model that
+    /// rule 1 scores (every row for a switch; module documentation).
     pub heldout_gain: f64,
     /// Held-out weighted mean square explained, summed over every model in use
     /// (`Σ_m 1 − MS_after/MS_before`): the ranking of candidates.
     pub explained: f64,
-    /// Held-out whiteness before / after.
+    /// Whiteness before / after of the views rule 2 scores, on the held-out part (both parts
+    /// for a switch).
     pub whiteness_before: Whiteness,
     /// See `whiteness_before`.
     pub whiteness_after: Whiteness,
@@ -365,11 +368,13 @@ pub struct Evidence {
     pub start: f64,
     /// Weighted RMSE per model the effect changes.
     pub models: Vec<ModelScore>,
-    /// Relative fall of the held-out weighted RMSE of the effect's own model.
+    /// Relative fall of the held-out weighted RMSE of the views of the effect's own model that
+    /// rule 1 scored (every row for a switch).
     pub heldout_gain: f64,
     /// Held-out weighted mean square explained, summed over the models.
     pub explained: f64,
-    /// Held-out whiteness before / after.
+    /// Whiteness before / after of the views rule 2 scores, on the held-out part (both parts
+    /// for a switch).
     pub whiteness_before: Whiteness,
     /// See `whiteness_before`.
     pub whiteness_after: Whiteness,
