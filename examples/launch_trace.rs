@@ -4,7 +4,6 @@
 //! ```text
 //! cargo run --release --example launch_trace -- DIR case-0029 12 20
 //! ```
-use fleetdyn::diagnose::extended::LongitudinalModel;
 use fleetdyn::diagnose::setup::Setup;
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
@@ -20,13 +19,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = PathBuf::from(dir);
     let (vf, log) = proof_dir::load(&dir, case)?;
     let setup = Setup::new(&log, &vf)?;
-    let m = LongitudinalModel::new(
-        &log,
-        &setup.nominal_truth,
-        &setup.ratios,
-        setup.nominal,
-        Default::default(),
-    )?;
+    let m = setup
+        .longitudinal_model(&log)?
+        .ok_or("the longitudinal model does not apply to this drive")?;
     let y = m.simulate(&setup.nominal)?;
     let starts: Vec<String> = m
         .window_starts()

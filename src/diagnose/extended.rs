@@ -18,8 +18,8 @@
 //!   models read it `P/2` ahead ([`corrected_log`]; `P` read off the rows where the recorded
 //!   value changes), the centred hold. On a hill the lag is a grade error `(dα/dt)·P/2` of
 //!   one sign while the grade climbs — at 24.5 m/s on a 2.5·10⁻⁴ 1/m grade change and 10 Hz,
-//!   3·10⁻⁴ (55 N on the 18.7 t proof truck), 0.06 m/s of speed over a 20 s window — which the noise
-//!   floor, drawn about the recording, does not carry. Measured on the 84 no-effect drives of
+//!   3·10⁻⁴ (55 N on the 18.7 t proof truck), 0.06 m/s of speed over a 20 s window — which
+//!   the noise floor, drawn about the recording, does not carry. Measured on the 84 no-effect drives of
 //!   `fleetdyn prove` seeds 1, 2, 3, 1001, 5001, 7001, 9001 (drawn driving): the vehicle-speed
 //!   windows below p = 10⁻⁴ fell from 0.45 % to 0.045 %, engine speed's from 0.86 % to 0.32 %;
 //!   `examples/truth_residual.rs` had traced the largest share of four of the eight clean
@@ -156,8 +156,9 @@ pub fn index(e: Effect) -> usize {
 /// ([`SlopeGrid::cured`]), used when given. The slope (recorded or cured) is read half its
 /// native period ahead, which undoes the hold's mean lag (the period is the mean spacing of
 /// the recorded slope's changes, over those at most 1.5× their 10th percentile; the cure is
-/// built from the held samples, so it carries the same lag). A service-brake force is read as a released brake (0) where
-/// no sample within ±[`super::compare::BRAKE_EPISODE_HALFWIDTH_S`] reaches
+/// built from the held samples, so it carries the same lag). A service-brake force is read
+/// as a released brake (0) where no sample within
+/// ±[`super::compare::BRAKE_EPISODE_HALFWIDTH_S`] reaches
 /// [`super::compare::BRAKE_RELEASED_BELOW_N`]; inside a braking episode every value counts,
 /// and so does every value at a standstill (recorded speed below the axle input's
 /// [`AxleRecordConfig::standstill_speed_mps`]), where the brakes hold the truck on the grade
