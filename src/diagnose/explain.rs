@@ -506,13 +506,11 @@ pub fn oracle_check(
         .map(|m| own[m] && ev.changed(m, &at, &base))
         .collect();
     let switch = fit_spec(e, problem.nominal().get(e), problem.slope_step()).switch;
-    let scored = scored_views(&ev, e, &active, &base, &at);
-    let gain = rule_gain(&ev, &scored, &base, &at, switch);
-    let parts = rule_parts(switch);
-    let (wb, wa) = (
-        ev.whiteness_on(&base, &scored, parts),
-        ev.whiteness_on(&at, &scored, parts),
-    );
+    let RuleFigures {
+        scored,
+        gain,
+        whiteness: (wb, wa),
+    } = rule_figures(&ev, e, &active, &base, &at, switch);
     let rule = AcceptanceRule::FIXED;
     Ok(Some(OracleCheck {
         heldout_gain: gain,
@@ -607,6 +605,38 @@ fn scored_views(
         moved
     } else {
         own
+    }
+}
+
+/// What rules 1 and 2 see between `before` and `after`.
+struct RuleFigures {
+    /// The views they score ([`scored_views`]).
+    scored: Vec<bool>,
+    /// Rule 1's figure ([`rule_gain`]).
+    gain: f64,
+    /// Rule 2's whiteness before and after, on the scored views and [`rule_parts`].
+    whiteness: (Whiteness, Whiteness),
+}
+
+/// [`RuleFigures`] of `e` from `before` to `after` over its changed views `active`, a switch
+/// scored on every row.
+fn rule_figures(
+    ev: &Evaluator<'_, '_>,
+    e: Effect,
+    active: &[bool],
+    before: &Eval,
+    after: &Eval,
+    switch: bool,
+) -> RuleFigures {
+    let scored = scored_views(ev, e, active, before, after);
+    let parts = rule_parts(switch);
+    RuleFigures {
+        gain: rule_gain(ev, &scored, before, after, switch),
+        whiteness: (
+            ev.whiteness_on(before, &scored, parts),
+            ev.whiteness_on(after, &scored, parts),
+        ),
+        scored,
     }
 }
 
@@ -833,13 +863,11 @@ fn candidate_fit(
         let n = ev.n_eff(&best, active, Part::Heldout);
         ev.deviance(base, &best, active, n, Part::Heldout)
     });
-    let scored = scored_views(ev, e, active, base, &best);
-    let parts = rule_parts(switch);
-    let (wb, wa) = (
-        ev.whiteness_on(base, &scored, parts),
-        ev.whiteness_on(&best, &scored, parts),
-    );
-    let gain = rule_gain(ev, &scored, base, &best, switch);
+    let RuleFigures {
+        scored,
+        gain,
+        whiteness: (wb, wa),
+    } = rule_figures(ev, e, active, base, &best, switch);
     let explained: f64 = (0..ev.models.len())
         .map(|m| 1.0 - best.heldout[m] / base.heldout[m])
         .sum();
