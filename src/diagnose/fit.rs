@@ -85,9 +85,11 @@
 //! `c` up to it. The other parameters are held at their values: in one dimension the profile is
 //! the likelihood itself.
 //!
-//! `signal_delay` starts from the best point of a grid ([`DELAY_GRID_S`]: 0 … 0.6 s in 25 ms
-//! steps, the costs in parallel) when that beats the base and the screen's probe: its cost
-//! has side basins about 0.05 s wide, in which the secant from no delay stops.
+//! `signal_delay` and `clutch_slip` start from the best point of a grid ([`DELAY_GRID_S`]:
+//! 0 … 0.6 s in 25 ms steps; [`CLUTCH_GRID`]: 50 … 100 % of the nominal capacity in 1.5 %
+//! steps; the costs in parallel) when that beats the base and the screen's probe: their costs
+//! have side basins (a delay's about 0.05 s wide, a clutch's about 3 % of its capacity), in
+//! which the secant from the probe stops.
 //!
 //! `slope_quantization` is not fitted continuously (a switch: the recorded slope, or its
 //! consistent reconstruction from cells of the sensor's resolution,
@@ -157,9 +159,10 @@ pub struct FitSpec {
     pub hi: f64,
     /// A switch rather than a continuous parameter (`slope_quantization`).
     pub switch: bool,
-    /// Start grid `[upper end, step]` from `lo`, for a parameter whose cost has narrow side
-    /// basins (`signal_delay`): the fit starts from the grid's best point ([`fit_effect`]).
-    pub grid: Option<[f64; 2]>,
+    /// Start grid `[first, last, step]` (the parameter's unit; clipped to the domain), for a
+    /// parameter whose cost has narrow side basins (`signal_delay`, `clutch_slip`): the fit
+    /// starts from the grid's best point ([`fit_effect`]).
+    pub grid: Option<[f64; 3]>,
     /// Multiples of `step` the screen probes: the candidate test and the ranking take the
     /// largest share of train SSE any rung's sensitivity removes ([`SCREEN_LADDER`] for the
     /// effects whose outputs are not near-linear in the parameter over its realistic range;
@@ -192,7 +195,21 @@ pub const SCREEN_LADDER: [f64; 3] = [0.5, 1.0, 1.5];
 /// 0.21 s and 0.27 s fitted for 0.314 s and 0.356 s hidden, with every view's lowest grid point
 /// at the truth; from the grid 0.315 s and 0.353 s; docs/events.md). A CAN torque signal lags
 /// by tenths of a second; beyond the grid the fit may still move up to the domain's 2 s.
-pub const DELAY_GRID_S: [f64; 2] = [0.6, 0.025];
+pub const DELAY_GRID_S: [f64; 3] = [0.0, 0.6, 0.025];
+
+/// `clutch_slip`'s start grid, as fractions of the nominal capacity: 50 … 100 % in 1.5 %
+/// steps (34 points). Why: the cost in the capacity is a staircase of basins, one per set of
+/// launches and shifts whose transmitted torque exceeds it. Each basin is about 3 % of the
+/// capacity wide (100 N·m at 3500 N·m), and the secant from the screen's probe stops in
+/// whichever it meets first. Measured with `examples/param_scan.rs` on the drawn-driving
+/// proof: on seed 1 case 31 (hidden 2660 N·m) the train cost is least at 2550 N·m, with side
+/// basins at 2800 and 3000 N·m, and the fit from the probe ended at 3017 N·m; on seed 1001
+/// case 31 (2629 N·m) the least train cost is at 2600–2650 N·m and the fit ended at 3092 N·m;
+/// on seed 2 case 9 (2131 N·m) at 2150 N·m, and the fit stopped at the probe's 2450 N·m. A
+/// clutch worn to below half its capacity slips at every launch and is in the grid's first
+/// basin; from there the fit may still move over the whole domain (0.1 … 2 θ₀). The step
+/// puts two points in each basin.
+pub const CLUTCH_GRID: [f64; 3] = [0.5, 1.0, 0.015];
 
 /// Steps and domains per effect, from the nominal value `nom` (module documentation; the
 /// steps are about the middle of README "Hidden effects"' magnitudes, the domains what is
@@ -244,6 +261,7 @@ pub fn fit_spec(e: Effect, nom: f64, slope_step: Option<f64>) -> FitSpec {
         EngineTorqueOffset => abs(100.0, -500.0, 500.0),
         ClutchSlip => FitSpec {
             ladder: &SCREEN_LADDER,
+            grid: Some(CLUTCH_GRID.map(|x| x * nom)),
             ..rel(-0.30, 0.1, 2.0)
         },
         BogieTorqueReaction => abs(0.4, -1.0, 1.0),
@@ -1115,14 +1133,15 @@ pub fn fit_effect(
     // computed in parallel and only the two kept points simulated again, so no grid of outputs
     // is held; ties go to the lower value)
     let mut grid_evaluations = 0;
-    if let Some([grid_hi, grid_step]) = spec.grid {
+    if let Some([grid_lo, grid_hi, grid_step]) = spec.grid {
         use rayon::prelude::*;
+        let grid_lo = grid_lo.max(spec.lo);
         // the end included (0.6 / 0.025 is 23.999… in binary)
-        let n = ((grid_hi.min(spec.hi) - spec.lo) / grid_step + 1e-9).floor() as usize + 1;
+        let n = ((grid_hi.min(spec.hi) - grid_lo) / grid_step + 1e-9).floor() as usize + 1;
         let costs: Vec<f64> = (0..n)
             .into_par_iter()
             .map(|k| {
-                ev.eval(base, active, e, spec.lo + k as f64 * grid_step)
+                ev.eval(base, active, e, grid_lo + k as f64 * grid_step)
                     .map_or(f64::INFINITY, |x| cost(&x))
             })
             .collect();
@@ -1136,7 +1155,7 @@ pub fn fit_effect(
                 (a, b) => a.or(b),
             };
             let at = |j: usize| {
-                ev.eval(base, active, e, spec.lo + j as f64 * grid_step)
+                ev.eval(base, active, e, grid_lo + j as f64 * grid_step)
                     .ok()
             };
             if let Some(x) = at(k) {
