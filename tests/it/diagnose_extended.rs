@@ -332,22 +332,16 @@ fn a_window_does_not_start_on_a_torque_step_with_the_clutch_closed() {
     assert!(with_shift.contains(&40.0), "{with_shift:?}");
 }
 
-/// Windows started with the clutch closed in the low gears of the proof drive where the fault
-/// was traced (`fleetdyn prove --seed 1001`, case 29: a 3.2 km highway drive with a drawn
-/// driver, its stiffness hidden — the model runs nominal here, so only the start state differs):
-/// the first 2 s of those windows (launches and the shifts after them, where the first gears'
-/// shuffle swings the wheel speed) reproduce the engine speed far better from the measured
-/// engine side (`LongitudinalModel::measured_twist_rate`) than from the locked engine speed of
-/// the recorded vehicle speed.
-#[test]
-fn a_locked_window_in_a_low_gear_starts_in_the_shuffle_phase() {
+/// Case `case` of `fleetdyn prove --seed SEED` (the default, drawn driving) as the diagnosis
+/// reads it: its vehicle file and its ingested log.
+fn proof_drive(seed: u64, case: usize) -> (VehicleFile, fleetdyn::table::DriveLog) {
     use fleetdyn::diagnose::prove::{generate, plan, ProofConfig};
     let dir = tempfile::tempdir().unwrap();
     let cfg = ProofConfig {
-        seed: 1001,
+        seed,
         ..ProofConfig::default()
     };
-    let case = plan(&cfg).into_iter().nth(29).unwrap();
+    let case = plan(&cfg).into_iter().nth(case).unwrap();
     let g = generate(
         &case,
         &fixture(VEHICLE),
@@ -361,6 +355,19 @@ fn a_locked_window_in_a_low_gear_starts_in_the_shuffle_phase() {
         .options(&[], Some(&vf))
         .unwrap();
     let log = fleetdyn::ingest::ingest_file(&g.drive, &opts).unwrap().log;
+    (vf, log)
+}
+
+/// Windows started with the clutch closed in the low gears of the proof drive where the fault
+/// was traced (`fleetdyn prove --seed 1001`, case 29: a 3.2 km highway drive with a drawn
+/// driver, its stiffness hidden — the model runs nominal here, so only the start state differs):
+/// the first 2 s of those windows (launches and the shifts after them, where the first gears'
+/// shuffle swings the wheel speed) reproduce the engine speed far better from the measured
+/// engine side (`LongitudinalModel::measured_twist_rate`) than from the locked engine speed of
+/// the recorded vehicle speed.
+#[test]
+fn a_locked_window_in_a_low_gear_starts_in_the_shuffle_phase() {
+    let (vf, log) = proof_drive(1001, 29);
     let log = &log;
     let ratios = vf.gearbox.ratios.clone();
     let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
@@ -423,27 +430,8 @@ fn a_locked_window_in_a_low_gear_starts_in_the_shuffle_phase() {
 /// everywhere does. Only the state a span starts from differs from the 1 ms model's.
 #[test]
 fn the_reversals_are_integrated_at_the_fine_step() {
-    use fleetdyn::diagnose::prove::{generate, plan, ProofConfig};
     use fleetdyn::diagnose::reversal_channel::{measure, simulate};
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = ProofConfig {
-        seed: 1,
-        ..ProofConfig::default()
-    };
-    let case = plan(&cfg).into_iter().nth(38).unwrap();
-    let g = generate(
-        &case,
-        &fixture(VEHICLE),
-        &cfg,
-        &dir.path().join("drives"),
-        &dir.path().join("answers"),
-    )
-    .unwrap();
-    let vf = VehicleFile::load(&g.vehicle).unwrap();
-    let opts = fleetdyn::pipeline::ingest_stage::IngestConfig::default()
-        .options(&[], Some(&vf))
-        .unwrap();
-    let log = fleetdyn::ingest::ingest_file(&g.drive, &opts).unwrap().log;
+    let (vf, log) = proof_drive(1, 38);
     let ratios = vf.gearbox.ratios.clone();
     let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.001);
