@@ -396,9 +396,10 @@ pub struct LongitudinalConfig {
     /// mode switches at step ends. On the drawn-driving proof (`fleetdyn prove --seed 1`,
     /// 1001) three drives without an effect were named a 2–3 % weaker clutch or a lash of
     /// 5·10⁻⁵ rad at 10 ms (a lash only switched the step to 1 ms); at 5 ms none of the 84
-    /// no-effect drives of seven seeds is (2 ms did the same on seed 1). 1 ms everywhere
-    /// costs 110 s per drive-hour (the budget is 60 s); 5 ms costs 4 % more than 10 ms (the
-    /// seven seeds' median times per drive-hour).
+    /// no-effect drives of seven seeds is (2 ms did the same on seed 1). 1 ms everywhere cost
+    /// about 110 s per drive-hour on one drive (seed 1 case 31: 9.9 s against 3.9 s at 10 ms;
+    /// the budget is 60 s); 5 ms costs 4 % more than 10 ms (the seven seeds' median times per
+    /// drive-hour).
     pub dt_s: f64,
     /// Samples below this measured speed do not count, m/s.
     pub min_speed_mps: f64,
@@ -805,12 +806,7 @@ impl<'a> LongitudinalModel<'a> {
         let mut fast = FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad);
         let mut fine = (self.cfg.fine_at_reversals && dt > FINE_STEP_S)
             .then(|| FastDriveline::new(p, self.ratios, FINE_STEP_S).with_lash(tm.lash_rad));
-        let no_fine: &[(f64, f64)] = &[];
-        let fine_spans = if fine.is_some() {
-            &self.fine[..]
-        } else {
-            no_fine
-        };
+        let fine_spans: &[(f64, f64)] = if fine.is_some() { &self.fine } else { &[] };
         let starts = &self.starts;
         let n_win = starts.len();
         let (mut ts, mut vs, mut ws) = (Vec::new(), Vec::new(), Vec::new());
