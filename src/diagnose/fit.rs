@@ -10,7 +10,8 @@
 //! a threshold or a shift (`clutch_slip`, `driveline_backlash`, `signal_delay`) one step reads
 //! a curved response at one arbitrary point, so the screen also probes ½ and 1½ times the
 //! step and judges the effect by the rung whose sensitivity removes the most train SSE
-//! ([`SCREEN_LADDER`]); its full fit starts from the step's probe as every other's does.
+//! ([`SCREEN_LADDER`]); its full fit starts from the step's probe as every other's does
+//! (or from a start grid's best point where that is lower: `signal_delay`, `clutch_slip`).
 //! Steps (θ₀ the vehicle file's value):
 //!
 //! | effect | step `h_e` | physical domain of the fit |
@@ -166,7 +167,8 @@ pub struct FitSpec {
     /// Multiples of `step` the screen probes: the candidate test and the ranking take the
     /// largest share of train SSE any rung's sensitivity removes ([`SCREEN_LADDER`] for the
     /// effects whose outputs are not near-linear in the parameter over its realistic range;
-    /// `[1]` for the others); the full fit starts from the step's own probe.
+    /// `[1]` for the others); the full fit starts from the step's own probe (or the start
+    /// grid's best point, `grid`).
     pub ladder: &'static [f64],
 }
 
@@ -181,7 +183,8 @@ pub struct FitSpec {
 /// capacity, `signal_delay` 0.1, 0.2, 0.3 s, `driveline_backlash` 0.015, 0.03, 0.045 rad, the
 /// generator's realistic ranges (README "Hidden effects") inside them — and judges the effect
 /// by the rung whose sensitivity explains most. The full fit still starts from the middle
-/// step's probe: a far rung's secant and its views (at −45 % the clutch also moves the
+/// step's probe, not a rung (or from the start grid's best point where that is lower,
+/// [`FitSpec::grid`]): a far rung's secant and its views (at −45 % the clutch also moves the
 /// torque reversals) started one fit 35 N·m off a steep slip threshold, where the step's
 /// probe had found the truth (`fleetdyn prove --seed 3 --cases 31`). Why these three: they
 /// are the catalogue's threshold and shift effects (the others scale a force, a stiffness or
