@@ -19,11 +19,11 @@
 //!   value changes), the centred hold. On a hill the lag is a grade error `(dα/dt)·P/2` of
 //!   one sign while the grade climbs — at 24.5 m/s on a 2.5·10⁻⁴ 1/m grade change and 10 Hz,
 //!   3·10⁻⁴ (55 N on the 18.7 t proof truck), 0.06 m/s of speed over a 20 s window — which
-//!   the noise floor, drawn about the recording, does not carry. Measured on the 84 no-effect drives of
-//!   `fleetdyn prove` seeds 1, 2, 3, 1001, 5001, 7001, 9001 (drawn driving): the vehicle-speed
-//!   windows below p = 10⁻⁴ fell from 0.45 % to 0.045 %, engine speed's from 0.86 % to 0.32 %;
-//!   `examples/truth_residual.rs` had traced the largest share of four of the eight clean
-//!   `unexplained` windows it followed to the recorded slope;
+//!   the noise floor, drawn about the recording, does not carry. Measured on the 84 no-effect
+//!   drives of `fleetdyn prove` seeds 1, 2, 3, 1001, 5001, 7001, 9001 (drawn driving): the
+//!   vehicle-speed windows below p = 10⁻⁴ fell from 0.45 % to 0.045 %, engine speed's from
+//!   0.86 % to 0.32 %; `examples/truth_residual.rs` had traced the largest share of four of the
+//!   eight clean `unexplained` windows it followed to the recorded slope;
 //! - `slope_quantization`'s parameter is the slope sensor's resolution `Δ` (tan α per step): a
 //!   value above the nominal resolution replaces the recorded slope by its consistent
 //!   reconstruction from cells of width `Δ` on the 1 m distance grid, each widened by the
