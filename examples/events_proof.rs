@@ -10,11 +10,11 @@
 //! cargo run --release --example events_proof -- DIR [case-0006 …]
 //! ```
 
-use fleetdyn::diagnose::catalogue::Effect;
 use fleetdyn::diagnose::events::{
     launch_clutch_torques, reversal_residual_peaks, torque_reversals, Channels, EventConfig,
 };
 use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::model::catalogue::Effect;
 use std::path::PathBuf;
 
 #[path = "common/proof_dir.rs"]

@@ -13,12 +13,12 @@
 //! engagements is brought to zero by a secant search on `ln k_d`, each step one simulation of
 //! the extended model) and prints it next to the hidden value.
 
-use fleetdyn::diagnose::catalogue::Effect;
 use fleetdyn::diagnose::extended::Theta;
 use fleetdyn::diagnose::modal::{
     compare_modes, fit_shaft_stiffness, summarise, ModalComparison, ModalConfig, Reference,
 };
 use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::model::catalogue::Effect;
 use std::path::PathBuf;
 
 #[path = "common/proof_dir.rs"]

@@ -13,6 +13,7 @@ pub mod ingest;
 pub mod io;
 pub mod model;
 pub mod pipeline;
+pub mod proof;
 pub mod report;
 pub mod road;
 pub mod schema;

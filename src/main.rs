@@ -840,7 +840,7 @@ fn run_prove(
     cases: Vec<usize>,
     driving: DrivingArg,
 ) -> Result<(), Failure> {
-    use fleetdyn::diagnose::prove::{run_proof, Driving, ProofConfig};
+    use fleetdyn::proof::{run_proof, Driving, ProofConfig};
     if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
         return Err(usage(anyhow::anyhow!(
             "--min-km {min_km} and --max-km {max_km} must be finite with 0.5 <= min <= max"

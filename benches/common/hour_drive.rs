@@ -5,7 +5,7 @@
 //! instead of 5.5 m²) so a diagnosis has something to find. Written as `drive.mcap` (the JSON
 //! topics at their CAN rates) and `drive.parquet` (canonical) under the given folder.
 
-use fleetdyn::diagnose::catalogue::Effect;
+use fleetdyn::model::catalogue::Effect;
 use fleetdyn::synth::can::Dropouts;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::EffectChoice;

@@ -2,7 +2,7 @@
 //! examples: the cases under `drives/`, each drive's canonical log and nominal vehicle file,
 //! and its answer under `answers/` — read only to label a case and to set its truth.
 
-use fleetdyn::diagnose::catalogue::Effect;
+use fleetdyn::model::catalogue::Effect;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::table::DriveLog;
 use std::error::Error;

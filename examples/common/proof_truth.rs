@@ -1,8 +1,8 @@
 //! The generator's truth of a proof case, for the study examples that trace a residual to its
-//! inputs: the drive is generated again from the proof's plan (`diagnose::prove::plan`) with
+//! inputs: the drive is generated again from the proof's plan (`proof::plan`) with
 //! the case's answer, so every recorded column's truth is known (the diagnosis never sees it).
 
-use fleetdyn::diagnose::prove::{drive_config, plan, Driving, ProofConfig};
+use fleetdyn::proof::{drive_config, plan, Driving, ProofConfig};
 use fleetdyn::signal::interp_linear;
 use fleetdyn::synth::can::Truth;
 use fleetdyn::synth::drive::{drive_truth, synth_drive, HiddenEffect, DRIVE_START_NS};
@@ -29,7 +29,7 @@ impl CaseTruth {
         case: &str,
         log: &DriveLog,
         label: &str,
-        effect: Option<(fleetdyn::diagnose::catalogue::Effect, f64)>,
+        effect: Option<(fleetdyn::model::catalogue::Effect, f64)>,
     ) -> Result<CaseTruth, Box<dyn Error>> {
         let ans: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(
             dir.join("answers").join(format!("{case}.json")),

@@ -110,6 +110,36 @@ pub struct Diagnosis {
     pub mismatch: Vec<MismatchEntry>,
     /// Accepted findings, in the order they were accepted.
     pub findings: Vec<FindingEntry>,
+    /// Parameters the drive informs that the vehicle file's tolerance holds: fitted, their
+    /// interval overlapping the file's tolerance band, so not named.
+    pub estimates: Vec<EstimateEntry>,
+}
+
+/// A parameter estimate set against the vehicle file's tolerance band.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimateEntry {
+    /// Catalogue id of the effect whose parameter it is.
+    pub effect: String,
+    /// Parameter name (unit in the name where it is not 1).
+    pub parameter: String,
+    /// Fitted value.
+    pub value: f64,
+    /// Lower end of the 95 % interval.
+    pub ci_low: f64,
+    /// Upper end.
+    pub ci_high: f64,
+    /// SI unit.
+    pub unit: &'static str,
+    /// The vehicle file's value.
+    pub nominal: f64,
+    /// Tolerance band, lower end.
+    pub tolerance_low: f64,
+    /// Tolerance band, upper end.
+    pub tolerance_high: f64,
+    /// The interval overlaps the band.
+    pub consistent_with_file: bool,
+    /// Plain words.
+    pub sentence: String,
 }
 
 impl Diagnosis {
@@ -352,6 +382,7 @@ mod tests {
                 parameters,
                 fit,
             }],
+            estimates: Vec::new(),
         }
     }
 

@@ -353,7 +353,7 @@ mod tests {
     }
 
     /// A launch simulated by the driveline model itself, closed loop as the synthetic AMT
-    /// does it (`crate::synth::amt`): from 1 s the nominal capacity rises at 400 N·m/s, the
+    /// does it: from 1 s the nominal capacity rises at 400 N·m/s, the
     /// engine torque is that capacity plus a proportional governor to 900 rpm
     /// (`K = 0.5 J_e / dt`), and once the clutch locks it closes fully. The plant's clutch
     /// capacity is `factor` times the nominal; the vehicle stands on a 5 % grade. One sample
@@ -378,7 +378,7 @@ mod tests {
             } else if t < 1.0 {
                 1.0
             } else {
-                crate::synth::amt::clutch_position_for(&p, 400.0 * (t - 1.0 + dt)) / p.clutch_x_max
+                p.clutch_position_for(400.0 * (t - 1.0 + dt)) / p.clutch_x_max
             };
             let m_e = (p.clutch_capacity(x * p.clutch_x_max) + k_gov * (w_target - y[0]))
                 .clamp(p.engine_min_torque_nm, p.engine_max_torque(y[0]));

@@ -42,7 +42,7 @@
 //!
 //! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
 //! advance holds")
-//! A fitted candidate is accepted only when all three hold:
+//! A fitted candidate is accepted only when all four hold:
 //! 1. **held-out error falls**: the held-out weighted RMSE of the signals of the effect's own
 //!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters (over
 //!    the views the rule scores, below: their weighted mean squares averaged);
@@ -79,6 +79,15 @@
 //!    road crosses its steps, which on a 5 km drive may be mostly in one part (seed 9001's
 //!    case 48 at the truth: speeds 0.682 → 0.132 on the train blocks, 0.218 → 0.149 on the
 //!    held-out ones).
+//!
+//! 4. **the interval lies outside the vehicle file's tolerance**: the 95 % interval does not
+//!    overlap the band `θ₀ ± w` around the file's value ([`crate::model::tolerance`]: the
+//!    file's `[tolerance]` entry, else the default of the parameter's kind). A vehicle file's
+//!    values are nominal: a healthy truck's drag area or shaft stiffness is never exactly the
+//!    file's, and a long drive fits it tightly enough to exclude the file's value. A
+//!    candidate that passes rules 1 to 3 with an interval inside or across the band is
+//!    reported as an estimate consistent with the file ([`ConsistentEstimate`]), and the next
+//!    passing candidate is tried. A switch has no band.
 //!
 //! Why 25 %: a catalogue effect at fleet magnitudes that the recorded signals can see removes
 //! most of the mismatch it causes (with its truth value the extended model reproduces the
@@ -144,13 +153,14 @@
 //! # Verdict
 //! [`verdict`] combines the findings with step 2's significance test.
 
-use super::catalogue::{Domain, Effect};
 use super::extended::Theta;
 use super::fit::{
     applicable, deviance_threshold, fit_effect, fit_spec, profile_interval, screen, Eval,
     Evaluator, Screen, ScreenEntry, CHI2_1_95, MAX_FULL_FITS,
 };
 use super::problem::{metrics, ExplainError, Part, Problem, Split, ViewKind, Whiteness};
+use crate::model::catalogue::{Domain, Effect};
+use crate::model::tolerance::Tolerances;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -198,16 +208,42 @@ pub struct ExplainConfig {
     pub noise_floor: Option<BTreeMap<String, f64>>,
     /// Most findings (greedy rounds), at most [`MAX_FINDINGS`] by default.
     pub max_findings: usize,
+    /// Tolerances of the vehicle file's values: an effect is named only when its parameter's
+    /// interval lies outside its band (module documentation, rule 4).
+    pub tolerances: Tolerances,
 }
 
 impl Default for ExplainConfig {
-    /// No noise floor, [`MAX_FINDINGS`].
+    /// No noise floor, [`MAX_FINDINGS`], the default tolerances.
     fn default() -> Self {
         Self {
             noise_floor: None,
             max_findings: MAX_FINDINGS,
+            tolerances: Tolerances::default(),
         }
     }
+}
+
+/// A fitted parameter whose interval overlaps the vehicle file's tolerance band: an estimate
+/// consistent with the file, not a finding (module documentation, rule 4).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConsistentEstimate {
+    /// Catalogue id of the effect whose parameter it is.
+    pub effect: &'static str,
+    /// The estimate.
+    pub estimate: ParameterEstimate,
+    /// The vehicle file's value.
+    pub nominal: f64,
+    /// The tolerance band, lower end.
+    pub band_low: f64,
+    /// The tolerance band, upper end.
+    pub band_high: f64,
+    /// Whether the band is the file's own (`[tolerance]`) rather than the default.
+    pub band_from_file: bool,
+    /// The greedy round it was fitted in.
+    pub round: usize,
+    /// Plain words.
+    pub sentence: String,
 }
 
 /// Weighted RMSE of one model's signals before and after a fit.
@@ -428,6 +464,9 @@ pub struct Explanation {
     pub rounds: Vec<Round>,
     /// Accepted findings, in acceptance order.
     pub findings: Vec<Finding>,
+    /// Fitted parameters that passed rules 1 to 3 with an interval overlapping the vehicle
+    /// file's tolerance band, in the order they were met.
+    pub consistent: Vec<ConsistentEstimate>,
     /// Final parameters (nominal with the findings' values).
     #[serde(skip)]
     pub theta: Theta,
@@ -450,29 +489,29 @@ pub fn verdict(findings: &[Finding], significant_mismatch: bool) -> Verdict {
     }
 }
 
-/// The acceptance rule's data tests at a known parameter value, without a fit: what the
-/// proof asks of a hidden effect to call it *visible* to the rule on its drive.
+/// The acceptance rule's data tests (rules 1 and 2 of [`AcceptanceRule::FIXED`]) at a given
+/// parameter value, without a fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct OracleCheck {
+pub struct RulesAt {
     /// Relative fall of the held-out weighted RMSE of the effect's own model from the nominal
-    /// parameters to the known value (rule 1's quantity; every row for a switch).
+    /// parameters to the value (rule 1's quantity; every row for a switch).
     pub heldout_gain: f64,
     /// The views rules 1 and 2 scored (module documentation, "Which views the rule scores").
     pub views: Vec<ViewKind>,
     /// Held-out non-white power of the residual of the views scored at the nominal
     /// parameters (both parts for a switch).
     pub nonwhite_before: f64,
-    /// The same at the known value.
+    /// The same at the value.
     pub nonwhite_after: f64,
-    /// Rule 1 holds at the known value.
+    /// Rule 1 holds at the value.
     pub passes_heldout: bool,
-    /// Rule 2 holds at the known value.
+    /// Rule 2 holds at the value.
     pub passes_whiteness: bool,
 }
 
-impl OracleCheck {
-    /// Rules 1 and 2 both hold: a fit that found the known value exactly would pass them.
-    pub fn visible(&self) -> bool {
+impl RulesAt {
+    /// Rules 1 and 2 both hold: a fit that found the value exactly would pass them.
+    pub fn both_hold(&self) -> bool {
         self.passes_heldout && self.passes_whiteness
     }
 }
@@ -480,23 +519,20 @@ impl OracleCheck {
 /// Evaluates rules 1 and 2 of [`AcceptanceRule::FIXED`] with `e`'s parameter set to `value`
 /// (all others nominal), weighted as the first round of [`explain`] weights (`noise_floor`):
 /// the best any fit of `e` could do on the held-out blocks (a switch: every row) if it found
-/// `value` exactly, on the views the rule would score at `value`. Rule
-/// 3 (the interval) needs a fit and is not evaluated. Only the effect's own model is
-/// simulated (the explain step also fits on the other models an effect reaches; rule 1 and
-/// this check score the own model alone). `None` when the effect's model is not in use.
-///
-/// The proof calls this with the hidden truth, after the blind diagnosis, to separate
-/// effects the recorded signals cannot show under the fixed rule from misses of the
-/// diagnosis itself; the diagnosis never calls it.
+/// `value` exactly, on the views the rule would score at `value`. Rule 3 (the interval) needs
+/// a fit and is not evaluated. Only the effect's own model is simulated (the explain step also
+/// fits on the other models an effect reaches; rule 1 and this evaluation score the own model
+/// alone). `None` when the effect's model is not in use. With a known true value, this tells
+/// an effect the recorded signals cannot show under the fixed rule from a miss of the search.
 ///
 /// # Errors
 /// [`ExplainError`] when a model fails at the nominal parameters or at `value`.
-pub fn oracle_check(
+pub fn rules_at(
     problem: &Problem<'_>,
     noise_floor: Option<&BTreeMap<String, f64>>,
     e: Effect,
     value: f64,
-) -> Result<Option<OracleCheck>, ExplainError> {
+) -> Result<Option<RulesAt>, ExplainError> {
     let Some(OwnModelAt { ev, own, base, at }) = own_model_at(problem, noise_floor, e, value)?
     else {
         return Ok(None);
@@ -512,7 +548,7 @@ pub fn oracle_check(
         whiteness: (wb, wa),
     } = rule_figures(&ev, e, &active, &base, &at, switch);
     let rule = AcceptanceRule::FIXED;
-    Ok(Some(OracleCheck {
+    Ok(Some(RulesAt {
         heldout_gain: gain,
         views: (0..ev.models.len())
             .filter(|&m| scored[m])
@@ -532,10 +568,9 @@ pub fn oracle_check(
 /// comparison uses. The models run as the diagnosis runs them (built from the recording,
 /// on its inputs); only what their outputs are scored against changes.
 ///
-/// The proof passes the generator's noise-free truth of the compared signals, so that a
-/// finding's held-out improvement can be read apart from the sensor noise that bounds the
-/// recording's own figure ([`super::prove::CaseScore::noise_free_heldout_ratio`]); the
-/// diagnosis never calls it. With the recorded columns as `reference` and a first finding's
+/// With a generator's noise-free truth of the compared signals as `reference`, a finding's
+/// held-out improvement can be read apart from the sensor noise that bounds the recording's
+/// own figure; the diagnosis itself never calls it. With the recorded columns as `reference` and a first finding's
 /// value, its entries for the signals in that finding's own-model `fit` equal them bit for
 /// bit (tests/it/diagnose_explain.rs); it may list more of the own model's signals (those
 /// the screen's probe did not count as changed).
@@ -697,6 +732,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
     let mut excluded: Vec<Effect> = Vec::new();
     let mut rounds = Vec::new();
     let mut findings: Vec<Finding> = Vec::new();
+    let mut consistent: Vec<ConsistentEstimate> = Vec::new();
     let domains = problem.domains();
     let mut probes: BTreeMap<Effect, Arc<super::fit::Probe>> = BTreeMap::new();
     // outputs of every model at the round's parameters
@@ -748,6 +784,37 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             let switch = fit_spec(e, nominal.get(e), None).switch;
             if !switch && ci.lo <= f.start && f.start <= ci.hi {
                 continue; // the interval contradicts the likelihood-ratio test: not accepted
+            }
+            let (band_low, band_high) = cfg.tolerances.band(e, nominal.get(e));
+            if !switch && ci.lo <= band_high && ci.hi >= band_low {
+                // rule 4: within the file's tolerance, an estimate and not a finding
+                if !consistent
+                    .iter()
+                    .any(|c: &ConsistentEstimate| c.effect == e.id())
+                {
+                    let estimate = ParameterEstimate {
+                        value: f.value,
+                        ci_low: ci.lo,
+                        ci_high: ci.hi,
+                        unit: e.unit(),
+                    };
+                    consistent.push(ConsistentEstimate {
+                        effect: e.id(),
+                        sentence: consistent_sentence(
+                            e,
+                            nominal.get(e),
+                            &estimate,
+                            cfg.tolerances.of_effect(e),
+                        ),
+                        estimate,
+                        nominal: nominal.get(e),
+                        band_low,
+                        band_high,
+                        band_from_file: cfg.tolerances.is_given(e),
+                        round,
+                    });
+                }
+                continue;
             }
             accepted = Some((i, ci));
             break;
@@ -836,6 +903,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         rule: AcceptanceRule::FIXED,
         rounds,
         findings,
+        consistent,
         theta,
     })
 }
@@ -1002,6 +1070,35 @@ fn num(x: f64) -> String {
     }
     let decimals = (2 - mag).max(0) as usize;
     format!("{x:.decimals$}")
+}
+
+/// The plain sentence of an estimate within the vehicle file's tolerance: "mass_kg = 40800 kg
+/// (95 % CI 40500 to 41100 kg), within the vehicle file's 40000 kg ± 3 %".
+fn consistent_sentence(
+    e: Effect,
+    nominal: f64,
+    est: &ParameterEstimate,
+    tol: crate::model::catalogue::Tolerance,
+) -> String {
+    use crate::model::catalogue::Tolerance;
+    let unit = if e.unit() == "1" {
+        String::new()
+    } else {
+        format!(" {}", e.unit())
+    };
+    let band = match tol {
+        Tolerance::Relative(r) => format!("{}{unit} ± {} %", num(nominal), num(100.0 * r)),
+        Tolerance::Absolute(a) => format!("{}{unit} ± {}{unit}", num(nominal), num(a)),
+        Tolerance::None => format!("{}{unit}", num(nominal)),
+    };
+    format!(
+        "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}: consistent \
+         with the file, not named",
+        e.parameter(),
+        num(est.value),
+        num(est.ci_low),
+        num(est.ci_high)
+    )
 }
 
 /// The plain sentence of a finding: what is wrong by how much, its fingerprint, and the

@@ -1,6 +1,6 @@
 //! The nominal models extended by every catalogue effect (diagnosis.md step 3): one parameter
 //! vector [`Theta`] whose component per [`Effect`] is that effect's parameter, in the same SI
-//! quantity the synthetic generator's answer file names (`c_w_a_f_m2`, `mass_kg`,
+//! quantity the catalogue names (`c_w_a_f_m2`, `mass_kg`,
 //! `slope_offset_rad`, …; [`Effect::parameter`]). At the nominal values ([`Theta::nominal`]) the
 //! extended models are the nominal ones.
 //!
@@ -8,8 +8,8 @@
 //! - plant parameters (drag area, rolling resistance, mass, shaft stiffness, clutch capacity,
 //!   CG height and position, tyre stiffness) and structural extensions (drive-shaft lash,
 //!   torque reaction, bellow progression, grade-force height) are set on a
-//!   [`TruthModel`] built from the vehicle file ([`TruthModel::inject`]) — the same code that
-//!   hides them in synthetic drives, so the two cannot disagree on meaning;
+//!   [`ExtendedVehicle`] built from the vehicle file ([`ExtendedVehicle::set`]), the model
+//!   layer's one definition of what each catalogue parameter means;
 //! - sensor effects correct the *recorded inputs* before the model sees them (the inverse of the
 //!   sensor fault): the slope becomes `tan(atan(s) − δ)` (`grade_offset`), the engine torque
 //!   `M(t + τ) − ΔM` (`signal_delay`, `engine_torque_offset`);
@@ -52,10 +52,11 @@
 //! pressures on the log's rows, open loop from the steady state (the suspension is stable,
 //! nothing drifts).
 
-use super::catalogue::Effect;
 use super::noise::{estimate_sensor_noise, grid_step_s, SampleKind};
 use crate::model::axle::AxleParams;
+use crate::model::catalogue::Effect;
 use crate::model::driveline::DrivelineParams;
+use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::schema::Interpolation;
 use crate::signal::dequantise::{dequantise, DequantiseConfig};
 use crate::signal::distance::{fill_gaps, resample_to_distance, DistanceMap, ResampleConfig};
@@ -65,7 +66,6 @@ use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::{scenario_from_log, RecordedError};
-use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
 use std::sync::{Arc, Mutex, OnceLock};
 use thiserror::Error;
@@ -78,7 +78,7 @@ pub enum ExtendedError {
     Recorded(#[from] RecordedError),
     /// A parameter value outside its physical domain.
     #[error(transparent)]
-    Effect(#[from] crate::synth::effects::EffectError),
+    Parameter(#[from] crate::model::extended_vehicle::ParameterError),
     /// The driveline simulation failed.
     #[error("{file}: driveline simulation: {source}")]
     Sim {
@@ -126,10 +126,10 @@ impl Theta {
     /// The nominal parameter values of `truth` (the vehicle file's, or "absent"), with the
     /// recording's slope resolution `slope_resolution` (tan α per step) as `slope_quantization`'s.
     /// Axle effects of a vehicle without axles get 0.
-    pub fn nominal(truth: &TruthModel, slope_resolution: f64) -> Theta {
+    pub fn nominal(truth: &ExtendedVehicle, slope_resolution: f64) -> Theta {
         let mut t = [0.0; 16];
         for (i, e) in Effect::ALL.iter().enumerate() {
-            t[i] = truth.nominal_value(*e, slope_resolution).unwrap_or(0.0);
+            t[i] = truth.value_of(*e, slope_resolution).unwrap_or(0.0);
         }
         Theta(t)
     }
@@ -441,7 +441,7 @@ pub struct LongitudinalOutputs {
 #[derive(Debug, Clone)]
 pub struct LongitudinalModel<'a> {
     log: &'a DriveLog,
-    nominal_truth: &'a TruthModel,
+    nominal_truth: &'a ExtendedVehicle,
     ratios: &'a [f64],
     nominal: Theta,
     /// The recorded slope's grid, built when a cure first asks for it ([`cured_slope`]).
@@ -629,7 +629,7 @@ impl<'a> LongitudinalModel<'a> {
     /// [`ExtendedError::Missing`] for a missing speed column.
     pub fn new(
         log: &'a DriveLog,
-        nominal_truth: &'a TruthModel,
+        nominal_truth: &'a ExtendedVehicle,
         ratios: &'a [f64],
         nominal: Theta,
         cfg: LongitudinalConfig,
@@ -687,7 +687,7 @@ impl<'a> LongitudinalModel<'a> {
     ///
     /// # Errors
     /// [`ExtendedError`] for a parameter outside its domain.
-    pub fn plant(&self, theta: &Theta) -> Result<TruthModel, ExtendedError> {
+    pub fn plant(&self, theta: &Theta) -> Result<ExtendedVehicle, ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
             if matches!(
@@ -699,8 +699,8 @@ impl<'a> LongitudinalModel<'a> {
             ) {
                 continue; // corrected on the inputs
             }
-            if e.domain() == super::catalogue::Domain::Longitudinal {
-                tm.inject(e, theta.get(e))?;
+            if e.domain() == crate::model::catalogue::Domain::Longitudinal {
+                tm.set(e, theta.get(e))?;
             }
         }
         Ok(tm)
@@ -900,7 +900,7 @@ impl<'a> LongitudinalModel<'a> {
 #[derive(Debug, Clone)]
 pub struct AxleModel<'a> {
     log: &'a DriveLog,
-    nominal_truth: &'a TruthModel,
+    nominal_truth: &'a ExtendedVehicle,
     ratios: &'a [f64],
     nominal: Theta,
     /// The recorded slope's grid, built when a cure first asks for it ([`cured_slope`]).
@@ -915,7 +915,7 @@ impl<'a> AxleModel<'a> {
     /// [`ExtendedError::Missing`] for missing pressures or axles.
     pub fn new(
         log: &'a DriveLog,
-        nominal_truth: &'a TruthModel,
+        nominal_truth: &'a ExtendedVehicle,
         ratios: &'a [f64],
         nominal: Theta,
     ) -> Result<Self, ExtendedError> {
@@ -958,7 +958,7 @@ impl<'a> AxleModel<'a> {
             ) {
                 continue;
             }
-            tm.inject(e, theta.get(e))?;
+            tm.set(e, theta.get(e))?;
         }
         let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
         let d = &tm.driveline;

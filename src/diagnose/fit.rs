@@ -10,7 +10,7 @@
 //! a threshold or a shift (`clutch_slip`, `driveline_backlash`, `signal_delay`) one step reads
 //! a curved response at one arbitrary point, so the screen also probes ½ and 1½ times the
 //! step and judges the effect by the rung whose sensitivity removes the most train SSE
-//! ([`SCREEN_LADDER`]); its full fit starts from the step's probe as every other's does
+//! ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER)); its full fit starts from the step's probe as every other's does
 //! (or from a start grid's best point where that is lower: `signal_delay`, `clutch_slip`).
 //! Steps (θ₀ the vehicle file's value):
 //!
@@ -86,8 +86,8 @@
 //! `c` up to it. The other parameters are held at their values: in one dimension the profile is
 //! the likelihood itself.
 //!
-//! `signal_delay` and `clutch_slip` start from the best point of a grid ([`DELAY_GRID_S`]:
-//! 0 … 0.6 s in 25 ms steps; [`CLUTCH_GRID`]: 50 … 100 % of the nominal capacity in 1.5 %
+//! `signal_delay` and `clutch_slip` start from the best point of a grid ([`DELAY_GRID_S`](crate::model::catalogue::DELAY_GRID_S):
+//! 0 … 0.6 s in 25 ms steps; [`CLUTCH_GRID`](crate::model::catalogue::CLUTCH_GRID): 50 … 100 % of the nominal capacity in 1.5 %
 //! steps; the costs in parallel) when that beats the base and the screen's probe: their costs
 //! have side basins (a delay's about 0.05 s wide, a clutch's about 3 % of its capacity), in
 //! which the secant from the probe stops.
@@ -101,9 +101,9 @@
 //! interval excludes the nominal". It applies only when the recorded slope's step is above
 //! 1.5 × the nominal resolution ([`super::setup::NOMINAL_SLOPE_RESOLUTION`]).
 
-use super::catalogue::{Domain, Effect};
 use super::extended::{ExtendedError, Theta};
 use super::problem::{effective_samples, weighted_ms, whiteness, Part, Problem, Whiteness};
+use crate::model::catalogue::{Domain, Effect, FitRule, Scale};
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -172,116 +172,34 @@ pub struct FitSpec {
     pub ladder: &'static [f64],
 }
 
-/// The screen's probe steps, as multiples of [`FitSpec::step`], for the effects whose outputs
-/// respond to the parameter by a threshold or a shift rather than in proportion: a clutch
-/// slips only once its capacity falls below the torque it must carry, a lash only acts where
-/// the torque reverses across it, a delay moves every torque ramp against the events it meets.
-/// One finite difference at the middle of the realistic range then reads such an effect's
-/// fingerprint at one arbitrary point of a curved response (a worn clutch at −30 % may slip
-/// nowhere on a drive whose truth at −38 % slips at every launch), so the screen probes half,
-/// once and one and a half times the step — for `clutch_slip` −15, −30, −45 % of the nominal
-/// capacity, `signal_delay` 0.1, 0.2, 0.3 s, `driveline_backlash` 0.015, 0.03, 0.045 rad, the
-/// generator's realistic ranges (README "Hidden effects") inside them — and judges the effect
-/// by the rung whose sensitivity explains most. The full fit still starts from the middle
-/// step's probe, not a rung (or from the start grid's best point where that is lower,
-/// [`FitSpec::grid`]): a far rung's secant and its views (at −45 % the clutch also moves the
-/// torque reversals) started one fit 35 N·m off a steep slip threshold, where the step's
-/// probe had found the truth (`fleetdyn prove --seed 3 --cases 31`). Why these three: they
-/// are the catalogue's threshold and shift effects (the others scale a force, a stiffness or
-/// a load in proportion).
-pub const SCREEN_LADDER: [f64; 3] = [0.5, 1.0, 1.5];
-
-/// `signal_delay`'s start grid, s: 0 … 0.6 s in 25 ms steps. Why: the cost in the delay has
-/// basins about 0.05 s wide — the torque ramps of each shift against the clutch, and the
-/// reversal feature, whose window the delayed events leave — and a fit started from no delay
-/// stops in a side one (measured with `examples/param_scan.rs` on `fleetdyn prove --seed 1001`:
-/// 0.21 s and 0.27 s fitted for 0.314 s and 0.356 s hidden, with every view's lowest grid point
-/// at the truth; from the grid 0.315 s and 0.353 s; docs/events.md). A CAN torque signal lags
-/// by tenths of a second; beyond the grid the fit may still move up to the domain's 2 s.
-pub const DELAY_GRID_S: [f64; 3] = [0.0, 0.6, 0.025];
-
-/// `clutch_slip`'s start grid, as fractions of the nominal capacity: 50 … 100 % in 1.5 %
-/// steps (34 points). Why: the cost in the capacity is a staircase of basins, one per set of
-/// launches and shifts whose transmitted torque exceeds it. Each basin is about 3 % of the
-/// capacity wide (100 N·m at 3500 N·m), and the secant from the screen's probe stops in
-/// whichever it meets first. Measured with `examples/param_scan.rs` on the drawn-driving
-/// proof with the model's 5 ms step: on seed 1 case 31 (hidden 2660 N·m) the train cost is
-/// least at 2550 N·m, with side basins at 2800 and 3000 N·m, and the fit from the probe ended
-/// at 3017 N·m; on seed 1001 case 31 (2629 N·m) the least train cost is at 2600–2650 N·m and
-/// the fit ended at 3092 N·m; on seed 2 case 9 (2131 N·m) at 2150 N·m, and the fit stopped at
-/// the probe's 2450 N·m. A clutch worn to below half its capacity slips at every launch and
-/// is in the grid's first basin; from there the fit may still move over the whole domain
-/// (0.1 … 2 θ₀). The step puts two points in each basin. A coarser grid (55 … 95 % in 5 %
-/// steps, with the model's former 10 ms step) was tried and reverted: its best training point
-/// for seed 1001 case 31, 2558 N·m, slipped on held-out rows where the truth does not, and a
-/// lash was named instead (README "Diagnosis proof"). This grid fits that drive to 2613 N·m.
-/// What a grid cannot cure: a capacity fitted on the training events may still sit on the
-/// wrong side of a held-out event's slip threshold. On the 3–6 km proof, seed 2 case 9 is
-/// fitted to 2210 N·m for 2131 hidden (held-out gain 0.14), and seed 9001 case 9 has its
-/// least training cost at 2275–2280 N·m for 2365 hidden, with a held-out event slipping below
-/// 2280–2290 N·m. On the 10–20 km drives of the same plans both are named
-/// (`tests/it/diagnose_proof.rs`, `worn_clutches_missed_on_short_drives_are_named_on_longer_ones`).
-pub const CLUTCH_GRID: [f64; 3] = [0.5, 1.0, 0.015];
-
-/// Steps and domains per effect, from the nominal value `nom` (module documentation; the
-/// steps are about the middle of README "Hidden effects"' magnitudes, the domains what is
-/// physical for a heavy truck). `slope_step` is the recorded slope's lattice step.
+/// Steps and domains of `e`'s fit from the nominal value `nom` (the catalogue row's
+/// [`FitRule`]: relative rules scale with `nom`; the module documentation's table).
+/// `slope_step` is the recorded slope's lattice step: `slope_quantization`'s switch moves the
+/// resolution from `nom` to it (twice `nom` when the slope has no lattice).
 pub fn fit_spec(e: Effect, nom: f64, slope_step: Option<f64>) -> FitSpec {
-    use Effect::*;
-    let rel = |step: f64, lo: f64, hi: f64| FitSpec {
-        step: step * nom,
-        lo: lo * nom,
-        hi: hi * nom,
-        switch: false,
-        grid: None,
-        ladder: &[1.0],
+    let rule: FitRule = e.spec().fit;
+    if rule.switch {
+        let q = slope_step.unwrap_or(2.0 * nom);
+        return FitSpec {
+            step: q - nom,
+            lo: q,
+            hi: q,
+            switch: true,
+            grid: None,
+            ladder: rule.ladder,
+        };
+    }
+    let k = match rule.scale {
+        Scale::Relative => nom,
+        Scale::Absolute => 1.0,
     };
-    let abs = |step: f64, lo: f64, hi: f64| FitSpec {
-        step,
-        lo,
-        hi,
+    FitSpec {
+        step: rule.step * k,
+        lo: rule.lo * k,
+        hi: rule.hi * k,
         switch: false,
-        grid: None,
-        ladder: &[1.0],
-    };
-    match e {
-        AeroDrag => rel(0.25, 0.25, 4.0),
-        RollingResistance => rel(0.30, 0.25, 4.0),
-        VehicleMass => rel(0.15, 0.5, 2.5),
-        GradeOffset => abs(0.01, -0.1, 0.1),
-        SlopeQuantization => {
-            let q = slope_step.unwrap_or(2.0 * nom);
-            FitSpec {
-                step: q - nom,
-                lo: q,
-                hi: q,
-                switch: true,
-                grid: None,
-                ladder: &[1.0],
-            }
-        }
-        SignalDelay => FitSpec {
-            grid: Some(DELAY_GRID_S),
-            ladder: &SCREEN_LADDER,
-            ..abs(0.2, 0.0, 2.0)
-        },
-        DrivelineBacklash => FitSpec {
-            ladder: &SCREEN_LADDER,
-            ..abs(0.03, 0.0, 0.2)
-        },
-        DrivelineCompliance => rel(-0.35, 0.1, 4.0),
-        EngineTorqueOffset => abs(100.0, -500.0, 500.0),
-        ClutchSlip => FitSpec {
-            ladder: &SCREEN_LADDER,
-            grid: Some(CLUTCH_GRID.map(|x| x * nom)),
-            ..rel(-0.30, 0.1, 2.0)
-        },
-        BogieTorqueReaction => abs(0.4, -1.0, 1.0),
-        LoadTransferHeight => abs(0.25, 0.1, 4.0),
-        AirSpringNonlinearity => abs(4.0, 0.0, 20.0),
-        CgPosition => abs(0.2, -1.5, 1.5),
-        TyreStiffness => rel(-0.30, 0.2, 4.0),
-        GradeLoadTransfer => abs(0.7, -3.0, 3.0),
+        grid: rule.grid.map(|g| [g[0] * k, g[1] * k, g[2] * k]),
+        ladder: rule.ladder,
     }
 }
 

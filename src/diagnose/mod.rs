@@ -1,7 +1,6 @@
 //! Model-vs-recording mismatch diagnosis (issue 7, `diagnosis.md`): compare, locate, explain,
 //! show.
 
-pub mod catalogue;
 pub mod compare;
 pub mod contract;
 pub mod events;
@@ -13,7 +12,6 @@ pub mod modal;
 pub mod modal_channel;
 pub mod noise;
 pub mod problem;
-pub mod prove;
 pub mod reversal_channel;
 pub mod run;
 pub mod setup;

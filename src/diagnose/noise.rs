@@ -93,12 +93,12 @@
 
 use super::compare::{compare_at, Compared};
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::road::rng::{splitmix64, Xoshiro256StarStar};
 use crate::schema::{drive_log, Interpolation};
 use crate::signal::distance::fill_gaps;
 use crate::signal::quantization::estimate_quantization;
 use crate::signal::{csd_pieces, WelchConfig};
-use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
@@ -1479,7 +1479,7 @@ impl NoiseFloors {
 #[derive(Debug, Clone)]
 pub struct ModelSet<'a> {
     /// The nominal vehicle.
-    pub truth: &'a TruthModel,
+    pub truth: &'a ExtendedVehicle,
     /// Gear ratios.
     pub ratios: &'a [f64],
     /// Nominal parameters.
@@ -1510,7 +1510,7 @@ impl<'a> ModelSet<'a> {
     /// and gear; axle with the three bellow pressures and a vehicle with axles.
     pub fn for_log(
         log: &DriveLog,
-        truth: &'a TruthModel,
+        truth: &'a ExtendedVehicle,
         ratios: &'a [f64],
         nominal: Theta,
     ) -> ModelSet<'a> {

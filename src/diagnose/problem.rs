@@ -67,13 +67,13 @@
 //! standardised residual series. RMSE, MAE and fit % per signal are unweighted, in the
 //! signal's SI unit ([`metrics`]).
 
-use super::catalogue::{Domain, Effect};
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
 use super::modal::ModalConfig;
 use super::modal_channel::{self, ModeSample};
 use super::reversal_channel::{self, ReversalSample};
+use crate::model::catalogue::{Domain, Effect};
+use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::quantization::estimate_quantization;
-use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
 use realfft::RealFftPlanner;
 use serde::Serialize;
@@ -340,7 +340,7 @@ impl<'a> Problem<'a> {
     /// compared signal has fewer than [`MIN_SAMPLES_PER_PART`] valid samples in a part.
     pub fn new(
         log: &'a DriveLog,
-        nominal_truth: &'a TruthModel,
+        nominal_truth: &'a ExtendedVehicle,
         ratios: &'a [f64],
         nominal: Theta,
         long_cfg: LongitudinalConfig,

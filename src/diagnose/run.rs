@@ -31,7 +31,9 @@
 //! partial diagnosis, and a failed one leaves the folder as it was (issue "Engineering
 //! standards": no partial outputs).
 
-use super::contract::{Diagnosis, FindingEntry, FitEntry, MismatchEntry, ParameterEntry};
+use super::contract::{
+    Diagnosis, EstimateEntry, FindingEntry, FitEntry, MismatchEntry, ParameterEntry,
+};
 use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding, SignalMetrics};
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig};
 use super::locate::{
@@ -43,6 +45,7 @@ use super::problem::ExplainError;
 use super::setup::Setup;
 use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
 use crate::io::OutputError;
+use crate::model::catalogue::Effect;
 use crate::model::vehicle::VehicleFile;
 use crate::report::axle_plot::PlotError;
 use crate::report::diagnosis::{plot_residuals, write_report, ResidualSeries};
@@ -276,6 +279,7 @@ pub fn diagnose(
         &ExplainConfig {
             noise_floor: Some(noise_floor.clone()),
             max_findings: cfg.max_findings,
+            tolerances: vehicle.tolerance.clone(),
         },
     )?;
     let v = verdict(&explanation.findings, location.any_significant);
@@ -316,6 +320,26 @@ pub fn diagnose(
         noise_floor,
         mismatch: location.mismatch.iter().map(mismatch_entry).collect(),
         findings: explanation.findings.iter().map(finding_entry).collect(),
+        estimates: explanation
+            .consistent
+            .iter()
+            .map(|c| {
+                let e = Effect::from_id(c.effect).expect("catalogue id");
+                EstimateEntry {
+                    effect: c.effect.to_string(),
+                    parameter: e.parameter().to_string(),
+                    value: c.estimate.value,
+                    ci_low: c.estimate.ci_low,
+                    ci_high: c.estimate.ci_high,
+                    unit: c.estimate.unit,
+                    nominal: c.nominal,
+                    tolerance_low: c.band_low,
+                    tolerance_high: c.band_high,
+                    consistent_with_file: true,
+                    sentence: c.sentence.clone(),
+                }
+            })
+            .collect(),
     };
     Ok(Diagnosed {
         diagnosis,

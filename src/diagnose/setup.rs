@@ -14,11 +14,11 @@
 
 use super::compare::Conditions;
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
+use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::model::vehicle::VehicleFile;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
 use crate::signal::quantization::estimate_quantization;
-use crate::synth::effects::TruthModel;
 use crate::table::DriveLog;
 
 /// Speed below which longitudinal rows do not count, m/s.
@@ -35,7 +35,7 @@ pub const NOMINAL_SLOPE_RESOLUTION: f64 = 0.001;
 #[derive(Debug, Clone)]
 pub struct Setup {
     /// The nominal vehicle as a truth model (no effect).
-    pub nominal_truth: TruthModel,
+    pub nominal_truth: ExtendedVehicle,
     /// Gear ratios.
     pub ratios: Vec<f64>,
     /// The nominal parameters.
@@ -138,7 +138,7 @@ impl Setup {
             .map(|q| q.step)
             .filter(|q| *q > 0.0 && *q < 0.1)
             .unwrap_or(NOMINAL_SLOPE_RESOLUTION);
-        let nominal_truth = TruthModel::nominal(d, vehicle.axles.as_ref());
+        let nominal_truth = ExtendedVehicle::nominal(d, vehicle.axles.as_ref());
         let nominal = Theta::nominal(&nominal_truth, NOMINAL_SLOPE_RESOLUTION);
         let conditions = Conditions::from_log(log);
         Ok(Setup {

@@ -263,6 +263,13 @@ impl DrivelineParams {
             / (self.clutch_l_upper - self.clutch_l_lower)
     }
 
+    /// The clutch position whose kinetic capacity is `torque_nm`: the inverse of
+    /// [`DrivelineParams::clutch_capacity`], clamped to the effective range.
+    pub fn clutch_position_for(&self, torque_nm: f64) -> f64 {
+        let f = (torque_nm / self.clutch_max_torque_nm).clamp(0.0, 1.0);
+        (self.clutch_l_upper - f * (self.clutch_l_upper - self.clutch_l_lower)) * self.clutch_x_max
+    }
+
     /// Torque through a locked clutch, `M_trans = (M_e J_c + M_c J_e)/(J_e + J_c)`, N·m.
     pub fn locked_clutch_torque(&self, m_e: f64, m_c: f64) -> f64 {
         (m_e * self.j_c_kg_m2 + m_c * self.j_e_kg_m2) / (self.j_e_kg_m2 + self.j_c_kg_m2)

@@ -3,7 +3,10 @@
 pub mod axle;
 pub mod axle_estimation;
 pub mod axle_measurement;
+pub mod catalogue;
 pub mod driveline;
+pub mod extended_vehicle;
 pub mod linear;
 pub mod resonance;
+pub mod tolerance;
 pub mod vehicle;

@@ -6,7 +6,8 @@
 //! checked key by key against `schemas/vehicle.toml`.
 
 use super::axle::AxleParams;
-use super::driveline::DrivelineParams;
+use super::driveline::{vehicle_schema, DrivelineParams};
+use super::tolerance::Tolerances;
 use serde::Deserialize;
 use std::path::Path;
 use thiserror::Error;
@@ -52,6 +53,13 @@ pub struct VehicleFile {
     /// The raw `[axles]` table as written (checked and converted by [`VehicleFile::parse`]).
     #[serde(default, rename = "axles")]
     axles_raw: Option<toml::Table>,
+    /// Tolerances of the file's values ([`super::tolerance`]): the `[tolerance]` table's
+    /// entries, every other parameter its kind's default.
+    #[serde(skip)]
+    pub tolerance: Tolerances,
+    /// The raw `[tolerance]` table as written.
+    #[serde(default, rename = "tolerance")]
+    tolerance_raw: Option<toml::Table>,
 }
 
 /// A vehicle file that cannot be used; names the file and the key.
@@ -199,6 +207,24 @@ impl VehicleFile {
                 }
             }
             v.axles = Some(p);
+        }
+        if let Some(t) = v.tolerance_raw.take() {
+            let schema = vehicle_schema();
+            let known = |k: &str| {
+                schema
+                    .driveline
+                    .iter()
+                    .chain(&schema.axles)
+                    .any(|s| s.key == k)
+            };
+            v.tolerance = Tolerances::from_table(&t, known).map_err(|(key, value, rule)| {
+                VehicleError::Range {
+                    file: file.into(),
+                    key: format!("tolerance.{key}"),
+                    value,
+                    rule,
+                }
+            })?;
         }
         Ok(v)
     }

@@ -242,6 +242,30 @@ pub fn report_markdown(
         }
         let _ = writeln!(s);
     }
+    if !d.estimates.is_empty() {
+        let _ = writeln!(
+            s,
+            "## Consistent with the vehicle file
+
+Fitted, but within the file's tolerance \
+             band, so not named:\n\n| parameter | value | 95 % interval | file's band | unit |\n\
+             |---|---|---|---|---|"
+        );
+        for e in &d.estimates {
+            let _ = writeln!(
+                s,
+                "| {} | {:.5} | {:.5} … {:.5} | {:.5} … {:.5} | {} |",
+                e.parameter,
+                e.value,
+                e.ci_low,
+                e.ci_high,
+                e.tolerance_low,
+                e.tolerance_high,
+                e.unit
+            );
+        }
+        let _ = writeln!(s);
+    }
     if !plots.is_empty() {
         let _ = writeln!(s, "## Residuals before and after\n");
         for (sig, file) in plots {
@@ -305,6 +329,7 @@ mod tests {
                 significance: 1e-5,
             }],
             findings: vec![],
+            estimates: Vec::new(),
         };
         let md = report_markdown(
             &d,

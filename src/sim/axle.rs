@@ -22,6 +22,7 @@
 //! nominal model, bit for bit.
 
 use super::inputs::Piecewise;
+pub use crate::model::axle::AxleExtensions;
 use crate::model::axle::{Axle, AxleParams, DamperTable, StaticState};
 use nalgebra::{SMatrix, SVector};
 
@@ -61,36 +62,6 @@ pub struct Longitudinal {
     pub accel_mps2: f64,
     /// Grade angle α, rad.
     pub alpha_rad: f64,
-}
-
-/// Physics the nominal half-truck leaves out, each named by its diagnosis-catalogue id
-/// (diagnosis.md). Every field's zero is the nominal model; all are SI.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct AxleExtensions {
-    /// `bogie_torque_reaction`: fraction κ (1) of the driven axle's wheel torque
-    /// `T = F_r r_w` (drive − auxiliary brake − the driven axle's service-brake share, + driving)
-    /// whose housing reaction goes into the chassis (torque rods) instead of the trailing arm.
-    /// It acts between arm and chassis as the moment pair `κ T (e_φr + e_θ)` on the generalised
-    /// forces (docs/axle-model.md sign convention: `φ` rear end up, `θ` nose up), so it loads
-    /// the driven-axle bellow in proportion to the torque and mirrors in braking.
-    pub torque_reaction: f64,
-    /// `air_spring_nonlinearity`: progression γ ≥ 0 of every bellow, 1/m: the bellow force is
-    /// `B = B_0 + k_b (e^{2γc} − 1)/(2γ) = B_0 + k_b (c + γ c² + …)` with `c` the bellow
-    /// compression, m. Its second-order term is the polytropic gas law's (`p V^n = const` gives
-    /// `γ = (n + 1) k_b / (2 n B_0)`); unlike a bare quadratic it stays monotone (stiffening in
-    /// compression, softening in extension) at any travel.
-    pub bellow_progression_per_m: f64,
-    /// `grade_load_transfer`: height offset Δh, m, of the point where the chassis' gravity
-    /// component along the road, `−m_c g sin α`, acts (above its CG for Δh > 0): an extra pitch
-    /// moment `m_c g sin α Δh` that moves load rearwards uphill.
-    pub grade_height_offset_m: f64,
-}
-
-impl AxleExtensions {
-    /// True when every extension is absent (the nominal model).
-    pub fn is_nominal(&self) -> bool {
-        *self == Self::default()
-    }
 }
 
 /// Piece indices of the five inputs, moved forward as time increases (so a long recorded drive

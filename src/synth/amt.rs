@@ -322,7 +322,7 @@ impl Amt {
                     (demand * p.engine_max_torque(c.launch_rpm * RPM)).max(c.launch_min_torque_nm);
                 let rate = target / c.launch_engage_s.max(self.dt);
                 let cap = (rate * (step + 1) as f64 * self.dt).min(p.clutch_max_torque_nm);
-                let x = clutch_position_for(p, cap);
+                let x = p.clutch_position_for(cap);
                 (x, p.clutch_capacity(x) + gov(c.launch_rpm * RPM), false)
             }
             AmtState::Driving { .. } => (0.0, demanded, false),
@@ -346,11 +346,4 @@ impl Amt {
             synchronise: sync,
         }
     }
-}
-
-/// The clutch position whose kinetic capacity is `torque_nm` (inverse of the linear actuator
-/// law of [`DrivelineParams::clutch_capacity`], clamped to the effective range).
-pub fn clutch_position_for(p: &DrivelineParams, torque_nm: f64) -> f64 {
-    let f = (torque_nm / p.clutch_max_torque_nm).clamp(0.0, 1.0);
-    (p.clutch_l_upper - f * (p.clutch_l_upper - p.clutch_l_lower)) * p.clutch_x_max
 }

@@ -46,8 +46,8 @@ use super::amt::{Amt, AmtConfig, AmtState, ShiftPhase};
 use super::can::{CanBus, SynthError as CanError, SynthOptions, Truth};
 use super::driver::{Driver, DriverConfig, SpeedLimits};
 use super::effects::{
-    resolve, Answer, EffectChoice, EffectError, Injection, OutOfCatalogue, ResistanceStretch,
-    TruthModel, LOCAL_ROLLING_RESISTANCE,
+    fault_bus, fault_truth, resolve, Answer, EffectChoice, EffectError, Injection, OutOfCatalogue,
+    ResistanceStretch, TruthModel, LOCAL_ROLLING_RESISTANCE,
 };
 use super::export::{fuel_rate_lph, ExportError, Series};
 use super::log_writer::{apply_dropouts, write_drive_log, LogOptions};
@@ -875,9 +875,9 @@ pub fn synth_drive_logged(
     };
     let drive = simulate_drive_with(
         d,
-        &truth_model.driveline,
+        &truth_model.vehicle.driveline,
         &PlantExtras {
-            lash_rad: truth_model.lash_rad,
+            lash_rad: truth_model.vehicle.lash_rad,
             stretch: truth_model.stretch,
         },
         &v.gearbox.ratios,
@@ -887,8 +887,12 @@ pub fn synth_drive_logged(
         cfg,
         seed,
     )?;
-    let axles = match truth_model.axles.as_ref() {
-        Some(pa) => Some(simulate_axles_with(pa, truth_model.axle_ext, &drive)?),
+    let axles = match truth_model.vehicle.axles.as_ref() {
+        Some(pa) => Some(simulate_axles_with(
+            pa,
+            truth_model.vehicle.axle_ext,
+            &drive,
+        )?),
         None => None,
     };
     let mut truth = drive_truth(&drive, axles.as_ref());
@@ -898,8 +902,8 @@ pub fn synth_drive_logged(
         bus.messages
             .retain(|m| !m.channels.iter().any(|c| c.column == "retarder_torque"));
     }
-    truth_model.sensors.apply_to_truth(&mut truth);
-    truth_model.sensors.apply_to_bus(&mut bus);
+    fault_truth(&truth_model.vehicle.sensors, &mut truth);
+    fault_bus(&truth_model.vehicle.sensors, &mut bus);
     if let Some(dr) = cfg.dropouts {
         bus = bus.with_dropouts(dr);
     }

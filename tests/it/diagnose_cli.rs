@@ -7,7 +7,7 @@
 //! one.
 
 use crate::common::fixture;
-use fleetdyn::diagnose::catalogue::Effect;
+use fleetdyn::model::catalogue::Effect;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect};
 use fleetdyn::synth::effects::EffectChoice;
 use parquet::file::reader::{FileReader, SerializedFileReader};

@@ -17,16 +17,17 @@
 //! runs its first cycle); the speed on a drive-hour is `cargo bench --bench diagnose`.
 
 use crate::common::fixture;
-use fleetdyn::diagnose::catalogue::{Domain, Effect};
 use fleetdyn::diagnose::explain::{
     explain, fits_against, verdict, ExplainConfig, Explanation, SignalFit, Verdict,
 };
 use fleetdyn::diagnose::extended::{LongitudinalConfig, Theta};
 use fleetdyn::diagnose::problem::{ExplainError, Problem};
-use fleetdyn::diagnose::prove::noise_free_reference;
+use fleetdyn::model::catalogue::{Domain, Effect};
+use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::proof::noise_free_reference;
 use fleetdyn::synth::drive::{drive_truth, synth_drive, DriveConfig, HiddenEffect, SynthDrive};
-use fleetdyn::synth::effects::{EffectChoice, TruthModel};
+use fleetdyn::synth::effects::EffectChoice;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
@@ -106,7 +107,7 @@ fn run(dir: &Path, road: Road, hidden: Option<(Effect, f64)>) -> Run {
     // blind from here: the nominal vehicle file written next to the drive
     let vf = VehicleFile::load(&d.vehicle).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let nominal_truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal_truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&nominal_truth, road.slope_resolution);
     let t0 = Instant::now();
     let p = Problem::new(
@@ -358,7 +359,7 @@ fn results_do_not_depend_on_the_thread_count() {
     .unwrap();
     let vf = VehicleFile::load(&d.vehicle).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
     let json = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -428,7 +429,15 @@ fn results_do_not_depend_on_the_thread_count() {
 
 /// A nominal city-se drive of `km` (seed 2) with its gear ratios, nominal truth model and
 /// parameters; the folder lives as long as the returned guard.
-fn nominal_city_drive(km: f64) -> (tempfile::TempDir, SynthDrive, Vec<f64>, TruthModel, Theta) {
+fn nominal_city_drive(
+    km: f64,
+) -> (
+    tempfile::TempDir,
+    SynthDrive,
+    Vec<f64>,
+    ExtendedVehicle,
+    Theta,
+) {
     let dir = tempfile::tempdir().unwrap();
     let d = synth_drive(
         &fixture(VEHICLE),
@@ -442,7 +451,7 @@ fn nominal_city_drive(km: f64) -> (tempfile::TempDir, SynthDrive, Vec<f64>, Trut
     .unwrap();
     let vf = VehicleFile::load(&d.vehicle).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
     (dir, d, ratios, truth, nominal)
 }

@@ -5,11 +5,12 @@
 //! the same in the generator and in the diagnosis.
 
 use crate::common::fixture;
-use fleetdyn::diagnose::catalogue::{Domain, Effect};
 use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel, Theta};
+use fleetdyn::model::catalogue::{Domain, Effect};
+use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
-use fleetdyn::synth::effects::{EffectChoice, TruthModel};
+use fleetdyn::synth::effects::EffectChoice;
 use std::path::Path;
 
 const VEHICLE: &str = "fixtures/vehicles/seed002-6x2-diesel.toml";
@@ -54,11 +55,18 @@ fn rmse(a: &[f64], b: &[f64], keep: &[bool]) -> f64 {
 
 /// (engine-speed RMSE rad/s, vehicle-speed RMSE m/s) or the three bellow RMSEs (Pa) summed in
 /// quadrature, of the extended model with `theta` on the drive's log.
-fn error(d: &SynthDrive, truth: &TruthModel, ratios: &[f64], theta: &Theta, domain: Domain) -> f64 {
+fn error(
+    d: &SynthDrive,
+    truth: &ExtendedVehicle,
+    ratios: &[f64],
+    theta: &Theta,
+    domain: Domain,
+) -> f64 {
     let log = &d.log;
     let nominal = Theta::nominal(
         truth,
-        if d.truth.sensors.slope_resolution.is_some() || theta.get(Effect::SlopeQuantization) < 0.01
+        if d.truth.vehicle.sensors.slope_resolution.is_some()
+            || theta.get(Effect::SlopeQuantization) < 0.01
         {
             0.001
         } else {
@@ -104,7 +112,7 @@ fn each_effect_at_its_truth_value_restores_the_fit() {
     let dir = tempfile::tempdir().unwrap();
     let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
     let clean = drive(&dir.path().join("clean"), None, false);
     let floor =
@@ -183,7 +191,7 @@ fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
     let dir = tempfile::tempdir().unwrap();
     let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.001);
     let fine = drive(&dir.path().join("fine"), None, true);
     let coarse = drive(
@@ -246,7 +254,7 @@ fn a_clutch_slipping_under_full_load_is_reproduced_at_its_true_capacity() {
     let dir = tempfile::tempdir().unwrap();
     let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
     let worn = 2438.3;
     let hidden = HiddenEffect {
@@ -335,7 +343,7 @@ fn a_window_does_not_start_on_a_torque_step_with_the_clutch_closed() {
 /// Case `case` of `fleetdyn prove --seed SEED` (the default, drawn driving) as the diagnosis
 /// reads it: its vehicle file and its ingested log.
 fn proof_drive(seed: u64, case: usize) -> (VehicleFile, fleetdyn::table::DriveLog) {
-    use fleetdyn::diagnose::prove::{generate, plan, ProofConfig};
+    use fleetdyn::proof::{generate, plan, ProofConfig};
     let dir = tempfile::tempdir().unwrap();
     let cfg = ProofConfig {
         seed,
@@ -370,7 +378,7 @@ fn a_locked_window_in_a_low_gear_starts_in_the_shuffle_phase() {
     let (vf, log) = proof_drive(1001, 29);
     let log = &log;
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.001);
     let held = |c: &str| {
         fleetdyn::signal::distance::fill_gaps(
@@ -433,7 +441,7 @@ fn the_reversals_are_integrated_at_the_fine_step() {
     use fleetdyn::diagnose::reversal_channel::{measure, simulate};
     let (vf, log) = proof_drive(1, 38);
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.001);
     let model = |dt_s: f64, fine_at_reversals: bool| {
         let cfg = LongitudinalConfig {

@@ -5,7 +5,6 @@
 //! (`--nocapture`).
 
 use crate::common::fixture;
-use fleetdyn::diagnose::catalogue::Effect;
 use fleetdyn::diagnose::compare::{Compared, Comparison, Conditions};
 use fleetdyn::diagnose::extended::Theta;
 use fleetdyn::diagnose::locate::{
@@ -15,10 +14,12 @@ use fleetdyn::diagnose::noise::{
     estimate_sensor_noise, noise_floors, stream, ModelSet, NoiseConfig, NoiseFloor, NoiseFloors,
     SampleKind, SensorNoise,
 };
+use fleetdyn::model::catalogue::Effect;
+use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::road::rng::Xoshiro256StarStar;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
-use fleetdyn::synth::effects::{EffectChoice, TruthModel};
+use fleetdyn::synth::effects::EffectChoice;
 use std::path::Path;
 
 const DT: f64 = 0.02; // 50 Hz grid
@@ -362,7 +363,7 @@ fn located(dir: &Path, effect: Option<(Effect, f64)>) -> (SynthDrive, NoiseFloor
     .unwrap();
     let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
     let ratios = vf.gearbox.ratios.clone();
-    let truth = TruthModel::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
     let nominal = Theta::nominal(&truth, 0.01);
     let models = ModelSet::for_log(&d.log, &truth, &ratios, nominal);
     assert!(models.longitudinal.is_some() && models.axle);

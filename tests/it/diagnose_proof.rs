@@ -34,7 +34,7 @@
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;
-use fleetdyn::diagnose::prove::{run_proof, CaseScore, Driving, ProofConfig, ProofRun};
+use fleetdyn::proof::{run_proof, CaseScore, Driving, ProofConfig, ProofRun};
 
 const IDENTIFIED: [&str; 13] = [
     "rolling_resistance",
@@ -332,7 +332,7 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
 /// A large torque-signal delay (`fleetdyn prove --seed 1001 --cases 27`: 0.356 s hidden) is
 /// fitted in its own basin: the cost in the delay has side basins about 0.05 s wide, and the
 /// fit started from no delay had stopped in one at 0.27 s (23 % of the delay off); it now
-/// starts from the best point of a 25 ms grid (`diagnose::fit::DELAY_GRID_S`).
+/// starts from the best point of a 25 ms grid (`model::catalogue::DELAY_GRID_S`).
 #[test]
 fn a_large_delay_is_fitted_in_its_own_basin() {
     let (_dir, run) = proof(&ProofConfig {
@@ -356,7 +356,7 @@ fn a_large_delay_is_fitted_in_its_own_basin() {
 /// every launch (the probe's sensitivity removed 8 % of the train SSE, under the screen's
 /// 10 %), and 0.2 s of delay explained 9.5 %. The screen now also probes ½ and 1½ times the
 /// step of these threshold and shift effects and judges them by the best rung
-/// (`diagnose::fit::SCREEN_LADDER`: 66 % and 22 % at −45 % and 0.3 s); both are named, fitted
+/// (`model::catalogue::SCREEN_LADDER`: 66 % and 22 % at −45 % and 0.3 s); both are named, fitted
 /// within 20 % and `explained`.
 #[test]
 fn the_screen_probes_threshold_effects_across_their_range() {
@@ -384,7 +384,7 @@ fn the_screen_probes_threshold_effects_across_their_range() {
 /// capacity is a staircase of basins about 3 % of it wide, and the secant from the screen's
 /// probe had ended at 3017 and 3092 N·m, both rejected by the rule. The fit now starts from the
 /// best point of a grid of 50 … 100 % of the nominal capacity in 1.5 % steps
-/// (`diagnose::fit::CLUTCH_GRID`); both drives are named.
+/// (`model::catalogue::CLUTCH_GRID`); both drives are named.
 #[test]
 fn a_worn_clutch_is_fitted_in_its_own_basin() {
     for seed in [1, 1001] {

@@ -64,7 +64,7 @@ fn smooth(v: &[f64], w: usize) -> Vec<f64> {
 /// resistances, up to the driveline's losses.
 fn net_work(d: &SynthDrive) -> f64 {
     let (t, r) = (&d.drive.t_s, &d.drive);
-    let r_w = d.truth.driveline.wheel_radius_m;
+    let r_w = d.truth.vehicle.driveline.wheel_radius_m;
     let aux = |i: usize| r.aux_brake_wheel_nm.get(i).copied().unwrap_or(0.0) / r_w;
     (1..t.len())
         .map(|i| {
@@ -180,7 +180,7 @@ fn random_choice_covers_the_catalogue_and_none_deterministically() {
 fn drag_and_rolling_resistance_cost_the_engine_their_extra_work() {
     let dir = tempfile::tempdir().unwrap();
     let none = drive(&dir.path().join("none"), None);
-    let p = none.truth.driveline.clone();
+    let p = none.truth.vehicle.driveline.clone();
     let aero = with(
         &dir.path().join("aero"),
         Effect::AeroDrag,
@@ -191,7 +191,7 @@ fn drag_and_rolling_resistance_cost_the_engine_their_extra_work() {
         Effect::RollingResistance,
         1.5 * p.c_r1,
     );
-    assert!((roll.truth.driveline.c_r2_s_per_m / p.c_r2_s_per_m - 1.5).abs() < 1e-12);
+    assert!((roll.truth.vehicle.driveline.c_r2_s_per_m / p.c_r2_s_per_m - 1.5).abs() < 1e-12);
     // the extra resistance's work along the effect drive's own trajectory
     let extra = |d: &SynthDrive, f: &dyn Fn(f64, f64) -> f64| -> f64 {
         let (t, v, s) = (&d.drive.t_s, &d.drive.speed_mps, &d.drive.slope);
@@ -227,9 +227,9 @@ fn drag_and_rolling_resistance_cost_the_engine_their_extra_work() {
 fn payload_loads_every_axle_and_the_truth_weighs_what_the_answer_says() {
     let dir = tempfile::tempdir().unwrap();
     let none = drive(&dir.path().join("none"), None);
-    let m0 = none.truth.driveline.mass_kg;
+    let m0 = none.truth.vehicle.driveline.mass_kg;
     let heavy = with(&dir.path().join("m"), Effect::VehicleMass, 1.2 * m0);
-    let a = heavy.truth.axles.as_ref().unwrap();
+    let a = heavy.truth.vehicle.axles.as_ref().unwrap();
     assert!((a.mass_kg() - 1.2 * m0).abs() < 1e-6 * m0);
     let st = a.static_state();
     let g = a.gravity_m_per_s2;
@@ -292,7 +292,7 @@ fn sensor_faults_change_only_the_sensor_by_their_magnitude() {
 fn driveline_effects_show_in_shaft_torque_launches_and_engine_speed() {
     let dir = tempfile::tempdir().unwrap();
     let none = drive(&dir.path().join("none"), None);
-    let p = none.truth.driveline.clone();
+    let p = none.truth.vehicle.driveline.clone();
     // backlash: the shaft carries no torque while crossing its play, which the nominal shaft
     // never does while moving
     let lash = with(&dir.path().join("b"), Effect::DrivelineBacklash, 0.04);
@@ -345,7 +345,7 @@ fn driveline_effects_show_in_shaft_torque_launches_and_engine_speed() {
 fn axle_effects_leave_the_driveline_alone_and_follow_their_fingerprint() {
     let dir = tempfile::tempdir().unwrap();
     let none = drive(&dir.path().join("none"), None);
-    let a0 = none.truth.axles.clone().unwrap();
+    let a0 = none.truth.vehicle.axles.clone().unwrap();
     let run = |name: &str, e: Effect, v: f64| {
         let d = with(&dir.path().join(name), e, v);
         assert_eq!(d.drive, none.drive, "{name}: the driveline is untouched");
@@ -483,13 +483,13 @@ fn out_of_catalogue_resistance_stretch_costs_its_work_and_is_answered_apart() {
     );
     // the stretch lies where the rule says (20–60 % in, 15–30 % long, 1–2 × c_r1)
     let l = 2000.0;
-    let c_r1 = none.truth.driveline.c_r1;
+    let c_r1 = none.truth.vehicle.driveline.c_r1;
     assert!(stretch.start_m >= 0.2 * l && stretch.start_m <= 0.6 * l);
     let len = stretch.end_m - stretch.start_m;
     assert!(len >= 0.15 * l - 1e-9 && len <= 0.30 * l + 1e-9);
     assert!(stretch.c_r_extra >= c_r1 && stretch.c_r_extra <= 2.0 * c_r1);
     // the vehicle file stays nominal; the engine pays the stretch's work (±5 %, as for drag)
-    let p = &st.truth.driveline;
+    let p = &st.truth.vehicle.driveline;
     let (t, v, s, x) = (
         &st.drive.t_s,
         &st.drive.speed_mps,

@@ -1,0 +1,241 @@
+//! The proof's plan: which drive hides which effect, on which road, with which driver.
+
+use crate::model::catalogue::Effect;
+use crate::road::rng::Xoshiro256StarStar;
+use crate::synth::can::Dropouts;
+use crate::synth::driver::{DriverConfig, LiftOffs};
+use serde::Serialize;
+
+/// Settings of a proof run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProofConfig {
+    /// Number of drives.
+    pub drives: usize,
+    /// Seed of the plan (drive `i` uses `seed + i`).
+    pub seed: u64,
+    /// Drive length range, km.
+    pub length_km: (f64, f64),
+    /// CAN dropouts of every message.
+    pub dropouts: Dropouts,
+    /// Drives without an effect in each cycle of the plan.
+    pub clean_per_cycle: usize,
+    /// Drives with the out-of-catalogue effect in each cycle of the plan.
+    pub out_of_catalogue_per_cycle: usize,
+    /// How the drives' driving is chosen.
+    pub driving: Driving,
+    /// Plan indices to run (each drive exactly as in the whole plan); empty: all `drives`.
+    /// An index at or past `drives` matches no case and runs nothing (`fleetdyn prove --cases`
+    /// rejects it with exit 2).
+    pub only: Vec<usize>,
+}
+
+impl Default for ProofConfig {
+    /// 66 drives: three cycles of every effect once, four clean drives and two with the
+    /// out-of-catalogue effect (48 + 12 + 6), seed 1, 3–6 km, dropouts starting with
+    /// probability 0.001 per message, 0.3 s long on average.
+    fn default() -> Self {
+        Self {
+            drives: 66,
+            seed: 1,
+            length_km: (3.0, 6.0),
+            dropouts: Dropouts {
+                start_probability: 0.001,
+                mean_length_s: 0.3,
+            },
+            clean_per_cycle: 4,
+            out_of_catalogue_per_cycle: 2,
+            driving: Driving::Drawn,
+            only: Vec::new(),
+        }
+    }
+}
+
+/// How a proof's drives are driven.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Driving {
+    /// One driver for every drive: the generator's default [`DriverConfig`] (0.8 m/s² up,
+    /// 1.2 m/s² down, k_v = 0.5 1/s, ±5 % tips, 8 s at a stop, no lift-offs) — the proofs of
+    /// the README's tables dated before the drawn driving (`fleetdyn prove --driving fixed`).
+    Fixed,
+    /// A driver drawn per case from its drive seed ([`drawn_driver`]).
+    Drawn,
+}
+
+impl Driving {
+    /// The `--driving` value.
+    pub fn label(self) -> &'static str {
+        match self {
+            Driving::Fixed => "fixed",
+            Driving::Drawn => "drawn",
+        }
+    }
+}
+
+/// PRNG stream of the drawn driving (xored into the drive seed).
+const DRIVING_STREAM: u64 = 0x6472_6976_696E_6721;
+
+/// The driver of a proof drive with seed `seed` under [`Driving::Drawn`]: the generator's
+/// default driver with, drawn uniformly from the drive seed's own stream,
+/// - comfortable acceleration 0.5–1.2 m/s² (a loaded truck's gentle start to a brisk one;
+///   at 1.2 m/s² the 18.7 t seed 002 truck reaches cruise in its top gear at full torque,
+///   `fleetdyn prove --seed 1` case 38) and deceleration 0.9–1.5 m/s²;
+/// - speed-error gain 0.3–0.8 1/s;
+/// - tip amplitude ±3 % to ±20 % of the torque demand;
+/// - lift-offs ([`LiftOffs`]) every 20–120 s on average (each interval 0.5–1.5 times the
+///   drive's mean), 1–4 s long, above 5 m/s;
+/// - 5–20 s standing at each stop.
+///
+/// Only the driver changes: roads, stops, effects and their magnitudes, the sensors and their
+/// noise draw from their own streams and are the same under either [`Driving`].
+pub fn drawn_driver(seed: u64) -> DriverConfig {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(seed ^ DRIVING_STREAM);
+    let mean_lift_s = rng.uniform(20.0, 120.0);
+    DriverConfig {
+        accel_mps2: rng.uniform(0.5, 1.2),
+        decel_mps2: rng.uniform(0.9, 1.5),
+        speed_gain_per_s: rng.uniform(0.3, 0.8),
+        tip_fraction: rng.uniform(0.03, 0.2),
+        stop_dwell_s: rng.uniform(5.0, 20.0),
+        lift_offs: Some(LiftOffs {
+            interval_s: (0.5 * mean_lift_s, 1.5 * mean_lift_s),
+            duration_s: (1.0, 4.0),
+            min_speed_mps: 5.0,
+        }),
+        ..DriverConfig::default()
+    }
+}
+
+/// What a proof drive hides.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Hidden {
+    /// Nothing.
+    Nothing,
+    /// A catalogue effect.
+    Effect(Effect),
+    /// The out-of-catalogue stretch of extra rolling resistance.
+    OutOfCatalogue,
+}
+
+impl Hidden {
+    /// Label in the confusion table.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Hidden::Nothing => "none",
+            Hidden::Effect(e) => e.id(),
+            Hidden::OutOfCatalogue => "out_of_catalogue",
+        }
+    }
+}
+
+/// One planned drive.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProofCase {
+    /// Index in the plan.
+    pub index: usize,
+    /// Drive seed.
+    pub seed: u64,
+    /// Road rule set.
+    pub rules: &'static str,
+    /// Road length, km (whole hundreds of metres).
+    pub length_km: f64,
+    /// What it hides.
+    pub hidden: Hidden,
+}
+
+/// The deterministic plan of a proof (see the module documentation).
+pub fn plan(cfg: &ProofConfig) -> Vec<ProofCase> {
+    let mut rng = Xoshiro256StarStar::seed_from_u64(cfg.seed ^ 0x9E00_F00D);
+    (0..cfg.drives)
+        .map(|i| {
+            let cycle = Effect::ALL.len() + cfg.clean_per_cycle + cfg.out_of_catalogue_per_cycle;
+            let slot = i % cycle.max(1);
+            let hidden = match Effect::ALL.get(slot) {
+                Some(e) => Hidden::Effect(*e),
+                None if slot < Effect::ALL.len() + cfg.clean_per_cycle => Hidden::Nothing,
+                None => Hidden::OutOfCatalogue,
+            };
+            let r = rng.next_u64() % 10;
+            let rules = match r {
+                0..=2 => "highway-se",
+                3..=5 => "freeway-us",
+                6..=7 => "city-se",
+                _ => "urban-us",
+            };
+            let km = rng.uniform(cfg.length_km.0, cfg.length_km.1);
+            ProofCase {
+                index: i,
+                seed: cfg.seed + i as u64,
+                rules,
+                length_km: (km * 10.0).round() / 10.0,
+                hidden,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::proof::drive_config;
+
+    #[test]
+    fn drawn_drivers_are_the_seeds_own_and_within_their_ranges() {
+        let drivers: Vec<DriverConfig> = (1..200).map(drawn_driver).collect();
+        assert_eq!(drivers[0], drawn_driver(1));
+        for d in &drivers {
+            assert!((0.5..=1.2).contains(&d.accel_mps2));
+            assert!((0.9..=1.5).contains(&d.decel_mps2));
+            assert!((0.3..=0.8).contains(&d.speed_gain_per_s));
+            assert!((0.03..=0.2).contains(&d.tip_fraction));
+            assert!((5.0..=20.0).contains(&d.stop_dwell_s));
+            let l = d.lift_offs.unwrap();
+            assert!(l.interval_s.0 >= 10.0 && l.interval_s.1 <= 180.0);
+            assert_eq!(l.interval_s.1, 3.0 * l.interval_s.0);
+            // everything else is the generator's default driver
+            assert_eq!(d.stop_every_m, DriverConfig::default().stop_every_m);
+            assert_eq!(d.retarder, DriverConfig::default().retarder);
+        }
+        // the drives differ: brisk and gentle, nervous and steady feet
+        let (lo, hi) = drivers.iter().fold((f64::MAX, 0.0_f64), |(lo, hi), d| {
+            (lo.min(d.accel_mps2), hi.max(d.accel_mps2))
+        });
+        assert!(lo < 0.6 && hi > 1.1, "{lo}…{hi}");
+        // the fixed driving is the default driver, whatever the seed
+        let case = plan(&ProofConfig::default())[5].clone();
+        let fixed = ProofConfig {
+            driving: Driving::Fixed,
+            ..ProofConfig::default()
+        };
+        assert_eq!(drive_config(&case, &fixed).driver.accel_mps2, 0.8);
+        assert_eq!(drive_config(&case, &fixed).driver.lift_offs, None);
+        assert_eq!(
+            drive_config(&case, &ProofConfig::default())
+                .driver
+                .stop_every_m,
+            drive_config(&case, &fixed).driver.stop_every_m
+        );
+    }
+
+    #[test]
+    fn plan_cycles_the_catalogue_and_is_deterministic() {
+        let cfg = ProofConfig::default();
+        let p = plan(&cfg);
+        assert_eq!(p, plan(&cfg));
+        assert_eq!(p.len(), 66);
+        for e in Effect::ALL {
+            assert_eq!(
+                p.iter().filter(|c| c.hidden == Hidden::Effect(e)).count(),
+                3
+            );
+        }
+        assert_eq!(p.iter().filter(|c| c.hidden == Hidden::Nothing).count(), 12);
+        assert_eq!(
+            p.iter()
+                .filter(|c| c.hidden == Hidden::OutOfCatalogue)
+                .count(),
+            6
+        );
+        assert!(p.iter().all(|c| c.length_km >= 3.0 && c.length_km <= 6.0));
+    }
+}

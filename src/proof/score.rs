@@ -1,0 +1,220 @@
+//! Scores of one diagnosed case against its answer, and the noise-free reference they are
+//! read against.
+
+use super::*;
+use crate::diagnose::contract::{Diagnosis, Verdict};
+use crate::model::catalogue::{Domain, Effect};
+use crate::table::DriveLog;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// The score of one diagnosed drive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseScore {
+    /// Plan index.
+    pub index: usize,
+    /// Drive seed.
+    pub seed: u64,
+    /// Road rule set.
+    pub rules: &'static str,
+    /// Road length, m.
+    pub length_m: f64,
+    /// Drive duration, s.
+    pub drive_s: f64,
+    /// Hidden (label).
+    pub hidden: &'static str,
+    /// Named (label).
+    pub named: String,
+    /// All accepted findings' effects, in order.
+    pub findings: Vec<String>,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// The hidden effect is named first.
+    pub correct: bool,
+    /// The hidden effect is in the first finding's ambiguity set.
+    pub ambiguous_correct: bool,
+    /// The hidden parameter's nominal value (catalogue effects).
+    pub nominal_value: Option<f64>,
+    /// Its truth.
+    pub truth_value: Option<f64>,
+    /// The fitted value (correctly named drives).
+    pub fitted_value: Option<f64>,
+    /// Parameter error relative to the hidden change (catalogue effects named correctly).
+    pub parameter_error: Option<f64>,
+    /// Held-out RMSE after/before of the first finding on the signal of the effect's own model
+    /// that improved most (the signal its sentence quotes).
+    pub heldout_ratio: Option<f64>,
+    /// The same on the signal of the effect's own model that improved least.
+    pub heldout_ratio_worst: Option<f64>,
+    /// Out-of-catalogue: unexplained or located on the stretch without a catalogue name.
+    pub out_of_catalogue_ok: Option<bool>,
+    /// Out-of-catalogue: a located mismatch overlaps the stretch.
+    pub out_of_catalogue_located: Option<bool>,
+    /// Diagnosis wall time, s.
+    pub seconds: f64,
+    /// Catalogue effects: the held-out gain of the effect's own model with the hidden truth
+    /// set, nothing fitted ([`crate::diagnose::explain::rules_at`], computed after the blind
+    /// diagnosis, outside its time).
+    pub oracle_heldout_gain: Option<f64>,
+    /// Catalogue effects: rules 1 and 2 of the acceptance rule hold at the truth — the
+    /// recorded signals show the effect to the rule on this drive.
+    pub oracle_visible: Option<bool>,
+    /// [`Self::heldout_ratio`] measured against the generator's noise-free signals instead of
+    /// the recording ([`crate::diagnose::explain::fits_against`]): the first finding's fitted value, its
+    /// own model, the same rows and held-out blocks, the same (quoted) signal — when that
+    /// signal is recorded directly (speed, engine speed also on the clutch-actuated rows,
+    /// bellow pressures); `None` when it is an event view's (shuffle frequency, reversal
+    /// speed), which has no noise-free twin. Only the outputs' noise is taken away:
+    /// the models still run on the recorded, noisy inputs. The recording's ratio cannot fall
+    /// below about `σ/RMSE_before` for an output sensor's noise `σ`; this one is bounded only
+    /// by what the recorded inputs leave unknown. Computed after the blind diagnosis, outside
+    /// its time; `None` without a finding.
+    pub noise_free_heldout_ratio: Option<f64>,
+    /// Catalogue effects: the same ratio with the hidden effect set to its truth instead of a
+    /// fitted value (what a perfect fit would show against the noise-free signals, on the
+    /// recorded inputs): on the quoted signal when the first finding names the hidden effect,
+    /// else on the most improved directly recorded signal of its own model.
+    pub noise_free_truth_ratio: Option<f64>,
+    /// Generator attempts (more than 1 when the drive was drawn again, see [`run_proof`]).
+    pub attempts: u32,
+}
+
+/// Scores the diagnosis `d` of a drive whose answer is `truth`; `drive_s` is the drive's
+/// duration.
+pub fn score(
+    case: &ProofCase,
+    truth: &ProofTruth,
+    d: &Diagnosis,
+    drive_s: f64,
+    seconds: f64,
+) -> CaseScore {
+    let first = d.findings.first();
+    let named = match (d.verdict, first) {
+        (Verdict::Unexplained, None) => "unexplained".to_string(),
+        (_, Some(f)) => f.effect.clone(),
+        (_, None) => "none".to_string(),
+    };
+    let hidden = truth.hidden.label();
+    let correct = named == hidden;
+    let ambiguous_correct =
+        !correct && first.is_some_and(|f| f.ambiguous_with.iter().any(|a| a == hidden));
+    let fitted_value = match (correct, truth.injection, first) {
+        (true, Some(inj), Some(f)) => f.parameters.get(inj.effect.parameter()).map(|p| p.value),
+        _ => None,
+    };
+    let parameter_error = match (fitted_value, truth.injection) {
+        (Some(v), Some(inj)) => {
+            let change = (inj.truth - inj.nominal).abs();
+            Some((v - inj.truth).abs() / change.max(f64::MIN_POSITIVE))
+        }
+        _ => None,
+    };
+    // the first finding's own model: axle effects change the bellow pressures
+    let ratios: Vec<f64> = first
+        .and_then(|f| {
+            let e = Effect::from_id(&f.effect).ok()?;
+            Some(own_ratios(e, &f.fit, contract_held).map(|r| r.1).collect())
+        })
+        .unwrap_or_default();
+    let heldout_ratio = ratios.iter().copied().reduce(f64::min);
+    let heldout_ratio_worst = ratios.iter().copied().reduce(f64::max);
+    let out_of_catalogue_located = truth.stretch.map(|st| {
+        d.mismatch
+            .iter()
+            .any(|m| m.start_m < st.end_m && m.end_m > st.start_m)
+    });
+    let out_of_catalogue_ok = out_of_catalogue_located
+        .map(|located| d.verdict == Verdict::Unexplained || (located && d.findings.is_empty()));
+    CaseScore {
+        index: case.index,
+        seed: case.seed,
+        rules: case.rules,
+        length_m: case.length_km * 1000.0,
+        drive_s,
+        hidden,
+        named,
+        findings: d.findings.iter().map(|f| f.effect.clone()).collect(),
+        verdict: d.verdict,
+        correct,
+        ambiguous_correct,
+        nominal_value: truth.injection.map(|i| i.nominal),
+        truth_value: truth.injection.map(|i| i.truth),
+        fitted_value,
+        parameter_error,
+        heldout_ratio,
+        heldout_ratio_worst,
+        out_of_catalogue_ok,
+        out_of_catalogue_located,
+        seconds,
+        oracle_heldout_gain: None,
+        oracle_visible: None,
+        noise_free_heldout_ratio: None,
+        noise_free_truth_ratio: None,
+        attempts: 1,
+    }
+}
+
+/// `(signal, held-out RMSE after/before)` of the signals of `e`'s own model in `fits` (axle
+/// effects: the bellow pressures; longitudinal: the others) with a non-zero error before —
+/// what [`score`] takes its held-out ratios from; `held` reads an entry's held-out RMSE
+/// `(before, after)`.
+pub(crate) fn own_ratios<T>(
+    e: Effect,
+    fits: &BTreeMap<String, T>,
+    held: fn(&T) -> (f64, f64),
+) -> impl Iterator<Item = (&str, f64)> {
+    let axle = e.domain() == Domain::Axle;
+    fits.iter()
+        .filter(move |(sig, _)| sig.starts_with("bellow_pressure") == axle)
+        .map(move |(sig, m)| (sig.as_str(), held(m)))
+        .filter(|(_, (before, _))| *before > 0.0)
+        .map(|(sig, (before, after))| (sig, after / before))
+}
+
+/// The held-out RMSE `(before, after)` of a contract fit entry.
+pub(crate) fn contract_held(m: &crate::diagnose::contract::FitEntry) -> (f64, f64) {
+    (m.heldout_before, m.heldout_after)
+}
+
+/// The signals a diagnosis compares that the generator knows without noise (the recorded
+/// speed, engine speed and bellow pressures, and the engine speed again as the clutch view's
+/// [`crate::diagnose::compare::ACTUATION_CHANNEL`]), on the rows of `log`: the truth `signals` read at
+/// each row's time (linear between the truth's samples; the log's clock starts at
+/// [`crate::synth::drive::DRIVE_START_NS`] = the truth's 0 s). The reference
+/// [`crate::diagnose::explain::fits_against`] takes to score a fit against the noise-free signals;
+/// `signals` from [`crate::synth::drive::drive_truth`].
+pub fn noise_free_reference(
+    log: &DriveLog,
+    signals: &crate::synth::can::Truth,
+) -> BTreeMap<String, Vec<f64>> {
+    const COMPARED: [&str; 5] = [
+        "vehicle_speed",
+        "engine_speed",
+        "bellow_pressure_front",
+        "bellow_pressure_rear",
+        "bellow_pressure_tag",
+    ];
+    let mut reference: BTreeMap<String, Vec<f64>> = signals
+        .columns
+        .iter()
+        .filter(|(name, _)| COMPARED.contains(&name.as_str()))
+        .map(|(name, y)| {
+            let values = log
+                .timestamp_ns
+                .iter()
+                .map(|&ns| {
+                    let t = (ns - crate::synth::drive::DRIVE_START_NS) as f64 * 1e-9;
+                    crate::signal::interp_linear(&signals.t_s, y, t)
+                })
+                .collect();
+            (name.clone(), values)
+        })
+        .collect();
+    if let Some(engine) = reference.get("engine_speed").cloned() {
+        reference.insert(
+            crate::diagnose::compare::ACTUATION_CHANNEL.to_string(),
+            engine,
+        );
+    }
+    reference
+}
