@@ -189,11 +189,16 @@ enum Command {
         #[command(flatten)]
         ingest: IngestArgs,
     },
-    /// The diagnosis proof (issue 7 point 6): synthetic drives each hiding one catalogue effect,
-    /// nothing, or an effect outside the catalogue; diagnosed blind and scored. Writes
-    /// proof.md, proof.json, proof_cases.parquet and every case's drive, answer and diagnosis.
+    /// The diagnosis proof: synthetic drives each hiding one catalogue effect, nothing, or an
+    /// effect outside the catalogue; diagnosed blind and scored. Writes proof.md, proof.json,
+    /// proof_cases.parquet and every case's drive, answer and diagnosis.
     Prove {
-        /// Number of drives (22 cover every effect once, four clean, two out-of-catalogue).
+        /// Where the drives come from: `independent`, the independent truth plant (the proof);
+        /// `model`, the diagnosis's own extended model (an inversion check).
+        #[arg(long, value_enum, default_value = "independent")]
+        truth: TruthArg,
+        /// Number of drives (a cycle covers every effect once, four clean drives and the
+        /// out-of-catalogue ones: 17 on the independent truth, 22 on the model).
         #[arg(long, default_value_t = 66)]
         drives: usize,
         /// Seed of the plan; drive i uses seed + i.
@@ -205,9 +210,10 @@ enum Command {
         /// Longest drive, km.
         #[arg(long, default_value_t = 6.0)]
         max_km: f64,
-        /// Nominal vehicle file (with [driveline] and [axles]).
-        #[arg(long, default_value = "fixtures/vehicles/seed002-6x2-diesel.toml")]
-        vehicle: PathBuf,
+        /// Nominal vehicle file (default: fixtures/vehicles/truck-40t.toml on the independent
+        /// truth, fixtures/vehicles/seed002-6x2-diesel.toml, which has [axles], on the model).
+        #[arg(long)]
+        vehicle: Option<PathBuf>,
         /// Output folder.
         #[arg(short, long, default_value = "out/proof")]
         output: PathBuf,
@@ -557,6 +563,12 @@ enum RoadCommand {
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
+enum TruthArg {
+    Independent,
+    Model,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
 enum DrivingArg {
     Drawn,
     Fixed,
@@ -830,17 +842,28 @@ fn run_diagnose(
 
 #[allow(clippy::too_many_arguments)]
 fn run_prove(
+    truth: TruthArg,
     drives: usize,
     seed: u64,
     min_km: f64,
     max_km: f64,
-    vehicle: PathBuf,
+    vehicle: Option<PathBuf>,
     output: PathBuf,
     jobs: Option<usize>,
     cases: Vec<usize>,
     driving: DrivingArg,
 ) -> Result<(), Failure> {
     use fleetdyn::proof::{run_proof, Driving, ProofConfig};
+    let base = match truth {
+        TruthArg::Independent => ProofConfig::independent(),
+        TruthArg::Model => ProofConfig::model(),
+    };
+    let vehicle = vehicle.unwrap_or_else(|| {
+        PathBuf::from(match truth {
+            TruthArg::Independent => "fixtures/vehicles/truck-40t.toml",
+            TruthArg::Model => "fixtures/vehicles/seed002-6x2-diesel.toml",
+        })
+    });
     if !(min_km.is_finite() && max_km.is_finite() && 0.5 <= min_km && min_km <= max_km) {
         return Err(usage(anyhow::anyhow!(
             "--min-km {min_km} and --max-km {max_km} must be finite with 0.5 <= min <= max"
@@ -864,7 +887,7 @@ fn run_prove(
             DrivingArg::Drawn => Driving::Drawn,
             DrivingArg::Fixed => Driving::Fixed,
         },
-        ..ProofConfig::default()
+        ..base
     };
     let jobs = jobs.unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -908,6 +931,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             ingest,
         } => run_diagnose(d, output, max_findings, ingest),
         Command::Prove {
+            truth,
             drives,
             seed,
             min_km,
@@ -918,7 +942,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             cases,
             driving,
         } => run_prove(
-            drives, seed, min_km, max_km, vehicle, output, jobs, cases, driving,
+            truth, drives, seed, min_km, max_km, vehicle, output, jobs, cases, driving,
         ),
         Command::Ingest {
             inputs,

@@ -44,7 +44,7 @@ impl CaseTruth {
         let length_km = run
             .as_ref()
             .and_then(|run| Some((run["length_km"][0].as_f64()?, run["length_km"][1].as_f64()?)))
-            .unwrap_or(ProofConfig::default().length_km);
+            .unwrap_or(ProofConfig::model().length_km);
         // the driving as the run recorded it (runs before it was recorded drove fixed)
         let driving = match run.as_ref().and_then(|run| run["driving"].as_str()) {
             Some("drawn") => Driving::Drawn,
@@ -55,7 +55,7 @@ impl CaseTruth {
             drives: index + 1,
             length_km,
             driving,
-            ..ProofConfig::default()
+            ..ProofConfig::model()
         };
         let pc = plan(&cfg).pop().ok_or("empty plan")?;
         let heading = format!(

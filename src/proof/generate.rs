@@ -1,10 +1,62 @@
-//! The proof's drives: one synthetic drive per case, its answer kept apart.
+//! The proof's drives: one synthetic drive per case, from the truth the proof is run on
+//! ([`TruthSource`]), its answer kept apart from the files the diagnosis reads.
 
 use super::*;
+use crate::model::catalogue::Effect;
+use crate::model::vehicle::VehicleFile;
 use crate::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
 use crate::synth::driver::DriverConfig;
-use crate::synth::effects::{EffectChoice, Injection, ResistanceStretch};
+use crate::synth::effects::{EffectChoice, Injection};
+use crate::truth::{Concealed, IndependentDriveConfig, OutOfCatalogue, TruthEffect, TruthError};
 use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a proof drive could not be generated.
+#[derive(Debug, Error)]
+pub enum GenerateError {
+    /// The model-based generator failed.
+    #[error(transparent)]
+    Model(#[from] DriveError),
+    /// The independent truth failed.
+    #[error(transparent)]
+    Independent(#[from] TruthError),
+    /// The vehicle file could not be read.
+    #[error(transparent)]
+    Vehicle(#[from] crate::model::vehicle::VehicleError),
+    /// The answer could not be written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl GenerateError {
+    /// The drive's own CAN log was rejected by ingest (a dropout longer than ingest's limit on
+    /// a required channel): the case may be drawn again with another seed.
+    pub fn is_ingest_rejection(&self) -> bool {
+        use crate::synth::can::SynthError;
+        matches!(
+            self,
+            GenerateError::Model(
+                DriveError::Can(SynthError::Ingest(_))
+                    | DriveError::Export(crate::synth::export::ExportError::Ingest { .. })
+            ) | GenerateError::Independent(TruthError::Can(SynthError::Ingest(_)))
+        )
+    }
+}
+
+/// A stretch of road an out-of-catalogue effect acts on, m of travelled distance.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Stretch {
+    /// Start, m.
+    pub start_m: f64,
+    /// End, m.
+    pub end_m: f64,
+}
 
 /// The answer of a generated proof drive.
 #[derive(Debug, Clone, PartialEq)]
@@ -13,8 +65,8 @@ pub struct ProofTruth {
     pub hidden: Hidden,
     /// The injection, for a catalogue effect.
     pub injection: Option<Injection>,
-    /// The stretch, for the out-of-catalogue effect.
-    pub stretch: Option<ResistanceStretch>,
+    /// The stretch, for an out-of-catalogue effect.
+    pub stretch: Option<Stretch>,
 }
 
 /// A generated proof drive.
@@ -53,12 +105,102 @@ pub fn drive_config(case: &ProofCase, cfg: &ProofConfig) -> DriveConfig {
     dc
 }
 
-/// Generates `case` with the vehicle of `vehicle`: the drive into `drives_dir/<index>/`, the
-/// answer into `answers_dir/<index>.json`.
+/// Generates `case` with the vehicle of `vehicle` from `cfg`'s truth: the drive into
+/// `drives_dir/<index>/`, the answer into `answers_dir/<index>.json`.
 ///
 /// # Errors
-/// [`DriveError`] from the generator.
+/// [`GenerateError`] from the generator.
 pub fn generate(
+    case: &ProofCase,
+    vehicle: &Path,
+    cfg: &ProofConfig,
+    drives_dir: &Path,
+    answers_dir: &Path,
+) -> Result<GeneratedCase, GenerateError> {
+    match cfg.truth {
+        TruthSource::Model => Ok(generate_model(case, vehicle, cfg, drives_dir, answers_dir)?),
+        TruthSource::Independent => {
+            generate_independent(case, vehicle, cfg, drives_dir, answers_dir)
+        }
+    }
+}
+
+/// [`generate`] on the independent truth: the truck drawn around the vehicle file within
+/// its tolerances, the case's concealed effect, `cfg`'s CAN dropouts; logged, ingested and
+/// written as the model-based drives are.
+fn generate_independent(
+    case: &ProofCase,
+    vehicle: &Path,
+    cfg: &ProofConfig,
+    drives_dir: &Path,
+    answers_dir: &Path,
+) -> Result<GeneratedCase, GenerateError> {
+    let name = format!("case-{:04}", case.index);
+    let dir = drives_dir.join(&name);
+    let answer = answers_dir.join(format!("{name}.json"));
+    let vf = VehicleFile::load(vehicle)?;
+    let effect = match case.hidden {
+        Hidden::Nothing => TruthEffect::None,
+        Hidden::Effect(e) => TruthEffect::Catalogue(e.id().to_string(), None),
+        Hidden::OutOfCatalogue(kind) => TruthEffect::OutOfCatalogue(match kind {
+            Outside::WetSurface | Outside::LocalRollingResistance => OutOfCatalogue::WetSurface,
+            Outside::StuckSpeedSensor => OutOfCatalogue::StuckSpeedSensor,
+            Outside::HiddenRetarder => OutOfCatalogue::HiddenRetarder,
+        }),
+    };
+    let mut drive = crate::truth::simulate_independent_drive(
+        &vf,
+        &IndependentDriveConfig {
+            effect,
+            ..IndependentDriveConfig::new(case.rules, case.length_km, case.seed)
+        },
+    )?;
+    drive.bus = drive.bus.clone().with_dropouts(cfg.dropouts);
+    crate::truth::write_independent_drive(&drive, vehicle, &dir, case.seed)?;
+    // the answer goes apart from the drive's folder, which the diagnosis reads
+    let beside = dir.join("answer.json");
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| GenerateError::Io { path, source }
+    };
+    std::fs::create_dir_all(answers_dir).map_err(io(answers_dir))?;
+    std::fs::rename(&beside, &answer).map_err(io(&answer))?;
+    let (injection, stretch) = match &drive.concealed {
+        Concealed::None => (None, None),
+        Concealed::Catalogue {
+            id, nominal, truth, ..
+        } => (
+            Effect::from_id(id).ok().map(|effect| Injection {
+                effect,
+                nominal: *nominal,
+                truth: *truth,
+            }),
+            None,
+        ),
+        Concealed::OutOfCatalogue { start_m, end_m, .. } => (
+            None,
+            Some(Stretch {
+                start_m: *start_m,
+                end_m: *end_m,
+            }),
+        ),
+    };
+    Ok(GeneratedCase {
+        case: case.clone(),
+        drive: dir.join("drive.parquet"),
+        vehicle: dir.join("vehicle.toml"),
+        answer,
+        truth: ProofTruth {
+            hidden: case.hidden,
+            injection,
+            stretch,
+        },
+        signals: drive.truth,
+    })
+}
+
+/// [`generate`] on the model truth.
+fn generate_model(
     case: &ProofCase,
     vehicle: &Path,
     cfg: &ProofConfig,
@@ -71,7 +213,7 @@ pub fn generate(
     let choice = match case.hidden {
         Hidden::Nothing => EffectChoice::None,
         Hidden::Effect(e) => EffectChoice::Given(e, None),
-        Hidden::OutOfCatalogue => EffectChoice::LocalRollingResistance,
+        Hidden::OutOfCatalogue(_) => EffectChoice::LocalRollingResistance,
     };
     let r = synth_drive(
         vehicle,
@@ -93,7 +235,10 @@ pub fn generate(
         truth: ProofTruth {
             hidden: case.hidden,
             injection: r.injection,
-            stretch: r.truth.stretch,
+            stretch: r.truth.stretch.map(|st| Stretch {
+                start_m: st.start_m,
+                end_m: st.end_m,
+            }),
         },
         signals: crate::synth::drive::drive_truth(&r.drive, r.axles.as_ref()),
     })

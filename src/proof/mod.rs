@@ -43,8 +43,10 @@ pub mod run;
 pub mod score;
 pub mod summary;
 
-pub use generate::{drive_config, generate, GeneratedCase, ProofTruth};
-pub use plan::{drawn_driver, plan, Driving, Hidden, ProofCase, ProofConfig};
+pub use generate::{drive_config, generate, GenerateError, GeneratedCase, ProofTruth, Stretch};
+pub use plan::{
+    drawn_driver, plan, Driving, Hidden, Outside, ProofCase, ProofConfig, TruthSource,
+};
 pub use run::{run_proof, ProofRun, ProveError, MAX_ATTEMPTS, RESEED_STRIDE};
 pub use score::{noise_free_reference, score, CaseScore};
 pub use summary::{cases_markdown, summarize, FailedCase, ProofSummary};

@@ -1,6 +1,6 @@
 //! The proof's plan: which drive hides which effect, on which road, with which driver.
 
-use crate::model::catalogue::Effect;
+use crate::model::catalogue::{Domain, Effect};
 use crate::road::rng::Xoshiro256StarStar;
 use crate::synth::can::Dropouts;
 use crate::synth::driver::{DriverConfig, LiftOffs};
@@ -27,13 +27,23 @@ pub struct ProofConfig {
     /// An index at or past `drives` matches no case and runs nothing (`fleetdyn prove --cases`
     /// rejects it with exit 2).
     pub only: Vec<usize>,
+    /// Where the drives' truth comes from.
+    pub truth: TruthSource,
 }
 
 impl Default for ProofConfig {
-    /// 66 drives: three cycles of every effect once, four clean drives and two with the
-    /// out-of-catalogue effect (48 + 12 + 6), seed 1, 3–6 km, dropouts starting with
-    /// probability 0.001 per message, 0.3 s long on average.
+    /// [`ProofConfig::independent`].
     fn default() -> Self {
+        Self::independent()
+    }
+}
+
+impl ProofConfig {
+    /// The proof on the independent truth ([`crate::truth`]): 66 drives in cycles of the ten
+    /// longitudinal catalogue effects, four clean drives and three out-of-catalogue ones (one
+    /// of each kind in turn), so 16 of 66 drives (24 %) hide nothing; seed 1, 3–6 km, dropouts
+    /// starting with probability 0.001 per message, 0.3 s long on average.
+    pub fn independent() -> Self {
         Self {
             drives: 66,
             seed: 1,
@@ -43,9 +53,89 @@ impl Default for ProofConfig {
                 mean_length_s: 0.3,
             },
             clean_per_cycle: 4,
-            out_of_catalogue_per_cycle: 2,
+            out_of_catalogue_per_cycle: 3,
             driving: Driving::Drawn,
             only: Vec::new(),
+            truth: TruthSource::Independent,
+        }
+    }
+
+    /// The inversion check on the diagnosis's own extended model ([`crate::synth::effects`]):
+    /// 66 drives, three cycles of all sixteen effects, four clean drives and two with the
+    /// out-of-catalogue stretch of extra rolling resistance (48 + 12 + 6), otherwise as
+    /// [`ProofConfig::independent`].
+    pub fn model() -> Self {
+        Self {
+            out_of_catalogue_per_cycle: 2,
+            truth: TruthSource::Model,
+            ..Self::independent()
+        }
+    }
+
+    /// The catalogue effects the plan cycles through: all sixteen on the model truth, the ten
+    /// longitudinal ones on the independent truth (it simulates no axle loads).
+    pub fn effects(&self) -> Vec<Effect> {
+        match self.truth {
+            TruthSource::Model => Effect::ALL.to_vec(),
+            TruthSource::Independent => Effect::ALL
+                .into_iter()
+                .filter(|e| e.domain() == Domain::Longitudinal)
+                .collect(),
+        }
+    }
+}
+
+/// Where a proof's drives come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TruthSource {
+    /// The independent truth plant ([`crate::truth`]): its own driveline, tyres, clutch,
+    /// engine, driver and gearbox, with the truck's parameters drawn around the vehicle file
+    /// within tolerances on every drive. The proof.
+    Independent,
+    /// The diagnosis's own extended model ([`crate::synth::effects`]): an inversion check.
+    Model,
+}
+
+impl TruthSource {
+    /// The `--truth` value.
+    pub fn label(self) -> &'static str {
+        match self {
+            TruthSource::Independent => "independent",
+            TruthSource::Model => "model",
+        }
+    }
+}
+
+/// An effect outside the catalogue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outside {
+    /// Model truth: extra rolling resistance on one stretch of road.
+    LocalRollingResistance,
+    /// Independent truth: a wet or broken surface (extra rolling resistance) on one stretch.
+    WetSurface,
+    /// Independent truth: the wheel-speed channel stuck on one stretch, then jumping back.
+    StuckSpeedSensor,
+    /// Independent truth: a retarder the logs do not report, dragging on one stretch.
+    HiddenRetarder,
+}
+
+impl Outside {
+    /// The kinds the independent truth conceals, in the plan's turn.
+    pub const INDEPENDENT: [Outside; 3] = [
+        Outside::WetSurface,
+        Outside::StuckSpeedSensor,
+        Outside::HiddenRetarder,
+    ];
+
+    /// Identifier in answers and case tables.
+    pub fn id(self) -> &'static str {
+        match self {
+            Outside::LocalRollingResistance => "local_rolling_resistance",
+            Outside::WetSurface => "wet_surface",
+            Outside::StuckSpeedSensor => "stuck_speed_sensor",
+            Outside::HiddenRetarder => "hidden_retarder",
         }
     }
 }
@@ -113,8 +203,8 @@ pub enum Hidden {
     Nothing,
     /// A catalogue effect.
     Effect(Effect),
-    /// The out-of-catalogue stretch of extra rolling resistance.
-    OutOfCatalogue,
+    /// An effect outside the catalogue, on one stretch of the road.
+    OutOfCatalogue(Outside),
 }
 
 impl Hidden {
@@ -123,7 +213,7 @@ impl Hidden {
         match self {
             Hidden::Nothing => "none",
             Hidden::Effect(e) => e.id(),
-            Hidden::OutOfCatalogue => "out_of_catalogue",
+            Hidden::OutOfCatalogue(_) => "out_of_catalogue",
         }
     }
 }
@@ -146,14 +236,22 @@ pub struct ProofCase {
 /// The deterministic plan of a proof (see the module documentation).
 pub fn plan(cfg: &ProofConfig) -> Vec<ProofCase> {
     let mut rng = Xoshiro256StarStar::seed_from_u64(cfg.seed ^ 0x9E00_F00D);
+    let effects = cfg.effects();
+    let mut outside_turn = 0;
     (0..cfg.drives)
         .map(|i| {
-            let cycle = Effect::ALL.len() + cfg.clean_per_cycle + cfg.out_of_catalogue_per_cycle;
+            let cycle = effects.len() + cfg.clean_per_cycle + cfg.out_of_catalogue_per_cycle;
             let slot = i % cycle.max(1);
-            let hidden = match Effect::ALL.get(slot) {
+            let hidden = match effects.get(slot) {
                 Some(e) => Hidden::Effect(*e),
-                None if slot < Effect::ALL.len() + cfg.clean_per_cycle => Hidden::Nothing,
-                None => Hidden::OutOfCatalogue,
+                None if slot < effects.len() + cfg.clean_per_cycle => Hidden::Nothing,
+                None => Hidden::OutOfCatalogue(match cfg.truth {
+                    TruthSource::Model => Outside::LocalRollingResistance,
+                    TruthSource::Independent => {
+                        outside_turn += 1;
+                        Outside::INDEPENDENT[(outside_turn - 1) % Outside::INDEPENDENT.len()]
+                    }
+                }),
             };
             let r = rng.next_u64() % 10;
             let rules = match r {
@@ -219,7 +317,7 @@ mod tests {
 
     #[test]
     fn plan_cycles_the_catalogue_and_is_deterministic() {
-        let cfg = ProofConfig::default();
+        let cfg = ProofConfig::model();
         let p = plan(&cfg);
         assert_eq!(p, plan(&cfg));
         assert_eq!(p.len(), 66);
@@ -232,10 +330,43 @@ mod tests {
         assert_eq!(p.iter().filter(|c| c.hidden == Hidden::Nothing).count(), 12);
         assert_eq!(
             p.iter()
-                .filter(|c| c.hidden == Hidden::OutOfCatalogue)
+                .filter(|c| matches!(c.hidden, Hidden::OutOfCatalogue(_)))
                 .count(),
             6
         );
         assert!(p.iter().all(|c| c.length_km >= 3.0 && c.length_km <= 6.0));
+    }
+
+    #[test]
+    fn the_independent_plan_cycles_the_longitudinal_effects_with_a_fifth_of_clean_drives() {
+        let cfg = ProofConfig::default();
+        assert_eq!(cfg.truth, TruthSource::Independent);
+        let p = plan(&cfg);
+        assert_eq!(p, plan(&cfg));
+        let longitudinal: Vec<Effect> = Effect::ALL
+            .into_iter()
+            .filter(|e| e.domain() == Domain::Longitudinal)
+            .collect();
+        assert_eq!(longitudinal.len(), 10);
+        for e in Effect::ALL {
+            let n = p.iter().filter(|c| c.hidden == Hidden::Effect(e)).count();
+            // 66 = 3 cycles of 17 + 15: each longitudinal effect 4 times, no axle effect
+            assert_eq!(n, if longitudinal.contains(&e) { 4 } else { 0 }, "{}", e.id());
+        }
+        let clean = p.iter().filter(|c| c.hidden == Hidden::Nothing).count();
+        assert_eq!(clean, 16);
+        assert!(clean as f64 >= 0.2 * p.len() as f64);
+        for kind in Outside::INDEPENDENT {
+            let n = p
+                .iter()
+                .filter(|c| c.hidden == Hidden::OutOfCatalogue(kind))
+                .count();
+            assert!(n >= 3, "{}: {n}", kind.id());
+        }
+        // the model plan's roads, lengths and seeds are the same drive for drive
+        let m = plan(&ProofConfig::model());
+        for (a, b) in p.iter().zip(&m) {
+            assert_eq!((a.seed, a.rules, a.length_km), (b.seed, b.rules, b.length_km));
+        }
     }
 }

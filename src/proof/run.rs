@@ -6,7 +6,6 @@ use super::*;
 use crate::diagnose::contract::Diagnosis;
 use crate::model::catalogue::Effect;
 use crate::model::vehicle::VehicleFile;
-use crate::synth::drive::DriveError;
 use crate::table::DriveLog;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -51,6 +50,8 @@ pub struct ProofRun {
     /// How the drives were driven (`--driving`): with the seed and the lengths it regenerates
     /// any case's drive.
     pub driving: Driving,
+    /// Where the drives' truth came from (`--truth`).
+    pub truth: TruthSource,
     /// Worker threads.
     pub jobs: usize,
     /// Scored cases, in plan order.
@@ -87,10 +88,7 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
         c.seed = case.seed + u64::from(attempt) * RESEED_STRIDE;
         match generate(&c, vehicle, cfg, &out.join("drives"), &out.join("answers")) {
             Ok(g) => break g,
-            Err(
-                DriveError::Can(crate::synth::can::SynthError::Ingest(_))
-                | DriveError::Export(crate::synth::export::ExportError::Ingest { .. }),
-            ) if attempt + 1 < MAX_ATTEMPTS => {
+            Err(e) if e.is_ingest_rejection() && attempt + 1 < MAX_ATTEMPTS => {
                 attempt += 1;
             }
             Err(e) => return fail("generate", e.to_string()),
@@ -271,6 +269,7 @@ pub fn run_proof(
         drives: cfg.drives,
         length_km: cfg.length_km,
         driving: cfg.driving,
+        truth: cfg.truth,
         jobs,
         scores,
         failed,
@@ -284,11 +283,12 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
     use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
     let io = |path: PathBuf| move |source| ProveError::Io { path, source };
     let md = format!(
-        "# Diagnosis proof\n\n`fleetdyn prove --drives {} --seed {} --min-km {} --max-km {} \
-         --driving {}{}`: \
+        "# Diagnosis proof\n\n`fleetdyn prove --truth {} --drives {} --seed {} --min-km {} \
+         --max-km {} --driving {}{}`: \
          {} synthetic drives, each hiding one catalogue effect (random magnitude), nothing, or \
-         the out-of-catalogue stretch of extra rolling resistance; diagnosed blind.\n\n{}\n\
+         an effect outside the catalogue on one stretch; diagnosed blind. {}\n\n{}\n\
          ## Cases\n\n{}",
+        cfg.truth.label(),
         cfg.drives,
         cfg.seed,
         cfg.length_km.0,
@@ -307,6 +307,17 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
             )
         },
         run.summary.drives,
+        match cfg.truth {
+            TruthSource::Independent => {
+                "The drives come from the independent truth plant, which shares no code with \
+                 the models the diagnosis fits; the truck's parameters are drawn around the \
+                 vehicle file within its tolerances on every drive."
+            }
+            TruthSource::Model => {
+                "The drives come from the diagnosis's own extended model: this is an \
+                 inversion check, not a proof."
+            }
+        },
         run.summary.to_markdown(),
         cases_markdown(&run.scores, &run.failed)
     );

@@ -48,6 +48,9 @@ pub struct ProofSummary {
     pub false_positive_rate: f64,
     /// No-effect drives with the verdict `unexplained`, share.
     pub clean_unexplained_rate: f64,
+    /// No-effect drives with any finding or the verdict `unexplained` (a false alarm either
+    /// way), share.
+    pub false_alarm_rate: f64,
     /// Median parameter error of correctly named drives.
     pub median_parameter_error: Option<f64>,
     /// Correctly named drives whose quoted signal's held-out RMSE at least halved, share.
@@ -174,6 +177,13 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
                 .count(),
             n_clean,
         ),
+        false_alarm_rate: share(
+            clean
+                .iter()
+                .filter(|s| !s.findings.is_empty() || s.verdict == Verdict::Unexplained)
+                .count(),
+            n_clean,
+        ),
         median_parameter_error: median(correct.iter().filter_map(|s| s.parameter_error).collect()),
         heldout_halved: share(
             correct
@@ -296,6 +306,11 @@ impl ProofSummary {
             s,
             "| no-effect drives with the verdict unexplained | {} |",
             pct(self.clean_unexplained_rate)
+        );
+        let _ = writeln!(
+            s,
+            "| false alarms on no-effect drives (a finding or unexplained) | {} |",
+            pct(self.false_alarm_rate)
         );
         let _ = writeln!(
             s,

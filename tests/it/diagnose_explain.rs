@@ -174,6 +174,9 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
     for f in &x.findings {
         eprintln!("{}: {}", e.id(), f.sentence);
     }
+    for c in &x.consistent {
+        eprintln!("{}: consistent: {}", e.id(), c.sentence);
+    }
     eprintln!(
         "{}: {:.0} s drive explained in {:.1} s",
         e.id(),

@@ -347,7 +347,7 @@ fn proof_drive(seed: u64, case: usize) -> (VehicleFile, fleetdyn::table::DriveLo
     let dir = tempfile::tempdir().unwrap();
     let cfg = ProofConfig {
         seed,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     };
     let case = plan(&cfg).into_iter().nth(case).unwrap();
     let g = generate(

@@ -74,7 +74,7 @@ fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
     let (dir, run) = proof(&ProofConfig {
         drives: 22,
         driving: Driving::Fixed,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     println!("{}", run.summary.to_markdown());
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
@@ -202,7 +202,7 @@ fn identified_drawn(hidden: &str) -> bool {
 fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_drives() {
     let (dir, run) = proof(&ProofConfig {
         drives: 22,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     println!("{}", run.summary.to_markdown());
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
@@ -286,7 +286,7 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
     let (_dir, run) = proof(&ProofConfig {
         only: vec![27, 48, 49, 60],
         driving: Driving::Fixed,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     let by = |i: usize| run.scores.iter().find(|s| s.index == i).unwrap();
@@ -339,7 +339,7 @@ fn a_large_delay_is_fitted_in_its_own_basin() {
         seed: 1001,
         only: vec![27],
         driving: Driving::Fixed,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     let delay = &run.scores[0];
@@ -364,7 +364,7 @@ fn the_screen_probes_threshold_effects_across_their_range() {
         seed: 5001,
         only: vec![49, 53],
         driving: Driving::Fixed,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     for (s, hidden) in run.scores.iter().zip(["signal_delay", "clutch_slip"]) {
@@ -396,7 +396,7 @@ fn a_worn_clutch_is_fitted_in_its_own_basin() {
                 seed,
                 only: vec![31],
                 driving: Driving::Drawn,
-                ..ProofConfig::default()
+                ..ProofConfig::model()
             },
             0.75,
         );
@@ -436,7 +436,7 @@ fn worn_clutches_missed_on_short_drives_are_named_on_longer_ones() {
                 only: vec![9],
                 length_km: (10.0, 20.0),
                 driving: Driving::Drawn,
-                ..ProofConfig::default()
+                ..ProofConfig::model()
             },
             0.5,
         );
@@ -450,7 +450,7 @@ fn named_slope_case(seed: u64, case: usize, driving: Driving) -> (CaseScore, ser
         seed,
         only: vec![case],
         driving,
-        ..ProofConfig::default()
+        ..ProofConfig::model()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
     let s = run.scores[0].clone();
