@@ -21,4 +21,5 @@ pub mod sim;
 pub mod synth;
 pub mod table;
 pub mod time_fmt;
+pub mod truth;
 pub mod units;
