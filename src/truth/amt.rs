@@ -11,10 +11,10 @@
 //!   two if one is not enough to reach 1100 rpm); at least 3 s between shifts (no hunting).
 //!   `pedal` is the driver's demand as a fraction of full load.
 //! - **Shift sequence**: torque ramp-down to 0 in 0.25 s → clutch open in 0.15 s → **neutral**
-//!   (gear out; CAN gear 0): selector travel 0.15 s, then the synchroniser brings the input
+//!   (gear out; CAN gear 0): selector travel 0.3 s, then the synchroniser brings the input
 //!   shaft to the new gear's speed (the plant engages at the speed match, a located event) while
-//!   the engine is rev-matched to it; neutral lasts at least 0.3 s → clutch close in 0.3 s →
-//!   torque ramp-up in 0.3 s.
+//!   the engine is rev-matched to it; neutral so lasts 0.3 s plus the synchronisation (≤ 0.3 s
+//!   for the largest speed step) → clutch close in 0.3 s → torque ramp-up in 0.3 s.
 //! - **Launch** from standstill in the start gear (1st on grades above 3 %, else 2nd): the
 //!   engine is governed to 1000 rpm; the clutch travel is set for a clutch torque that rises at
 //!   2000 N·m/s up to the driver's demand, computed with the capacity the AMT believes (the
@@ -240,8 +240,7 @@ impl Amt {
                 };
                 engine = i.demand_nm.min(self.torque_limit(g));
                 let start = self.start_gear(i.slope);
-                if i.w_e < 720.0 * RPM && (g <= start || i.v < 3.0) || (i.braking && i.v < 3.0)
-                {
+                if i.w_e < 720.0 * RPM && (g <= start || i.v < 3.0) || (i.braking && i.v < 3.0) {
                     self.enter(Phase::Open, t);
                 } else if t - self.last_shift_t > 3.0 {
                     let up = (1250.0 + 400.0 * i.pedal) * RPM;
@@ -282,11 +281,11 @@ impl Amt {
                 } else {
                     self.govern(target_w.max(self.idle), i.w_e, 0.0, dt)
                 };
-                if tp >= 0.15 && !self.sync_started {
+                if tp >= 0.3 && !self.sync_started {
                     action = GearAction::StartSync;
                     self.sync_started = true;
                 }
-                if engaged == Some(ng) && tp >= 0.3 {
+                if engaged == Some(ng) {
                     self.last_shift_t = t;
                     if i.stopped || i.v < 1.0 {
                         self.enter(Phase::Open, t);

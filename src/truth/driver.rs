@@ -14,7 +14,8 @@
 //! at the road end. The driver dwells 8–25 s (uniform) at each stop, holding the brake.
 //!
 //! # Control
-//! Desired acceleration `a = clamp(0.5 1/s·(v_ref − v) + I, −2, 1) m/s²` with a slow integral
+//! Desired acceleration `a = clamp(a_ff + 0.8 1/s·(v_ref − v) + I, −2, 1) m/s²` (a_ff = −a_b
+//! on the braking curve, −2 m/s² within 0.5 m of the stop point, else 0) with a slow integral
 //! `İ = 0.02 1/s²·(v_ref − v)` (|I| ≤ 0.3 m/s²) for the bias of the driver's force estimate;
 //! force `F = m_n·a + F_res(v, slope)` from the nominal truck (the driver knows the nominal
 //! resistances and sees the grade); engine net torque `F·r_w/(i_t·i_f)` in the current gear
@@ -142,7 +143,17 @@ impl Driver {
         let v_ref = self.v_ref(x);
         let e = v_ref - v;
         self.integ = (self.integ + 0.02 * e * dt).clamp(-0.3, 0.3);
-        let a = (0.5 * e + self.integ).clamp(-2.0, 1.0);
+        // on the braking curve the reference decelerates at A_BRAKE: feed it forward; past the
+        // stop point stop firmly
+        let next = self.stops.get(self.next).copied().unwrap_or(f64::INFINITY);
+        let a_ff = if x >= next - 0.5 {
+            -2.0
+        } else if v_ref < self.cruise - 1e-9 {
+            -A_BRAKE
+        } else {
+            0.0
+        };
+        let a = (a_ff + 0.8 * e + self.integ).clamp(-2.0, 1.0);
         let f_res = 0.5 * p.rho_air * p.c_w_a_f_m2 * v * v
             + (p.c_r1 + p.c_r2_s_per_m * v) * mg * cos_a
             + mg * slope * cos_a;

@@ -79,9 +79,15 @@ impl OutOfCatalogue {
     /// What it is, in words.
     pub fn description(self) -> &'static str {
         match self {
-            OutOfCatalogue::WetSurface => "wet or broken surface: extra rolling resistance on one stretch",
-            OutOfCatalogue::StuckSpeedSensor => "wheel-speed channel stuck on one stretch, then jumps back",
-            OutOfCatalogue::HiddenRetarder => "a retarder the logs do not report, dragging on one stretch",
+            OutOfCatalogue::WetSurface => {
+                "wet or broken surface: extra rolling resistance on one stretch"
+            }
+            OutOfCatalogue::StuckSpeedSensor => {
+                "wheel-speed channel stuck on one stretch, then jumps back"
+            }
+            OutOfCatalogue::HiddenRetarder => {
+                "a retarder the logs do not report, dragging on one stretch"
+            }
         }
     }
 }
@@ -175,7 +181,10 @@ fn signed(rng: &mut Xoshiro256StarStar, lo: f64, hi: f64) -> f64 {
 
 fn stretch(rng: &mut Xoshiro256StarStar, length_m: f64, len: f64) -> (f64, f64) {
     let len = len.min(0.9 * length_m);
-    let a = rng.uniform(0.05 * length_m, (0.95 * length_m - len).max(0.05 * length_m));
+    let a = rng.uniform(
+        0.05 * length_m,
+        (0.95 * length_m - len).max(0.05 * length_m),
+    );
     (a, a + len)
 }
 
@@ -315,7 +324,8 @@ pub fn apply(
                 }
                 _ => {
                     // clutch_slip
-                    let c = value.unwrap_or_else(|| nominal.clutch_kinetic_nm * rng.uniform(0.55, 0.65));
+                    let c = value
+                        .unwrap_or_else(|| nominal.clutch_kinetic_nm * rng.uniform(0.55, 0.65));
                     p.clutch_kinetic_nm = c;
                     p.clutch_static_ratio = 1.0;
                     (nominal.clutch_kinetic_nm, c)

@@ -147,7 +147,11 @@ impl EventRk4 {
         while *t < t_end {
             let h = self.h_s.min(t_end - *t);
             // the last sliver of a span: snap to t_end
-            let h = if t_end - (*t + h) < 1e-12 { t_end - *t } else { h };
+            let h = if t_end - (*t + h) < 1e-12 {
+                t_end - *t
+            } else {
+                h
+            };
             events += self.step(sys, t, x, h)?;
             if let Some(index) = x.iter().position(|v| !v.is_finite()) {
                 return Err(IntegratorError::NonFinite {
@@ -197,7 +201,11 @@ impl EventRk4 {
                     return Ok(count);
                 }
                 Some((j, s)) => {
-                    *x = if s >= rest { x1 } else { rk4_step(&*sys, *t, x, s) };
+                    *x = if s >= rest {
+                        x1
+                    } else {
+                        rk4_step(&*sys, *t, x, s)
+                    };
                     *t = if s >= rest { t_target } else { *t + s };
                     sys.on_event(j, *t, x);
                     count += 1;

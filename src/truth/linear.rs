@@ -7,9 +7,12 @@
 //! - [`oscillatory_modes`]: eigenvalues λ = σ ± iω_d of A (nalgebra's real Schur form); each
 //!   complex pair gives the natural frequency `f_n = |λ|/2π` (Hz) and damping ratio
 //!   `ζ = −σ/|λ|`.
-//! - [`fit_damped`]: the same two numbers from a sampled free response, by a second-order
-//!   Prony fit with offset: least squares on `y_k = a1·y_{k−1} + a2·y_{k−2} + c`; the roots z of
-//!   `z² − a1 z − a2` give `λ = ln(z)/Δt`.
+//! - [`fit_damped`] / [`fit_modes`]: the same numbers from a sampled free response, by a Prony
+//!   fit of order n with offset (Prony 1795; Hildebrand, "Introduction to Numerical Analysis",
+//!   McGraw-Hill, §9.4): least squares on `y_k = a1·y_{k−1} + … + an·y_{k−n} + c`; the roots z
+//!   of `zⁿ − a1 zⁿ⁻¹ − … − an` (companion-matrix eigenvalues) give `λ = ln(z)/Δt`. Order 2
+//!   fits one damped oscillation; a higher order also absorbs slow real modes (e.g. the tyre
+//!   relaxation, rate |v|/σ) that would otherwise bias it.
 
 use super::integrator::HybridSystem;
 use super::plant::{Plant, State, N};
@@ -62,34 +65,53 @@ pub fn oscillatory_modes(a: &DMatrix<f64>) -> Vec<Mode> {
 /// Second-order Prony fit of samples `y` spaced `dt` (module doc); `None` if the fit has no
 /// complex root pair or is singular.
 pub fn fit_damped(y: &[f64], dt: f64) -> Option<Mode> {
-    if y.len() < 5 {
-        return None;
+    fit_modes(y, dt, 2).into_iter().next()
+}
+
+/// Prony fit of order `order` of samples `y` spaced `dt` (module doc): the oscillatory modes
+/// found (one per complex root pair), by increasing frequency; empty if singular or too short.
+pub fn fit_modes(y: &[f64], dt: f64, order: usize) -> Vec<Mode> {
+    if order == 0 || y.len() < 3 * order + 2 {
+        return Vec::new();
     }
-    let n = y.len() - 2;
-    let mut m = DMatrix::zeros(n, 3);
+    let n = y.len() - order;
+    let mut m = DMatrix::zeros(n, order + 1);
     let mut b = DVector::zeros(n);
     for k in 0..n {
-        m[(k, 0)] = y[k + 1];
-        m[(k, 1)] = y[k];
-        m[(k, 2)] = 1.0;
-        b[k] = y[k + 2];
+        for i in 0..order {
+            m[(k, i)] = y[k + order - 1 - i];
+        }
+        m[(k, order)] = 1.0;
+        b[k] = y[k + order];
     }
-    let sol = m.svd(true, true).solve(&b, 1e-14).ok()?;
-    let (a1, a2) = (sol[0], sol[1]);
-    let disc = a1 * a1 + 4.0 * a2;
-    if disc >= 0.0 {
-        return None;
+    let Ok(sol) = m.svd(true, true).solve(&b, 1e-14) else {
+        return Vec::new();
+    };
+    // companion matrix of z^n − a1 z^(n−1) − … − an
+    let mut c = DMatrix::zeros(order, order);
+    for i in 0..order {
+        c[(0, i)] = sol[i];
+        if i + 1 < order {
+            c[(i + 1, i)] = 1.0;
+        }
     }
-    let re = a1 / 2.0;
-    let im = (-disc).sqrt() / 2.0;
-    let r = (re * re + im * im).sqrt();
-    let sigma = r.ln() / dt;
-    let wd = im.atan2(re) / dt;
-    let w = (sigma * sigma + wd * wd).sqrt();
-    Some(Mode {
-        freq_hz: w / std::f64::consts::TAU,
-        damping: -sigma / w,
-    })
+    let mut out: Vec<Mode> = c
+        .complex_eigenvalues()
+        .iter()
+        .filter(|z| z.im > 1e-12)
+        .map(|z| {
+            let r = (z.re * z.re + z.im * z.im).sqrt();
+            let sigma = r.ln() / dt;
+            let wd = z.im.atan2(z.re) / dt;
+            let w = (sigma * sigma + wd * wd).sqrt();
+            Mode {
+                freq_hz: w / std::f64::consts::TAU,
+                damping: -sigma / w,
+            }
+        })
+        .collect();
+    out.sort_by(|p, q| p.freq_hz.total_cmp(&q.freq_hz));
+    out
 }
 
 #[cfg(test)]
@@ -110,6 +132,9 @@ mod tests {
             .collect();
         let m = fit_damped(&y, dt).unwrap();
         // noise-free samples of an exact second-order response: the fit is exact to round-off
-        assert!((m.freq_hz - f).abs() < 1e-8 && (m.damping - z).abs() < 1e-8, "{m:?}");
+        assert!(
+            (m.freq_hz - f).abs() < 1e-8 && (m.damping - z).abs() < 1e-8,
+            "{m:?}"
+        );
     }
 }

@@ -353,7 +353,10 @@ impl TruckParams {
             ("damper.k1", self.damper.k1_nm_per_rad),
             ("damper.k2", self.damper.k2_nm_per_rad),
             ("damper.theta1", self.damper.theta1_rad),
-            ("damper.hysteresis_width", self.damper.hysteresis_width_rad_s),
+            (
+                "damper.hysteresis_width",
+                self.damper.hysteresis_width_rad_s,
+            ),
             ("k_p", self.k_p),
             ("i_f", self.i_f),
             ("k_s", self.k_s),
@@ -390,7 +393,10 @@ impl TruckParams {
             ("c_w_a_f_m2", self.c_w_a_f_m2),
             ("c_r1", self.c_r1),
             ("c_r2", self.c_r2_s_per_m),
-            ("tyre.low_speed_damping", self.tyre.low_speed_damping_n_s_per_m),
+            (
+                "tyre.low_speed_damping",
+                self.tyre.low_speed_damping_n_s_per_m,
+            ),
             ("thermal.h1", self.thermal.h1_w_per_k_m_s),
             ("thermal.cold_excess", self.thermal.cold_excess),
             ("engine.friction0", self.engine.friction0_nm),
@@ -401,7 +407,11 @@ impl TruckParams {
         for (n, v) in nonneg {
             check(n, v, v >= 0.0)?;
         }
-        check("engine.map_gain", self.engine.map_gain, self.engine.map_gain > -0.5)?;
+        check(
+            "engine.map_gain",
+            self.engine.map_gain,
+            self.engine.map_gain > -0.5,
+        )?;
         check("engine.map_offset_nm", self.engine.map_offset_nm, true)?;
         check(
             "damper.k2 (must be ≥ k1)",
@@ -417,7 +427,8 @@ impl TruckParams {
             check("gear ratio", r, r > 0.0)?;
         }
         let e = &self.engine;
-        if e.full_load_speed_rad_s.len() < 2 || e.full_load_speed_rad_s.len() != e.full_load_nm.len()
+        if e.full_load_speed_rad_s.len() < 2
+            || e.full_load_speed_rad_s.len() != e.full_load_nm.len()
         {
             return Err(TruthError::BadParameter {
                 parameter: "engine full-load curve (≥ 2 points, equal lengths)",

@@ -41,11 +41,12 @@
 //! - Wheels: `J_wd·ω̇_wj = M_dj − r_w·F_xj`; tyres per [`super::tyre`].
 //! - Body: `(m + J_wn/r_w²)·v̇ = F_xL + F_xR − F_a − F_r − F_g − F_b`, `ẋ = v`, with the service
 //!   brake force F_b ≥ 0 against motion, retarder torque M_ret on the gearbox output.
-//! - Standstill is a mode: when v reaches 0 (event) the brakes hold the driveline behind the
-//!   gearbox output and the wheels (their speeds are set to 0 — a jump of the order of the
-//!   tyre slip velocity), the engine side stays free; the truck leaves standstill when the
-//!   driver has released the brake and the clutch's torque at the wheels exceeds the grade and
-//!   rolling resistance (hill-start aid), checked by [`Plant::settle_modes`].
+//! - Standstill is a mode: when v reaches 0 (event) the brakes hold the wheels and the body
+//!   (wheel speeds set to 0 — a jump of the order of the tyre slip velocity; tyre deflections
+//!   frozen), the driveline up to the drive shafts stays free and winds up against the held
+//!   wheels; the truck leaves standstill when the driver has released the brake and the drive
+//!   shafts' torque at the ground exceeds grade and rolling resistance (hill-start aid),
+//!   checked by [`Plant::settle_modes`].
 //!
 //! # Step size
 //! The fastest modes are the propeller shaft against the final drive (≈ 300 Hz at the file's
@@ -370,10 +371,8 @@ impl Plant {
         match self.gear {
             GearMode::Engaged(g) => {
                 let ri = p.ratios[g];
-                if !self.stopped {
-                    let j = p.j_in * ri * ri + p.j_out + p.j_p;
-                    dx[W_P] = (ri * m_d - p.b_t * x[W_P] - m_p - m_ret) / j;
-                }
+                let j = p.j_in * ri * ri + p.j_out + p.j_p;
+                dx[W_P] = (ri * m_d - p.b_t * x[W_P] - m_p - m_ret) / j;
                 dx[W_I] = ri * dx[W_P];
             }
             GearMode::Neutral { target, sync } => {
@@ -382,13 +381,8 @@ impl Plant {
                     _ => (0.0, 0.0),
                 };
                 dx[W_I] = (m_d - ts - p.b_in * x[W_I]) / p.j_in;
-                if !self.stopped {
-                    dx[W_P] = (rt * ts - p.b_t * x[W_P] - m_p - m_ret) / (p.j_out + p.j_p);
-                }
+                dx[W_P] = (rt * ts - p.b_t * x[W_P] - m_p - m_ret) / (p.j_out + p.j_p);
             }
-        }
-        if self.stopped {
-            return e;
         }
         dx[PHI_P] = dphi_p;
         let t_cage = p.i_f * m_p - p.b_f * w_cage;
@@ -399,6 +393,9 @@ impl Plant {
         dx[W_SR] = (a * rr - b * rl) / det;
         dx[PHI_DL] = dphi_dl;
         dx[PHI_DR] = dphi_dr;
+        if self.stopped {
+            return e;
+        }
         dx[W_WL] = (m_dl - r * f_l) / p.j_wd;
         dx[W_WR] = (m_dr - r * f_rr) / p.j_wd;
         dx[U_L] = deflection_rate(&p.tyre, x[U_L], vsl, v);
@@ -464,22 +461,8 @@ impl Plant {
     fn stop(&mut self, x: &mut State) {
         self.stopped = true;
         self.events.stop += 1;
-        for i in [W_P, W_SL, W_SR, W_WL, W_WR, V] {
+        for i in [W_WL, W_WR, V] {
             x[i] = 0.0;
-        }
-        if let GearMode::Engaged(_) = self.gear {
-            x[W_I] = 0.0;
-        }
-    }
-
-    /// Wheel-side force the clutch side can deliver at standstill in gear, N: `M_d·i_t·i_f/r_w`.
-    fn launch_force(&self, x: &State) -> Option<f64> {
-        match self.gear {
-            GearMode::Engaged(g) => {
-                let e = self.eval(x);
-                Some(e.m_d * self.p.total_ratio(g) / self.p.wheel_radius_m)
-            }
-            GearMode::Neutral { .. } => None,
         }
     }
 
@@ -519,14 +502,15 @@ impl Plant {
             self.stop(x);
         }
         if self.stopped && self.u.brake_n <= 0.0 {
-            if let Some(f) = self.launch_force(x) {
-                let tan_a = self.road.slope_at(x[X]);
-                let cos_a = 1.0 / (1.0 + tan_a * tan_a).sqrt();
-                let mg = self.p.mass_kg * self.p.gravity;
-                let hold = mg * tan_a * cos_a + self.p.c_r1 * mg * cos_a;
-                if f > hold {
-                    self.stopped = false;
-                }
+            // the held wheels release when the drive shafts' torque at the ground exceeds what
+            // holds the truck back: grade and rolling resistance
+            let f = (e.m_dl + e.m_dr) / self.p.wheel_radius_m;
+            let tan_a = self.road.slope_at(x[X]);
+            let cos_a = 1.0 / (1.0 + tan_a * tan_a).sqrt();
+            let mg = self.p.mass_kg * self.p.gravity;
+            let hold = mg * tan_a * cos_a + self.p.c_r1 * mg * cos_a;
+            if f > hold {
+                self.stopped = false;
             }
         }
     }
