@@ -484,6 +484,13 @@ impl TruckParams {
         self.ratios[g] * self.i_f
     }
 
+    /// Structural damping of one drive shaft's differential (left-against-right) motion,
+    /// N·m·s/rad: 2 % of critical of a side gear on its shaft, `0.04·√(k_s·J_s)` (steel shafts
+    /// damp 1–2 %; see [`super::plant`]).
+    pub fn antisymmetric_damping(&self) -> f64 {
+        0.04 * (self.k_s * self.j_s).sqrt()
+    }
+
     /// Equivalent translational mass of the body: m + J_wn/r_w², kg.
     pub fn body_mass(&self) -> f64 {
         self.mass_kg + self.j_wn / (self.wheel_radius_m * self.wheel_radius_m)

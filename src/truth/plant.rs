@@ -36,16 +36,24 @@
 //! - Open differential with carrier inertia J_f and massless spider gears (equal split):
 //!   `[J_f/4 + J_s, J_f/4; J_f/4, J_f/4 + J_s]·[ω̇_sL; ω̇_sR] = [T/2 − M_dL; T/2 − M_dR]`,
 //!   `T = i_f·M_p − b_f·ω_cage`.
-//! - Drive shafts: `M_dj = k_s·dz(φ_dj) + c_s·φ̇_dj` in contact, 0 inside the lash (dead zone
-//!   `dz(φ) = φ ∓ b/2`; contact/free are modes located by events; no lash: always in contact).
+//! - Drive shafts: `M_dj = k_s·dz(φ_dj) + c_s·φ̄̇ + c_a·(φ̇_dj − φ̄̇)` in contact, 0 inside the
+//!   lash (dead zone `dz(φ) = φ ∓ b/2`; contact/free are modes located by events; no lash:
+//!   always in contact), `φ̄̇ = (φ̇_dL + φ̇_dR)/2`. The vehicle file's large lumped damping c_d
+//!   (= 2·c_s) damps the common wind-up of the axle, which is what it was identified from (the
+//!   shuffle); the differential (left-against-right) motion of a side gear against its wheel
+//!   gets the steel shaft's structural damping, 2 % of critical, `c_a = 0.04·√(k_s·J_s)`. The
+//!   split dissipates: the damper power is `2c_s·φ̄̇² + c_a·Σ(φ̇_dj − φ̄̇)² ≥ 0`. (Putting c_s on
+//!   each side's own rate would make the side-gear mode's decay rate c_s/J_s ≈ 35 000 1/s,
+//!   which no explicit step of useful size integrates.)
 //! - Wheels: `J_wd·ω̇_wj = M_dj − r_w·F_xj`; tyres per [`super::tyre`].
 //! - Body: `(m + J_wn/r_w²)·v̇ = F_xL + F_xR − F_a − F_r − F_g − F_b`, `ẋ = v`, with the service
 //!   brake force F_b ≥ 0 against motion, retarder torque M_ret on the gearbox output.
 //! - Standstill is a mode: when v reaches 0 (event) the brakes hold the wheels and the body
 //!   (wheel speeds set to 0 — a jump of the order of the tyre slip velocity; tyre deflections
 //!   frozen), the driveline up to the drive shafts stays free and winds up against the held
-//!   wheels; the truck leaves standstill when the driver has released the brake and the drive
-//!   shafts' torque at the ground exceeds grade and rolling resistance (hill-start aid),
+//!   wheels; the truck leaves standstill when the driver has released the brake, a gear is
+//!   engaged and the drive shafts' torque at the ground exceeds grade and rolling resistance
+//!   (hill-start aid),
 //!   checked by [`Plant::settle_modes`].
 //!
 //! # Step size
@@ -330,12 +338,16 @@ impl Plant {
         let m_p = p.k_p * x[PHI_P] + p.c_p * dphi_p;
         let m_ret = self.u.retarder_nm * (x[W_P] / 20.0).clamp(0.0, 1.0);
         let half = 0.5 * p.lash_rad;
-        let shaft = |phi: f64, dphi: f64, mode: LashMode| match mode {
-            LashMode::Free => 0.0,
-            LashMode::Contact(s) => p.k_s * (phi - s * half) + p.c_s * dphi,
-        };
         let dphi_dl = x[W_SL] - x[W_WL];
         let dphi_dr = x[W_SR] - x[W_WR];
+        // damping: c_s on the common (axle wind-up) twist rate, c_a on each side's difference
+        // from it (module doc)
+        let mean = 0.5 * (dphi_dl + dphi_dr);
+        let c_a = p.antisymmetric_damping();
+        let shaft = |phi: f64, dphi: f64, mode: LashMode| match mode {
+            LashMode::Free => 0.0,
+            LashMode::Contact(s) => p.k_s * (phi - s * half) + p.c_s * mean + c_a * (dphi - mean),
+        };
         let m_dl = shaft(x[PHI_DL], dphi_dl, self.lash[0]);
         let m_dr = shaft(x[PHI_DR], dphi_dr, self.lash[1]);
         let tan_a = self.road.slope_at(x[X]);
@@ -440,7 +452,7 @@ impl Plant {
         {
             push(sig * (x[W_I] - self.p.ratios[t] * x[W_P]), Guard::Sync);
         }
-        if self.p.lash_rad > 0.0 && !self.stopped {
+        if self.p.lash_rad > 0.0 {
             let half = 0.5 * self.p.lash_rad;
             for (side, phi) in [(0, x[PHI_DL]), (1, x[PHI_DR])] {
                 match self.lash[side] {
@@ -501,7 +513,7 @@ impl Plant {
         if !self.stopped && x[V] < 0.0 {
             self.stop(x);
         }
-        if self.stopped && self.u.brake_n <= 0.0 {
+        if self.stopped && self.u.brake_n <= 0.0 && matches!(self.gear, GearMode::Engaged(_)) {
             // the held wheels release when the drive shafts' torque at the ground exceeds what
             // holds the truck back: grade and rolling resistance
             let f = (e.m_dl + e.m_dr) / self.p.wheel_radius_m;
