@@ -144,6 +144,9 @@ impl EventRk4 {
             }
         }
         let mut events = 0;
+        // the guards at the end of an event-free step are those at the start of the next one
+        // (neither the system nor its inputs change inside `advance`): evaluated once
+        let mut cache: Option<([f64; MAX_GUARDS], usize)> = None;
         while *t < t_end {
             let h = self.h_s.min(t_end - *t);
             // the last sliver of a span: snap to t_end
@@ -152,7 +155,7 @@ impl EventRk4 {
             } else {
                 h
             };
-            events += self.step(sys, t, x, h)?;
+            events += self.step(sys, t, x, h, &mut cache)?;
             if let Some(index) = x.iter().position(|v| !v.is_finite()) {
                 return Err(IntegratorError::NonFinite {
                     t_s: *t,
@@ -171,6 +174,7 @@ impl EventRk4 {
         t: &mut f64,
         x: &mut [f64; N],
         h: f64,
+        cache: &mut Option<([f64; MAX_GUARDS], usize)>,
     ) -> Result<usize, IntegratorError> {
         let t_target = *t + h;
         let mut count = 0;
@@ -181,9 +185,15 @@ impl EventRk4 {
             if rest <= 0.0 {
                 return Ok(count);
             }
-            let n = sys.guards(*t, x, &mut g0);
+            let n = match cache.take() {
+                Some((g, n)) => {
+                    g0 = g;
+                    n
+                }
+                None => sys.guards(*t, x, &mut g0),
+            };
             let x1 = rk4_step(&*sys, *t, x, rest);
-            let _ = sys.guards(*t + rest, &x1, &mut g1);
+            let n1 = sys.guards(*t + rest, &x1, &mut g1);
             // earliest crossing among armed guards
             let mut best: Option<(usize, f64)> = None;
             for j in 0..n {
@@ -198,6 +208,7 @@ impl EventRk4 {
                 None => {
                     *x = x1;
                     *t = t_target;
+                    *cache = Some((g1, n1));
                     return Ok(count);
                 }
                 Some((j, s)) => {
