@@ -70,7 +70,7 @@ pub struct IndependentDriveConfig {
 
 impl IndependentDriveConfig {
     /// A drive on `rules` of `length_km` with `seed`, no concealed effect, tolerances and wind
-    /// on, time limit 600 s + 0.5 s/m... (`length/2 m/s + 600 s`).
+    /// on; time limit `length / (2 m/s) + 600 s` (a mean speed far below any drive's).
     pub fn new(rules: &str, length_km: f64, seed: u64) -> Self {
         Self {
             rules: rules.into(),

@@ -254,12 +254,12 @@ pub fn apply(
                 });
             };
             if let Some(v) = value {
+                // offsets may have either sign; a delay or a lash may be zero; the rest are
+                // positive physical quantities
                 let ok = v.is_finite()
                     && match id {
-                        "grade_offset" | "signal_delay" | "engine_torque_offset" => {
-                            id != "signal_delay" || v >= 0.0
-                        }
-                        "driveline_backlash" => v >= 0.0,
+                        "grade_offset" | "engine_torque_offset" => true,
+                        "signal_delay" | "driveline_backlash" => v >= 0.0,
                         _ => v > 0.0,
                     };
                 if !ok {

@@ -47,7 +47,9 @@
 //!   which no explicit step of useful size integrates.)
 //! - Wheels: `J_wd·ω̇_wj = M_dj − r_w·F_xj`; tyres per [`super::tyre`].
 //! - Body: `(m + J_wn/r_w²)·v̇ = F_xL + F_xR − F_a − F_r − F_g − F_b`, `ẋ = v`, with the service
-//!   brake force F_b ≥ 0 against motion, retarder torque M_ret on the gearbox output.
+//!   brake force F_b ≥ 0 against motion (acting on the body). Retarder torque on the gearbox
+//!   output `M_ret = T_r·clamp(ω_p/20 rad/s, 0, 1)` (a hydrodynamic retarder loses its torque
+//!   at low propeller speed).
 //! - Standstill is a mode: when v reaches 0 (event) the brakes hold the wheels and the body
 //!   (wheel speeds set to 0 — a jump of the order of the tyre slip velocity; tyre deflections
 //!   frozen), the driveline up to the drive shafts stays free and winds up against the held
