@@ -4,7 +4,9 @@
 //! resampled to travelled distance ([`signal::distance`]), filtered without phase lag
 //! ([`signal`], [`road`]) and written as Parquet with units and provenance ([`io`]).
 //! Synthetic logs as real loggers deliver them (CAN rates, resolutions, noise, dropouts) come
-//! from [`synth`].
+//! from [`synth`]. [`truth`] is an independent truck simulator written from physics (no code
+//! shared with [`sim`] or the diagnosis) whose drives prove the diagnosis against a truck it was
+//! not built from.
 //! The binary `fleetdyn` is a thin shell over this library.
 #![deny(missing_docs)]
 
@@ -22,4 +24,5 @@ pub mod sim;
 pub mod synth;
 pub mod table;
 pub mod time_fmt;
+pub mod truth;
 pub mod units;

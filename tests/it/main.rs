@@ -42,3 +42,4 @@ mod synth_effects;
 mod synth_export;
 mod synth_extras;
 mod synth_nominal;
+mod truth_plant;
