@@ -173,6 +173,10 @@ pub const AMBIGUITY_GAIN_RATIO: f64 = 0.9;
 pub const AMBIGUITY_MIN_CORRELATION: f64 = 0.9;
 /// Most findings (greedy rounds that accept).
 pub const MAX_FINDINGS: usize = 3;
+/// Most greedy rounds that end in an estimate consistent with the vehicle file (rule 4)
+/// rather than a finding: such a round sets the parameter to its estimate and searches the
+/// remaining residual again.
+pub const MAX_CONSISTENT_ROUNDS: usize = 2;
 /// Least weighted mean square of the change a fitted effect makes to one of its own model's
 /// views for that view to be scored by rules 1 and 2: an RMS change of a tenth of the view's
 /// weights `σ_c` (module documentation, "Which views the rule scores").
@@ -335,6 +339,8 @@ pub struct Round {
     pub fits: Vec<CandidateFit>,
     /// The accepted effect, if any.
     pub accepted: Option<&'static str>,
+    /// The effect whose within-tolerance estimate the round took instead (rule 4), if any.
+    pub consistent: Option<&'static str>,
 }
 
 /// A fitted parameter (diagnosis.md output contract).
@@ -475,14 +481,20 @@ pub struct Explanation {
 /// Diagnosis verdict (diagnosis.md output contract), the contract's type.
 pub use super::contract::Verdict;
 
-/// The verdict from the findings and step 2's `significant_mismatch`: any accepted finding →
-/// `explained` (the acceptance rule is a significance test of its own, on held-out data, and
-/// may see a small spread-out effect a per-window test does not); otherwise `unexplained` when
-/// the mismatch is significant, else `no_significant_mismatch`.
-pub fn verdict(findings: &[Finding], significant_mismatch: bool) -> Verdict {
+/// The verdict from the findings, the estimates consistent with the vehicle file and step 2's
+/// `significant_mismatch`: any accepted finding → `explained` (the acceptance rule is a
+/// significance test of its own, on held-out data, and may see a small spread-out effect a
+/// per-window test does not); otherwise `unexplained` when the mismatch is significant and no
+/// estimate within the file's tolerances explains it (passing rules 1 to 3), else
+/// `no_significant_mismatch`: nothing is wrong beyond the vehicle file's tolerances.
+pub fn verdict(
+    findings: &[Finding],
+    consistent: &[ConsistentEstimate],
+    significant_mismatch: bool,
+) -> Verdict {
     if !findings.is_empty() {
         Verdict::Explained
-    } else if significant_mismatch {
+    } else if significant_mismatch && consistent.is_empty() {
         Verdict::Unexplained
     } else {
         Verdict::NoSignificantMismatch
@@ -741,7 +753,10 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         .iter()
         .map(|y| Arc::new(y.clone()))
         .collect();
-    for round in 0..cfg.max_findings {
+    for round in 0..cfg.max_findings + MAX_CONSISTENT_ROUNDS {
+        if findings.len() >= cfg.max_findings {
+            break;
+        }
         let ev = Evaluator::new(problem, theta, &bases, cfg.noise_floor.as_ref(), dt_s);
         let base = ev.eval_outputs(f64::NAN, bases.clone());
         let effects: Vec<Effect> = Effect::ALL
@@ -786,44 +801,56 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 continue; // the interval contradicts the likelihood-ratio test: not accepted
             }
             let (band_low, band_high) = cfg.tolerances.band(e, nominal.get(e));
-            if !switch && ci.lo <= band_high && ci.hi >= band_low {
-                // rule 4: within the file's tolerance, an estimate and not a finding
-                if !consistent
-                    .iter()
-                    .any(|c: &ConsistentEstimate| c.effect == e.id())
-                {
-                    let estimate = ParameterEstimate {
-                        value: f.value,
-                        ci_low: ci.lo,
-                        ci_high: ci.hi,
-                        unit: e.unit(),
-                    };
-                    consistent.push(ConsistentEstimate {
-                        effect: e.id(),
-                        sentence: consistent_sentence(
-                            e,
-                            nominal.get(e),
-                            &estimate,
-                            cfg.tolerances.of_effect(e),
-                        ),
-                        estimate,
-                        nominal: nominal.get(e),
-                        band_low,
-                        band_high,
-                        band_from_file: cfg.tolerances.is_given(e),
-                        round,
-                    });
-                }
-                continue;
-            }
-            accepted = Some((i, ci));
+            let inside = !switch && ci.lo <= band_high && ci.hi >= band_low;
+            accepted = Some((i, ci, inside));
             break;
         }
+        // rule 4: the best passing candidate inside the file's tolerance is an estimate, not a
+        // finding; its value is taken and the remaining residual searched again
+        if let Some(&(i, ref ci, true)) = accepted.as_ref() {
+            let f = &fits[i];
+            let e = Effect::from_id(f.effect).expect("catalogue id");
+            let best = f.eval.as_ref().expect("fits keep their simulation");
+            let (band_low, band_high) = cfg.tolerances.band(e, nominal.get(e));
+            let estimate = ParameterEstimate {
+                value: f.value,
+                ci_low: ci.lo,
+                ci_high: ci.hi,
+                unit: e.unit(),
+            };
+            consistent.push(ConsistentEstimate {
+                effect: e.id(),
+                sentence: consistent_sentence(
+                    e,
+                    nominal.get(e),
+                    &estimate,
+                    cfg.tolerances.of_effect(e),
+                ),
+                estimate,
+                nominal: nominal.get(e),
+                band_low,
+                band_high,
+                band_from_file: cfg.tolerances.is_given(e),
+                round,
+            });
+            bases = best.outputs.clone();
+            theta.set(e, f.value);
+            excluded.push(e);
+            rounds.push(Round {
+                screen: scr,
+                fits,
+                accepted: None,
+                consistent: Some(e.id()),
+            });
+            continue;
+        }
+        let accepted = accepted.map(|(i, ci, _)| (i, ci));
         let Some((i, ci)) = accepted else {
             rounds.push(Round {
                 screen: scr,
                 fits,
                 accepted: None,
+                consistent: None,
             });
             break;
         };
@@ -894,6 +921,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             screen: scr,
             fits,
             accepted: Some(e.id()),
+            consistent: None,
         });
     }
     Ok(Explanation {
@@ -1264,8 +1292,27 @@ mod tests {
 
     #[test]
     fn verdict_combines_findings_and_significance() {
-        assert_eq!(verdict(&[], false), Verdict::NoSignificantMismatch);
-        assert_eq!(verdict(&[], true), Verdict::Unexplained);
+        assert_eq!(verdict(&[], &[], false), Verdict::NoSignificantMismatch);
+        assert_eq!(verdict(&[], &[], true), Verdict::Unexplained);
+        let within = ConsistentEstimate {
+            effect: "aero_drag",
+            estimate: ParameterEstimate {
+                value: 5.6,
+                ci_low: 5.5,
+                ci_high: 5.7,
+                unit: "m2",
+            },
+            nominal: 5.5,
+            band_low: 5.225,
+            band_high: 5.775,
+            band_from_file: false,
+            round: 0,
+            sentence: String::new(),
+        };
+        assert_eq!(
+            verdict(&[], std::slice::from_ref(&within), true),
+            Verdict::NoSignificantMismatch
+        );
         assert_eq!(
             serde_json::to_string(&Verdict::NoSignificantMismatch).unwrap(),
             "\"no_significant_mismatch\""

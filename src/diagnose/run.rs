@@ -282,7 +282,11 @@ pub fn diagnose(
             tolerances: vehicle.tolerance.clone(),
         },
     )?;
-    let v = verdict(&explanation.findings, location.any_significant);
+    let v = verdict(
+        &explanation.findings,
+        &explanation.consistent,
+        location.any_significant,
+    );
     // residuals after: the extended models at the final parameters, per model in use
     let mut after: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for domain in problem.domains() {

@@ -8,6 +8,7 @@ use crate::synth::drive::{synth_drive, DriveConfig, DriveError, HiddenEffect};
 use crate::synth::driver::DriverConfig;
 use crate::synth::effects::{EffectChoice, Injection};
 use crate::truth::{Concealed, IndependentDriveConfig, OutOfCatalogue, TruthEffect, TruthError};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -16,7 +17,7 @@ use thiserror::Error;
 pub enum GenerateError {
     /// The model-based generator failed.
     #[error(transparent)]
-    Model(#[from] DriveError),
+    Model(Box<DriveError>),
     /// The independent truth failed.
     #[error(transparent)]
     Independent(#[from] TruthError),
@@ -41,10 +42,14 @@ impl GenerateError {
         use crate::synth::can::SynthError;
         matches!(
             self,
-            GenerateError::Model(
+            GenerateError::Independent(TruthError::Can(SynthError::Ingest(_)))
+        ) || matches!(
+            self,
+            GenerateError::Model(e) if matches!(
+                **e,
                 DriveError::Can(SynthError::Ingest(_))
                     | DriveError::Export(crate::synth::export::ExportError::Ingest { .. })
-            ) | GenerateError::Independent(TruthError::Can(SynthError::Ingest(_)))
+            )
         )
     }
 }
@@ -118,7 +123,8 @@ pub fn generate(
     answers_dir: &Path,
 ) -> Result<GeneratedCase, GenerateError> {
     match cfg.truth {
-        TruthSource::Model => Ok(generate_model(case, vehicle, cfg, drives_dir, answers_dir)?),
+        TruthSource::Model => generate_model(case, vehicle, cfg, drives_dir, answers_dir)
+            .map_err(|e| GenerateError::Model(Box::new(e))),
         TruthSource::Independent => {
             generate_independent(case, vehicle, cfg, drives_dir, answers_dir)
         }

@@ -44,9 +44,7 @@ pub mod score;
 pub mod summary;
 
 pub use generate::{drive_config, generate, GenerateError, GeneratedCase, ProofTruth, Stretch};
-pub use plan::{
-    drawn_driver, plan, Driving, Hidden, Outside, ProofCase, ProofConfig, TruthSource,
-};
+pub use plan::{drawn_driver, plan, Driving, Hidden, Outside, ProofCase, ProofConfig, TruthSource};
 pub use run::{run_proof, ProofRun, ProveError, MAX_ATTEMPTS, RESEED_STRIDE};
 pub use score::{noise_free_reference, score, CaseScore};
 pub use summary::{cases_markdown, summarize, FailedCase, ProofSummary};

@@ -351,7 +351,12 @@ mod tests {
         for e in Effect::ALL {
             let n = p.iter().filter(|c| c.hidden == Hidden::Effect(e)).count();
             // 66 = 3 cycles of 17 + 15: each longitudinal effect 4 times, no axle effect
-            assert_eq!(n, if longitudinal.contains(&e) { 4 } else { 0 }, "{}", e.id());
+            assert_eq!(
+                n,
+                if longitudinal.contains(&e) { 4 } else { 0 },
+                "{}",
+                e.id()
+            );
         }
         let clean = p.iter().filter(|c| c.hidden == Hidden::Nothing).count();
         assert_eq!(clean, 16);
@@ -366,7 +371,10 @@ mod tests {
         // the model plan's roads, lengths and seeds are the same drive for drive
         let m = plan(&ProofConfig::model());
         for (a, b) in p.iter().zip(&m) {
-            assert_eq!((a.seed, a.rules, a.length_km), (b.seed, b.rules, b.length_km));
+            assert_eq!(
+                (a.seed, a.rules, a.length_km),
+                (b.seed, b.rules, b.length_km)
+            );
         }
     }
 }

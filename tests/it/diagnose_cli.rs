@@ -87,7 +87,14 @@ fn diagnose_writes_the_contract_and_names_the_effect() {
         serde_json::from_slice(&std::fs::read(out.join("diagnosis.json")).unwrap()).unwrap();
     assert_eq!(
         keys(&j),
-        set(&["drive_id", "verdict", "noise_floor", "mismatch", "findings"])
+        set(&[
+            "drive_id",
+            "verdict",
+            "noise_floor",
+            "mismatch",
+            "findings",
+            "estimates"
+        ])
     );
     assert_eq!(j["verdict"], "explained");
     let floors = keys(&j["noise_floor"]);

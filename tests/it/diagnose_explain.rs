@@ -254,7 +254,10 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
         nf.heldout_after
     );
     assert!(f.sentence.contains(e.parameter()) && f.sentence.contains("held-out"));
-    assert_eq!(verdict(&x.findings, true), Verdict::Explained);
+    assert_eq!(
+        verdict(&x.findings, &x.consistent, true),
+        Verdict::Explained
+    );
     // the proof's noise-free scoring (`fits_against`) given the recording itself as the
     // reference scores the same simulation on the same rows: every own-model signal of the
     // finding's table, bit for bit (same simulation, same arithmetic; `fits_against` may list
@@ -305,11 +308,33 @@ fn load_transfer_height_is_named_and_fitted() {
 #[test]
 fn rolling_resistance_is_named_and_fitted_on_a_highway() {
     // +35 %: a constant-plus-v force, close to a slope-sensor mounting angle (both act as a
-    // force ∝ m·g on a drive without large speed changes). Until the diagnosis read the brake
-    // channel's clamped noise as a released brake (src/diagnose/compare.rs,
-    // BRAKE_RELEASED_BELOW_N), a phantom ~80 N drag sat in every fit and the isolability check
-    // put grade_offset in the ambiguity set here; without it the held-out fits separate them
-    check(HIGHWAY, Effect::RollingResistance, 1.35 * 0.006, &[]);
+    // force ∝ m·g on a drive without large speed changes); the held-out fits separate them.
+    // Its 95 % interval on this 15-minute drive is about ±18 % wide, so its lower end meets
+    // the vehicle file's ±10 % rolling-resistance tolerance: the rule (docs/diagnosis.md,
+    // rule 4) may name it or report it as an estimate consistent with the file, but must not
+    // name anything else.
+    let dir = tempfile::tempdir().unwrap();
+    let e = Effect::RollingResistance;
+    let truth = 1.35 * 0.006;
+    let r = run(dir.path(), HIGHWAY, Some((e, truth)));
+    let x = &r.x;
+    let named: Vec<&str> = x.findings.iter().map(|f| f.effect).collect();
+    let estimated: Vec<&str> = x.consistent.iter().map(|c| c.effect).collect();
+    eprintln!("named {named:?}, consistent {estimated:?}");
+    assert!(named.iter().all(|&n| n == e.id()), "{named:?}");
+    let value = match (x.findings.first(), x.consistent.first()) {
+        (Some(f), _) => f.parameters[e.parameter()].value,
+        (None, Some(c)) if c.effect == e.id() => {
+            // within the band: the interval overlaps it, the estimate is still the truth's
+            assert!(c.estimate.ci_low <= c.band_high, "{c:?}");
+            c.estimate.value
+        }
+        _ => panic!("neither named nor estimated: {named:?} {estimated:?}"),
+    };
+    assert!(
+        (value - truth).abs() <= tolerance(truth),
+        "{value} vs {truth}"
+    );
 }
 
 #[test]
@@ -335,10 +360,17 @@ fn clean_drives_give_no_finding() {
             r.x.findings.iter().map(|f| &f.sentence).collect::<Vec<_>>()
         );
         assert_eq!(
-            verdict(&r.x.findings, false),
+            verdict(&r.x.findings, &r.x.consistent, false),
             Verdict::NoSignificantMismatch
         );
-        assert_eq!(verdict(&r.x.findings, true), Verdict::Unexplained);
+        // a significant mismatch on a clean drive is unexplained unless an estimate within the
+        // vehicle file's tolerances explains it
+        let expected = if r.x.consistent.is_empty() {
+            Verdict::Unexplained
+        } else {
+            Verdict::NoSignificantMismatch
+        };
+        assert_eq!(verdict(&r.x.findings, &r.x.consistent, true), expected);
     }
 }
 
