@@ -178,9 +178,16 @@ impl RoadGrid {
         }
     }
 
-    /// tan α at `x` (linear, held beyond the ends).
+    /// tan α at `x` (linear, held beyond the ends; a grid without samples or without a
+    /// positive finite step is flat, or its first value).
     pub fn slope_at(&self, x: f64) -> f64 {
         let n = self.slope.len();
+        if n == 0 {
+            return 0.0;
+        }
+        if !(self.step_m.is_finite() && self.step_m > 0.0 && x.is_finite()) {
+            return self.slope[0];
+        }
         let s = (x / self.step_m).max(0.0);
         let k = s.floor() as usize;
         if k + 1 >= n {

@@ -778,3 +778,28 @@ fn truth_plant_tyres_warm_up_as_their_heat_balance_says() {
     // warming lowers the rolling resistance from its cold value
     assert!(factor < 1.0 + b_ && x[DT] > 0.0);
 }
+
+#[test]
+fn truth_plant_nominal_split_follows_the_vehicle_file() {
+    let v = truck();
+    let d = v.driveline.as_ref().unwrap();
+    let p = nominal();
+    // the file's rule J_t(i) = 0.2·i² + 0.3 kg·m² splits into input and output sides; the file
+    // rounds J_t to 0.01 kg·m², which moves J_in by ≤ 0.01/(i_1² − i_12²) ≈ 5e-5
+    assert!((p.j_in - 0.2).abs() < 1e-4 && (p.j_out - 0.3).abs() < 1e-4);
+    for (g, &r) in v.gearbox.ratios.iter().enumerate() {
+        // the file lists J_t rounded to 0.01 kg·m²
+        assert!((p.j_in * r * r + p.j_out - d.j_t_kg_m2[g]).abs() < 0.006);
+    }
+    // two shafts in parallel give the lumped k_d, c_d; wheel inertias add up to J_w
+    assert_eq!(2.0 * p.k_s, d.k_d_nm_per_rad);
+    assert_eq!(2.0 * p.c_s, d.c_d_nm_s_per_rad);
+    assert!((2.0 * p.j_wd + p.j_wn - d.j_w_kg_m2).abs() < 1e-9);
+    // a road grid that cannot be read is flat rather than a panic
+    let empty = RoadGrid {
+        step_m: 0.0,
+        slope: vec![],
+        surface: None,
+    };
+    assert_eq!(empty.slope_at(10.0), 0.0);
+}
