@@ -602,6 +602,13 @@ fn truth_plant_fifteen_minute_drive_reaches_the_road_end() {
         (x_end - (18_000.0 - 5.0)).abs() < 10.0,
         "ended at {x_end} m"
     );
+    // one standstill per planned stop: the hill hold lets go only when the shafts carry the
+    // truck, so no launch rolls back into a second stop
+    assert_eq!(d.events.stop, d.stops.len(), "stops {:?}", d.stops);
+    eprintln!(
+        "ended {:.2} m past the last stop point",
+        x_end - (18_000.0 - 5.0)
+    );
 }
 
 #[test]
