@@ -810,3 +810,30 @@ fn truth_plant_nominal_split_follows_the_vehicle_file() {
     };
     assert_eq!(empty.slope_at(10.0), 0.0);
 }
+
+#[test]
+fn truth_plant_surface_stretch_and_hidden_retarder_act_only_where_placed() {
+    let p = nominal();
+    let (mut plant, mut x) = rolling_plant(p.clone(), 11, 20.0, 0.0);
+    plant.road.surface = Some((100.0, 200.0, 1.5));
+    let mg = p.mass_kg * p.gravity;
+    let phi_t = 1.0 + p.thermal.cold_excess; // cold tyres, ΔT = 0
+    for (xm, factor) in [(50.0, 1.0), (150.0, 1.5), (250.0, 1.0)] {
+        x[X] = xm;
+        let f_r = plant.eval(&x).f_r;
+        // F_r = (c_r1·φ_T·φ_s + c_r2·v)·m g on the flat
+        let expected = (p.c_r1 * phi_t * factor + p.c_r2_s_per_m * 20.0) * mg;
+        assert!(
+            (f_r - expected).abs() < 1e-9 * expected,
+            "at {xm} m: {f_r} vs {expected}"
+        );
+    }
+    // a retarder torque on the gearbox output decelerates it by T_r/(J_in·i² + J_out + J_p)
+    // at once (above 20 rad/s propeller speed, where it has its full torque)
+    let before = plant.eval(&x).dx[W_P];
+    plant.u.retarder_nm = 500.0;
+    let after = plant.eval(&x).dx[W_P];
+    let j = p.j_in * p.ratios[11] * p.ratios[11] + p.j_out + p.j_p;
+    assert!(x[W_P] > 20.0);
+    assert!(((before - after) - 500.0 / j).abs() < 1e-9 * 500.0 / j);
+}
