@@ -55,7 +55,8 @@
 //!   frozen), the driveline up to the drive shafts stays free and winds up against the held
 //!   wheels; the truck leaves standstill when the driver has released the brake, a gear is
 //!   engaged and the drive shafts' torque at the ground exceeds grade and rolling resistance
-//!   (hill-start aid),
+//!   (hill-start aid; at that moment each tyre's deflection is set to carry its shaft's
+//!   torque, the force the brake handed over),
 //!   checked by [`Plant::settle_modes`].
 //!
 //! # Step size
@@ -178,9 +179,16 @@ impl RoadGrid {
         }
     }
 
-    /// tan α at `x` (linear, held beyond the ends).
+    /// tan α at `x` (linear, held beyond the ends; a grid without samples or without a
+    /// positive finite step is flat, or its first value).
     pub fn slope_at(&self, x: f64) -> f64 {
         let n = self.slope.len();
+        if n == 0 {
+            return 0.0;
+        }
+        if !(self.step_m.is_finite() && self.step_m > 0.0 && x.is_finite()) {
+            return self.slope[0];
+        }
         let s = (x / self.step_m).max(0.0);
         let k = s.floor() as usize;
         if k + 1 >= n {
@@ -525,6 +533,15 @@ impl Plant {
             let hold = mg * tan_a * cos_a + self.p.c_r1 * mg * cos_a;
             if f > hold {
                 self.stopped = false;
+                // as the brakes let go, each tyre takes over the torque of its shaft: its
+                // deflection is set to carry M_dj/r_w (F_x(u) = µF_z·tanh(C_κ·u/σ/(µF_z))
+                // inverted; no slip velocity at standstill)
+                let t = &self.p.tyre;
+                let fmax = t.mu * t.fz_n;
+                for (i, m) in [(U_L, e.m_dl), (U_R, e.m_dr)] {
+                    let q = (m / self.p.wheel_radius_m / fmax).clamp(-0.999, 0.999);
+                    x[i] = t.relaxation_m * q.atanh() * fmax / t.slip_stiffness_n;
+                }
             }
         }
     }
