@@ -138,6 +138,8 @@ pub struct EstimateEntry {
     pub tolerance_high: f64,
     /// The interval overlaps the band.
     pub consistent_with_file: bool,
+    /// Catalogue ids that explain the data alike, each outside its own band.
+    pub ambiguous_with: Vec<String>,
     /// Plain words.
     pub sentence: String,
 }

@@ -246,6 +246,10 @@ pub struct ConsistentEstimate {
     pub band_from_file: bool,
     /// The greedy round it was fitted in.
     pub round: usize,
+    /// Effects outside their own bands that explain the data alike (as a finding's
+    /// `ambiguous_with`): with the recorded signals, "within the file's tolerance" and these
+    /// cannot be told apart, and the within-tolerance reading is not overruled.
+    pub ambiguous_with: Vec<&'static str>,
     /// Plain words.
     pub sentence: String,
 }
@@ -818,24 +822,46 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 ci_high: ci.hi,
                 unit: e.unit(),
             };
+            let mut ambiguous = Vec::new();
+            for &j in &passing {
+                if j == i || fits[j].explained < AMBIGUITY_GAIN_RATIO * f.explained {
+                    continue;
+                }
+                let other = &fits[j];
+                let c = ev.correction_correlation(
+                    &base,
+                    best,
+                    other.eval.as_ref().expect("fits keep their simulation"),
+                );
+                if c.abs() >= AMBIGUITY_MIN_CORRELATION {
+                    ambiguous.push(other.effect);
+                }
+            }
+            let mut sentence =
+                consistent_sentence(e, nominal.get(e), &estimate, cfg.tolerances.of_effect(e));
+            if !ambiguous.is_empty() {
+                sentence.push_str(&format!(
+                    "; the recorded signals cannot tell it from {}",
+                    ambiguous.join(", ")
+                ));
+            }
             consistent.push(ConsistentEstimate {
                 effect: e.id(),
-                sentence: consistent_sentence(
-                    e,
-                    nominal.get(e),
-                    &estimate,
-                    cfg.tolerances.of_effect(e),
-                ),
+                sentence,
                 estimate,
                 nominal: nominal.get(e),
                 band_low,
                 band_high,
                 band_from_file: cfg.tolerances.is_given(e),
                 round,
+                ambiguous_with: ambiguous.clone(),
             });
             bases = best.outputs.clone();
             theta.set(e, f.value);
             excluded.push(e);
+            for a in &ambiguous {
+                excluded.push(Effect::from_id(a).expect("catalogue id"));
+            }
             rounds.push(Round {
                 screen: scr,
                 fits,
@@ -1307,6 +1333,7 @@ mod tests {
             band_high: 5.775,
             band_from_file: false,
             round: 0,
+            ambiguous_with: Vec::new(),
             sentence: String::new(),
         };
         assert_eq!(

@@ -36,16 +36,19 @@ use super::contract::{
 };
 use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding, SignalMetrics};
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig};
+use super::fit::fit_spec;
 use super::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
-use super::modal::{compare_modes, ModalComparison, ModalConfig, Reference};
+use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
-use super::problem::ExplainError;
+use super::problem::{ExplainError, Problem};
 use super::setup::Setup;
 use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
 use crate::io::OutputError;
 use crate::model::catalogue::Effect;
+use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
+use crate::model::tolerance::Tolerances;
 use crate::model::vehicle::VehicleFile;
 use crate::report::axle_plot::PlotError;
 use crate::report::diagnosis::{plot_residuals, write_report, ResidualSeries};
@@ -85,6 +88,72 @@ pub enum DiagnoseError {
         source: std::io::Error,
     },
 }
+
+/// Per compared signal and row, the variance of the model's output that the vehicle file's
+/// tolerances allow: every continuous catalogue parameter of a model in use moved alone to the
+/// upper edge of its band `θ₀ + w` (the lower edge where the upper one leaves the fit's
+/// physical domain), the output change `Δy` read as the sensitivity across the band, and
+/// `Σ Δy²/3` — the variance of a parameter spread uniformly over `θ₀ ± w`, to first order,
+/// the parameters independent. A residual this size is what a truck whose values all lie in
+/// their bands shows against the nominal model; locate tests the residual against the sensor
+/// noise floor plus this (docs/diagnosis.md, "Model-form residual").
+///
+/// # Errors
+/// [`ExtendedError`] when a model fails at the nominal parameters or at a band's edge.
+pub fn tolerance_variance(
+    problem: &Problem<'_>,
+    tolerances: &Tolerances,
+) -> Result<BTreeMap<String, Vec<f64>>, ExtendedError> {
+    use rayon::prelude::*;
+    let nominal = *problem.nominal();
+    let mut out: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for domain in problem.domains() {
+        let idx = problem.channel_indices(domain);
+        let base = problem.simulate(domain, &nominal)?;
+        let edges: Vec<(Effect, f64)> = Effect::ALL
+            .into_iter()
+            .filter(|e| e.domain() == domain)
+            .filter_map(|e| {
+                let nom = nominal.get(e);
+                let spec = fit_spec(e, nom, None);
+                let w = tolerances.of_effect(e).half_width(nom);
+                if spec.switch || w.is_nan() || w <= 0.0 {
+                    return None;
+                }
+                if nom + w <= spec.hi {
+                    Some((e, nom + w))
+                } else if nom - w >= spec.lo {
+                    Some((e, nom - w))
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let moved: Vec<Vec<Vec<f64>>> = edges
+            .par_iter()
+            .map(|&(e, v)| {
+                let mut theta = nominal;
+                theta.set(e, v);
+                problem.simulate(domain, &theta)
+            })
+            .collect::<Result<_, _>>()?;
+        for (k, &c) in idx.iter().enumerate() {
+            let mut var = vec![0.0; base[k].len()];
+            for m in &moved {
+                for (i, v) in var.iter_mut().enumerate() {
+                    let d = m[k][i] - base[k][i];
+                    *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                }
+            }
+            out.insert(problem.channels()[c].name.clone(), var);
+        }
+    }
+    Ok(out)
+}
+
+/// Gears whose shuffle mode sets the modal test's tolerance margin ([`tolerance_shift`]): the
+/// low gears, where clutch engagements ring.
+pub const MODAL_TOLERANCE_GEARS: usize = 4;
 
 /// Settings of a diagnosis.
 #[derive(Debug, Clone, PartialEq)]
@@ -246,6 +315,19 @@ pub fn diagnose(
         reinit_times_s: window_starts(log, LongitudinalConfig::default().window_s),
         ..cfg.locate.clone()
     };
+    let problem = setup.problem(log, actuation_variance.as_deref())?;
+    // residual the vehicle file's tolerances allow is not a mismatch: its variance joins the
+    // floor's per-row null variance
+    let allowed = tolerance_variance(&problem, &vehicle.tolerance)?;
+    for f in floors.floors.iter_mut() {
+        if let Some(v) = allowed.get(&f.signal) {
+            for (n, a) in f.null_variance.iter_mut().zip(v) {
+                if n.is_finite() && a.is_finite() {
+                    *n += a;
+                }
+            }
+        }
+    }
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
     // the shuffle modes after clutch engagements against the nominal driveline's linearised
     // ones (docs/modal.md: the simulated ringing is restarted inside the analysis windows);
@@ -255,7 +337,16 @@ pub fn diagnose(
         .iter()
         .find(|c| c.name == "engine_speed")
         .map(|es| {
-            let mcfg = ModalConfig::default();
+            // a shift the vehicle file's tolerances allow is not a mismatch
+            let d = &setup.nominal_truth.driveline;
+            let allowed = (1..=setup.ratios.len().min(MODAL_TOLERANCE_GEARS))
+                .map(|g| {
+                    let v0 = vehicle_speed_at(d, &setup.ratios, g, OPERATING_ENGINE_SPEED_RAD_S);
+                    tolerance_shift(d, &setup.ratios, g, v0, &vehicle.tolerance)
+                })
+                .fold(0.0, f64::max);
+            let mut mcfg = ModalConfig::default();
+            mcfg.min_relative_shift = mcfg.min_relative_shift.max(allowed);
             let m = compare_modes(
                 log,
                 &es.measured,
@@ -272,7 +363,6 @@ pub fn diagnose(
             }
             m
         });
-    let problem = setup.problem(log, actuation_variance.as_deref())?;
     let noise_floor = floors.summary();
     let explanation = explain(
         &problem,
@@ -340,6 +430,7 @@ pub fn diagnose(
                     tolerance_low: c.band_low,
                     tolerance_high: c.band_high,
                     consistent_with_file: true,
+                    ambiguous_with: c.ambiguous_with.iter().map(|a| a.to_string()).collect(),
                     sentence: c.sentence.clone(),
                 }
             })

@@ -31,7 +31,8 @@ pub struct CaseScore {
     pub verdict: Verdict,
     /// The hidden effect is named first.
     pub correct: bool,
-    /// The hidden effect is in the first finding's ambiguity set.
+    /// The hidden effect is in the first finding's ambiguity set, or, on a drive without a
+    /// finding, in the ambiguity set of an estimate within the vehicle file's tolerance.
     pub ambiguous_correct: bool,
     /// The hidden parameter's nominal value (catalogue effects).
     pub nominal_value: Option<f64>,
@@ -96,8 +97,14 @@ pub fn score(
     };
     let hidden = truth.hidden.label();
     let correct = named == hidden;
-    let ambiguous_correct =
-        !correct && first.is_some_and(|f| f.ambiguous_with.iter().any(|a| a == hidden));
+    let ambiguous_correct = !correct
+        && match first {
+            Some(f) => f.ambiguous_with.iter().any(|a| a == hidden),
+            None => d
+                .estimates
+                .iter()
+                .any(|e| e.ambiguous_with.iter().any(|a| a == hidden)),
+        };
     let fitted_value = match (correct, truth.injection, first) {
         (true, Some(inj), Some(f)) => f.parameters.get(inj.effect.parameter()).map(|p| p.value),
         _ => None,
