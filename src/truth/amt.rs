@@ -6,10 +6,12 @@
 //! clutch travel 0 = engaged, 1 = open. Control runs every [`super::drive::CONTROL_DT_S`].
 //!
 //! # Behaviour
-//! - **Shift schedule by engine speed**: upshift when `ω_e > 1250 rpm + 400 rpm·pedal` and the
-//!   next gear keeps `ω_e ≥ 950 rpm`; downshift when `ω_e < 900 rpm + 250 rpm·pedal` (one gear,
-//!   two if one is not enough to reach 1100 rpm); at least 3 s between shifts (no hunting).
-//!   `pedal` is the driver's demand as a fraction of full load.
+//! - **Shift schedule by input-shaft speed** `ω_in = i_t·ω_p` (the output-shaft sensor; equal to
+//!   the engine speed while the clutch holds, and with the wheels while a worn clutch slips):
+//!   upshift when `ω_in > 1250 rpm + 400 rpm·pedal` and the next gear keeps `ω_in ≥ 950 rpm`;
+//!   downshift when `ω_in < 900 rpm + 250 rpm·pedal` (one gear, two if one is not enough to
+//!   reach 1100 rpm); at least 3 s between shifts (no hunting). `pedal` is the driver's demand
+//!   as a fraction of full load.
 //! - **Shift sequence**: torque ramp-down to 0 in 0.25 s → clutch open in 0.15 s → **neutral**
 //!   (gear out; CAN gear 0): selector travel 0.3 s, then the synchroniser brings the input
 //!   shaft to the new gear's speed (the plant engages at the speed match, a located event) while
@@ -18,10 +20,20 @@
 //! - **Launch** from standstill in the start gear (1st on grades above 3 %, else 2nd): the
 //!   engine is governed to 1000 rpm; the clutch travel is set for a clutch torque that rises at
 //!   2000 N·m/s up to the driver's demand, computed with the capacity the AMT believes (the
-//!   vehicle file's, so a worn clutch slips more); when the slip speed is below 10 rad/s the
-//!   clutch closes fully in 0.3 s.
-//! - **Stopping**: when the engine would fall below 720 rpm in the start gear (or below 3 m/s
+//!   vehicle file's at first); when the slip speed is below 10 rad/s the clutch closes fully in
+//!   0.3 s.
+//! - **Clutch-capacity adaptation** (as AMT clutch controllers learn their clutch's torque
+//!   characteristic): during a launch, once the requested clutch torque has stood at the demand
+//!   for 0.3 s while the clutch slips (> 5 rad/s), the torque the clutch really carries is the
+//!   engine's net torque less its inertia torque; the believed capacity moves toward
+//!   `believed·carried/requested` with a 0.5 s time constant (bounds 0.3–1.2 × the file's) and
+//!   is kept for later launches. A worn clutch is so closed further until it carries the launch
+//!   torque (a truck on a steep grade then gets away); fully engaged (pedal released, travel 0)
+//!   it still slips at full load, since its capacity is below the engine's torque.
+//! - **Stopping**: when the input shaft falls below 720 rpm in the start gear (or below 3 m/s
 //!   while braking) the clutch opens; at standstill the start gear is selected through neutral.
+//!   A launch never runs in a gear above the start gear from below 1 m/s: the clutch opens and
+//!   the start gear is selected.
 //! - **Traction limit**: the net torque demand is limited per gear to
 //!   `0.7·µ·F_z,axle·r_w/(i_t·i_f)` with the nominal axle load and µ = 0.8 (a gear-dependent
 //!   torque limit as AMT ECUs apply against wheel spin and driveline overload).
@@ -122,6 +134,8 @@ pub struct Amt {
     m_hold: f64,
     sync_started: bool,
     launch_t: f64,
+    last_engine: f64,
+    last_w_e: f64,
 }
 
 impl Amt {
@@ -145,6 +159,8 @@ impl Amt {
             m_hold: 0.0,
             sync_started: false,
             launch_t: 0.0,
+            last_engine: 0.0,
+            last_w_e: nominal.engine.idle_rad_s,
         }
     }
 
@@ -218,12 +234,20 @@ impl Amt {
                     self.enter(Phase::Open, t);
                     return self.out(0.0, action);
                 };
+                if g > self.start_gear(i.slope) && (i.stopped || i.v < 1.0) {
+                    // no launch in a gear above the start gear from (near) standstill: open, and
+                    // the start gear is selected through neutral
+                    self.enter(Phase::Open, t);
+                    let idle = self.govern(self.idle, i.w_e, 0.0, dt);
+                    return self.out(idle, action);
+                }
                 let dem = i.demand_nm.min(self.torque_limit(g)).max(0.0);
                 let m_cl = dem.min(2000.0 * (t - self.launch_t));
+                let slip = i.w_e - self.ratios[g] * i.w_p;
+                self.adapt_capacity(m_cl, dem, slip, i.w_e, t, dt);
                 let target_x = travel_for(&self.nominal, self.clutch_believed_nm, m_cl);
                 self.x = target_x;
                 engine = self.govern(1000.0 * RPM, i.w_e, m_cl, dt);
-                let slip = i.w_e - self.ratios[g] * i.w_p;
                 if slip.abs() < 10.0 && i.v > 0.3 {
                     self.enter(Phase::ClutchClose, t);
                     self.m_hold = engine;
@@ -240,19 +264,23 @@ impl Amt {
                 };
                 engine = i.demand_nm.min(self.torque_limit(g));
                 let start = self.start_gear(i.slope);
-                if i.w_e < 720.0 * RPM && (g <= start || i.v < 3.0) || (i.braking && i.v < 3.0) {
+                // the schedule reads the input-shaft speed (from the output-shaft sensor), which
+                // equals the engine speed while the clutch holds and stays with the wheels when
+                // a worn clutch slips
+                let w_in = self.ratios[g] * i.w_p;
+                if w_in < 720.0 * RPM && (g <= start || i.v < 3.0) || (i.braking && i.v < 3.0) {
                     self.enter(Phase::Open, t);
                 } else if t - self.last_shift_t > 3.0 {
                     let up = (1250.0 + 400.0 * i.pedal) * RPM;
                     let dn = (900.0 + 250.0 * i.pedal) * RPM;
-                    if i.w_e > up
+                    if w_in > up
                         && g + 1 < self.ratios.len()
-                        && i.w_e * self.ratios[g + 1] / self.ratios[g] >= 950.0 * RPM
+                        && w_in * self.ratios[g + 1] / self.ratios[g] >= 950.0 * RPM
                     {
                         self.begin_shift(g + 1, t, engine);
-                    } else if i.w_e < dn && g > 0 {
+                    } else if w_in < dn && g > 0 {
                         let mut ng = g - 1;
-                        if ng > 0 && i.w_e * self.ratios[ng] / self.ratios[g] < 1100.0 * RPM {
+                        if ng > 0 && w_in * self.ratios[ng] / self.ratios[g] < 1100.0 * RPM {
                             ng -= 1;
                         }
                         self.begin_shift(ng, t, engine);
@@ -324,7 +352,34 @@ impl Amt {
             }
         }
         let idle = self.kp * (self.idle - i.w_e);
-        self.out(engine.max(idle), action)
+        let engine = engine.max(idle);
+        self.last_engine = engine;
+        self.last_w_e = i.w_e;
+        self.out(engine, action)
+    }
+
+    /// Clutch-capacity adaptation during a launch (module doc): while the clutch slips at the
+    /// governed engine speed and the requested clutch torque `m_cl` has stood at the demand `dem`
+    /// for 0.3 s, the clutch carries what the engine gives less its inertia torque,
+    /// `M_obs = M_e,prev − J_e·Δω_e/Δt`; the believed capacity follows `M_obs/m_cl` of itself
+    /// with a 0.5 s time constant, bounded to 0.3–1.2 × the vehicle file's capacity.
+    fn adapt_capacity(&mut self, m_cl: f64, dem: f64, slip: f64, w_e: f64, t: f64, dt: f64) {
+        let settled = t - self.launch_t >= dem / 2000.0 + 0.3;
+        if !(settled && slip > 5.0 && m_cl > 100.0) {
+            return;
+        }
+        let m_obs = self.last_engine - self.nominal.j_e * (w_e - self.last_w_e) / dt;
+        let ratio = (m_obs / m_cl).clamp(0.5, 1.5);
+        let nom = self.nominal.clutch_nominal_nm;
+        self.clutch_believed_nm = (self.clutch_believed_nm
+            * (1.0 + (ratio - 1.0) * (dt / 0.5).min(1.0)))
+        .clamp(0.3 * nom, 1.2 * nom);
+    }
+
+    /// The clutch capacity the AMT currently believes, N·m (the vehicle file's until a launch
+    /// teaches it otherwise).
+    pub fn clutch_believed_nm(&self) -> f64 {
+        self.clutch_believed_nm
     }
 
     fn out(&self, engine_nm: f64, action: GearAction) -> AmtOutput {

@@ -11,7 +11,7 @@
 //! | `slope_quantization` | coarser slope sensor resolution on the bus | `slope_resolution` (1) | U[0.0125, 0.02] instead of 0.01 |
 //! | `signal_delay` | engine-torque CAN channel lags | `engine_torque_delay_s` (s) | U[0.1, 0.4] |
 //! | `driveline_backlash` | free play in each drive shaft (dead zone, located contact events) | `drive_shaft_lash_rad` (rad) | U[0.015, 0.05] |
-//! | `driveline_compliance` | drive-shaft stiffness scaled (lumped k_d = 2·k_s) | `k_d_nm_per_rad` (N·m/rad) | ×(1 ± U[0.25, 0.50]) |
+//! | `driveline_compliance` | lumped flexibility scaled: shafts k_s and tyre carcass C_κ/σ (σ ÷ f) both ×f | `k_d_nm_per_rad` (N·m/rad) | ×(1 ± U[0.25, 0.50]) |
 //! | `engine_torque_offset` | reported − produced torque offset (map error) | `engine_torque_offset_nm` (N·m) | ±U[40, 150] |
 //! | `clutch_slip` | worn clutch: kinetic capacity reduced, glazed facings (k_µ = 1.0) | `clutch_max_torque_nm` (N·m) | ×U[0.55, 0.65] |
 //!
@@ -313,9 +313,17 @@ pub fn apply(
                     (0.0, b)
                 }
                 "driveline_compliance" => {
-                    let k = value.unwrap_or_else(|| 2.0 * p.k_s * (1.0 + signed(rng, 0.25, 0.50)));
-                    p.k_s = k / 2.0;
-                    (2.0 * nominal.k_s, k)
+                    // the lumped flexibility (shafts in series with the tyres' carcass) scales
+                    // by f: both the shafts and the tyres' carcass stiffness C_κ/σ (σ ÷ f, C_κ
+                    // kept: the steady slip is unchanged) scale by f
+                    let k0 = p.lumped_stiffness();
+                    let f = match value {
+                        Some(k) => k / k0,
+                        None => 1.0 + signed(rng, 0.25, 0.50),
+                    };
+                    p.k_s *= f;
+                    p.tyre.relaxation_m /= f;
+                    (nominal.lumped_stiffness(), p.lumped_stiffness())
                 }
                 "engine_torque_offset" => {
                     let o = value.unwrap_or_else(|| signed(rng, 40.0, 150.0));

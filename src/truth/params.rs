@@ -183,9 +183,14 @@ pub struct TruckParams {
     pub i_f: f64,
     /// Final drive loss b_f, N·m·s/rad (at the carrier).
     pub b_f: f64,
-    /// Drive-shaft stiffness per side k_s = k_d/2 (two shafts in parallel give the file's k_d).
+    /// Drive-shaft stiffness per side k_s. The vehicle file's k_d is the lumped main
+    /// flexibility — both drive shafts in series with the tyres' torsional compliance — so the
+    /// shafts take what the tyres leave: `2·k_s = 1/(1/k_d − 1/k_ty)` with the tyres'
+    /// torsional stiffness `k_ty = 2·C_κ·r_w²/σ` (see [`TruckParams::tyre_torsional_stiffness`]
+    /// and [`TruckParams::lumped_stiffness`]).
     pub k_s: f64,
-    /// Drive-shaft damping per side c_s = c_d/2.
+    /// Drive-shaft damping per side c_s = c_d/2 (the file's lumped c_d on the axle wind-up; the
+    /// tyres add their own, speed-dependent damping through the relaxation length).
     pub c_s: f64,
     /// Drive-shaft lash (total free play per side), rad; 0 nominally.
     pub lash_rad: f64,
@@ -234,7 +239,8 @@ impl TruckParams {
     ///
     /// # Errors
     /// [`TruthError::BadParameter`] for a non-finite or non-positive value the plant divides by,
-    /// or fewer than one gear ratio.
+    /// fewer than one gear ratio, or a lumped `k_d_nm_per_rad` not below the tyres' torsional
+    /// stiffness (the shafts would need a non-positive or infinite stiffness).
     pub fn nominal(d: &DrivelineParams, ratios: &[f64]) -> Result<Self, TruthError> {
         if ratios.is_empty() || d.j_t_kg_m2.len() != ratios.len() {
             return Err(TruthError::BadParameter {
@@ -261,6 +267,17 @@ impl TruckParams {
         let j_wd = d.j_w_kg_m2 * 4.0 / 12.0 / 2.0;
         let m_eq = j_wd / (d.wheel_radius_m * d.wheel_radius_m);
         let low_damp = 2.0 * 0.5 * (slip / sigma * m_eq).sqrt();
+        // the file's k_d lumps shafts and tyres in series; the tyres' share is their carcass
+        // stiffness C_κ/σ at the wheel radius, both sides in parallel
+        let k_ty = 2.0 * slip / sigma * d.wheel_radius_m * d.wheel_radius_m;
+        let k_d = d.k_d_nm_per_rad;
+        check("k_d_nm_per_rad", k_d, k_d > 0.0)?;
+        check(
+            "k_d_nm_per_rad (must be below the tyres' torsional stiffness 2·C_κ·r_w²/σ)",
+            k_d,
+            k_d < k_ty,
+        )?;
+        let k_shafts = 1.0 / (1.0 / k_d - 1.0 / k_ty);
         let p = TruckParams {
             mass_kg: d.mass_kg,
             wheel_radius_m: d.wheel_radius_m,
@@ -289,7 +306,7 @@ impl TruckParams {
             c_p: d.c_p_nm_s_per_rad,
             i_f: d.final_drive_ratio,
             b_f: d.b_f_nm_s_per_rad,
-            k_s: d.k_d_nm_per_rad / 2.0,
+            k_s: k_shafts / 2.0,
             c_s: d.c_d_nm_s_per_rad / 2.0,
             lash_rad: 0.0,
             clutch_kinetic_nm: d.clutch_max_torque_nm,
@@ -489,6 +506,23 @@ impl TruckParams {
     /// damp 1–2 %; see [`super::plant`]).
     pub fn antisymmetric_damping(&self) -> f64 {
         0.04 * (self.k_s * self.j_s).sqrt()
+    }
+
+    /// Torsional stiffness of the driven tyres at the axle, both sides, N·m/rad:
+    /// `k_ty = 2·C_κ·r_w²/σ`. At low speed (|v|/σ well below the frequency of interest) the
+    /// relaxation-length tyre is a spring of longitudinal stiffness C_κ/σ at the contact patch
+    /// (its carcass), seen at the axle through r_w².
+    pub fn tyre_torsional_stiffness(&self) -> f64 {
+        2.0 * self.tyre.slip_stiffness_n / self.tyre.relaxation_m
+            * self.wheel_radius_m
+            * self.wheel_radius_m
+    }
+
+    /// The lumped main flexibility, N·m/rad: both shafts (2·k_s) in series with the tyres
+    /// (`k_ty`), `1/(1/(2·k_s) + 1/k_ty)` — what the vehicle file's k_d describes. Equal to the
+    /// file's k_d for the nominal truck.
+    pub fn lumped_stiffness(&self) -> f64 {
+        1.0 / (1.0 / (2.0 * self.k_s) + 1.0 / self.tyre_torsional_stiffness())
     }
 
     /// Equivalent translational mass of the body: m + J_wn/r_w², kg.

@@ -60,10 +60,16 @@
 //!   checked by [`Plant::settle_modes`].
 //!
 //! # Step size
-//! The fastest modes are the propeller shaft against the final drive (≈ 300 Hz at the file's
-//! k_p) and the half shafts against the side gears (≈ 160 Hz). RK4's stability limit on the
-//! imaginary axis is |λ|·h ≤ 2.8; [`STEP_S`] = 0.25 ms keeps |λ|·h below 0.5 for them, so they
-//! are resolved, not just stable (RK4 amplitude error per step (λh)⁶/144 ≈ 1e-4 at 0.5).
+//! The fastest modes: the left-against-right motion of a side gear on its drive shaft (J_s on
+//! k_s, ≈ 570 Hz: the shafts are stiff because the file's lumped k_d also holds the tyres'
+//! compliance, see [`super::params::TruckParams::lumped_stiffness`]), the propeller shaft against
+//! the final drive (≈ 300 Hz) and the axle wind-up, overdamped by the lumped c_d (real
+//! eigenvalues, the fastest ≈ −8.4e3 1/s). RK4's stability limit is |λ|·h ≤ 2.8 on the imaginary
+//! axis and 2.78 on the real one; [`STEP_S`] = 0.25 ms gives |λ|·h ≈ 2.2 at most (the axle
+//! wind-up; measured by `truth_plant_shuffle_frequency_matches_the_nominal_model_at_low_speed`),
+//! the propeller mode ≈ 0.5 (resolved: RK4 amplitude error per step (λh)⁶/144 ≈ 1e-4) and the
+//! side-gear mode ≈ 0.9 (stable; its numerical damping, (λh)⁶/144 ≈ 0.4 % per step, is a fifth
+//! of its 2 % structural damping; symmetric loads leave it unexcited).
 
 use super::clutch::{
     damper_torque, kinetic_capacity, locked_transmitted, stage_of, ClutchMode, DamperStage,
