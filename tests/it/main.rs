@@ -28,6 +28,7 @@ mod fault_injection;
 mod fixtures_regen;
 mod ingest_errors;
 mod ingest_fixtures;
+mod proof_independent;
 mod real_data;
 mod resample_props;
 mod resample_truth;
