@@ -47,6 +47,7 @@ use super::setup::Setup;
 use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
 use crate::io::OutputError;
 use crate::model::catalogue::Effect;
+use crate::model::driveline::DrivelineParams;
 use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
 use crate::model::tolerance::Tolerances;
 use crate::model::vehicle::VehicleFile;
@@ -149,6 +150,47 @@ pub fn tolerance_variance(
         }
     }
     Ok(out)
+}
+
+/// Smallest normalised longitudinal slip stiffness `C_κ / F_z` of a driven heavy-truck axle
+/// on a dry road, 1 (per unit slip): truck tyres measure about 8–15 (Pacejka, "Tire and
+/// Vehicle Dynamics", Elsevier); the lower end gives the larger slip.
+pub const SLIP_STIFFNESS_MIN: f64 = 8.0;
+/// Smallest share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's
+/// drive axle carries about 11.5 t (29 %); rigid trucks more.
+pub const DRIVEN_LOAD_SHARE_MIN: f64 = 0.25;
+
+/// Per row, the variance of the engine speed that the driven tyres' longitudinal slip, which
+/// the nominal model leaves out, allows: a wheel-based speed from free-rolling wheels misses
+/// the slip `κ = |F_x| / (C_κ F_z)` of the driven tyres, so the engine turns `ω_e κ` faster
+/// (drive) or slower (engine braking) than the rigid model predicts. `F_x = M_e i_t i_f / r_w`
+/// from the recorded torque and gear, `C_κ / F_z ≥` [`SLIP_STIFFNESS_MIN`] and
+/// `F_z ≥` [`DRIVEN_LOAD_SHARE_MIN`]` · m g` bound `κ` from above; `κ` is taken as spread
+/// uniformly up to that bound's magnitude about the model, variance `(ω_e κ_max)²/3`, as the
+/// tolerances are. `None` without the channels it needs. NaN-free: rows without a finite
+/// torque, gear or speed get 0.
+pub fn tyre_slip_variance(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> Option<Vec<f64>> {
+    let torque = log.signal("engine_torque")?;
+    let gear = log.signal("gear")?;
+    let w = log.signal("engine_speed")?;
+    let f_z = DRIVEN_LOAD_SHARE_MIN * p.mass_kg * p.gravity_m_per_s2;
+    Some(
+        (0..log.len())
+            .map(|i| {
+                let g = gear[i].round();
+                if !(torque[i].is_finite() && w[i].is_finite() && g >= 1.0) {
+                    return 0.0;
+                }
+                let Some(&i_t) = ratios.get(g as usize - 1) else {
+                    return 0.0;
+                };
+                let f_x = torque[i] * i_t * p.final_drive_ratio / p.wheel_radius_m;
+                let kappa = f_x.abs() / (SLIP_STIFFNESS_MIN * f_z);
+                let d = w[i] * kappa;
+                d * d / 3.0
+            })
+            .collect(),
+    )
 }
 
 /// Gears whose shuffle mode sets the modal test's tolerance margin ([`tolerance_shift`]): the
@@ -318,7 +360,15 @@ pub fn diagnose(
     let problem = setup.problem(log, actuation_variance.as_deref())?;
     // residual the vehicle file's tolerances allow is not a mismatch: its variance joins the
     // floor's per-row null variance
-    let allowed = tolerance_variance(&problem, &vehicle.tolerance)?;
+    let mut allowed = tolerance_variance(&problem, &vehicle.tolerance)?;
+    if let Some(slip) = tyre_slip_variance(log, &setup.nominal_truth.driveline, &setup.ratios) {
+        let v = allowed
+            .entry("engine_speed".to_string())
+            .or_insert_with(|| vec![0.0; slip.len()]);
+        for (a, s) in v.iter_mut().zip(&slip) {
+            *a += s;
+        }
+    }
     for f in floors.floors.iter_mut() {
         if let Some(v) = allowed.get(&f.signal) {
             for (n, a) in f.null_variance.iter_mut().zip(v) {
@@ -630,4 +680,50 @@ fn write_staged(
     diag.write_json(&stage.join("diagnosis.json"))?;
     names.push("diagnosis.json".into());
     Ok(names)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tyre_slip_variance_follows_the_traction_force_bound() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fixtures/vehicles/truck-40t.toml");
+        let vf = VehicleFile::load(&path).unwrap();
+        let p = vf.driveline.clone().unwrap();
+        let r = vf.gearbox.ratios.clone();
+        let log = DriveLog::from_columns(
+            100_000_000,
+            vec![
+                (
+                    "engine_torque",
+                    "N.m",
+                    vec![2000.0, -200.0, 2000.0, f64::NAN, 500.0],
+                ),
+                ("gear", "1", vec![12.0, 12.0, 0.0, 12.0, 1.0]),
+                (
+                    "engine_speed",
+                    "rad/s",
+                    vec![150.0, 150.0, 150.0, 150.0, 100.0],
+                ),
+            ],
+        );
+        let v = tyre_slip_variance(&log, &p, &r).unwrap();
+        // κ_max = M_e i_t i_f / r_w / (8 · 0.25 m g); variance (ω_e κ_max)²/3
+        let bound = |m_e: f64, i_t: f64, w: f64| {
+            let f_x = m_e * i_t * p.final_drive_ratio / p.wheel_radius_m;
+            let k = f_x.abs() / (SLIP_STIFFNESS_MIN * DRIVEN_LOAD_SHARE_MIN * p.mass_kg * 9.81);
+            (w * k).powi(2) / 3.0
+        };
+        assert!((v[0] - bound(2000.0, 1.0, 150.0)).abs() < 1e-12 * v[0].max(1.0));
+        // full load in top gear on the 40 t truck: a slip bound of about 1.6 %, 2.4 rad/s
+        let kappa = (3.0 * v[0]).sqrt() / 150.0;
+        assert!(kappa > 0.015 && kappa < 0.017, "{kappa}");
+        // engine braking slips the other way, by its own magnitude
+        assert!((v[1] - bound(-200.0, 1.0, 150.0)).abs() < 1e-12);
+        // neutral and a missing torque allow nothing
+        assert_eq!((v[2], v[3]), (0.0, 0.0));
+        assert!((v[4] - bound(500.0, r[0], 100.0)).abs() < 1e-9 * v[4]);
+    }
 }
