@@ -10,29 +10,11 @@
 //! a threshold or a shift (`clutch_slip`, `driveline_backlash`, `signal_delay`) one step reads
 //! a curved response at one arbitrary point, so the screen also probes ½ and 1½ times the
 //! step and judges the effect by the rung whose sensitivity removes the most train SSE
-//! ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER)); its full fit starts from the step's probe as every other's does
+//! ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER)); its full fit starts from the
+//! step's probe as every other's does
 //! (or from a start grid's best point where that is lower: `signal_delay`, `clutch_slip`).
-//! Steps (θ₀ the vehicle file's value):
-//!
-//! | effect | step `h_e` | physical domain of the fit |
-//! |---|---|---|
-//! | `aero_drag` | +25 % θ₀ | 0.25…4 θ₀ |
-//! | `rolling_resistance` | +30 % θ₀ | 0.25…4 θ₀ |
-//! | `vehicle_mass` | +15 % θ₀ | 0.5…2.5 θ₀ |
-//! | `grade_offset` | +0.01 rad | ±0.1 rad |
-//! | `slope_quantization` | switch to the dequantised slope at the recorded step | — |
-//! | `signal_delay` | +0.2 s (ladder 0.1, 0.2, 0.3 s) | 0…2 s |
-//! | `driveline_backlash` | +0.03 rad (ladder 0.015, 0.03, 0.045 rad) | 0…0.2 rad |
-//! | `driveline_compliance` | −35 % θ₀ | 0.1…4 θ₀ |
-//! | `engine_torque_offset` | +100 N·m | ±500 N·m |
-//! | `clutch_slip` | −30 % θ₀ (ladder −15, −30, −45 %) | 0.1…2 θ₀ |
-//! | `bogie_torque_reaction` | +0.4 | ±1 |
-//! | `load_transfer_height` | +0.25 m | 0.1…4 m |
-//! | `air_spring_nonlinearity` | +4 1/m | 0…20 1/m |
-//! | `cg_position` | +0.2 m | ±1.5 m |
-//! | `tyre_stiffness` | −30 % | 0.2…4 |
-//! | `grade_load_transfer` | +0.7 m | ±3 m |
-//!
+//! Steps and domains are the catalogue's ([`crate::model::catalogue::FitRule`], the "fit step"
+//! and "fit domain" columns of docs/diagnosis.md; θ₀ the vehicle file's value)
 //! (the step's sign flips where the domain ends). The probe simulates the effect's own model
 //! and, for longitudinal effects, the axle model too; the models whose outputs change are the
 //! ones the effect is fitted and scored on. Probes are taken once, in the first greedy round,
@@ -165,9 +147,10 @@ pub struct FitSpec {
     /// starts from the grid's best point ([`fit_effect`]).
     pub grid: Option<[f64; 3]>,
     /// Multiples of `step` the screen probes: the candidate test and the ranking take the
-    /// largest share of train SSE any rung's sensitivity removes ([`SCREEN_LADDER`] for the
-    /// effects whose outputs are not near-linear in the parameter over its realistic range;
-    /// `[1]` for the others); the full fit starts from the step's own probe (or the start
+    /// largest share of train SSE any rung's sensitivity removes
+    /// ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER) for the effects whose
+    /// outputs are not near-linear in the parameter over its realistic range; `[1]` for the
+    /// others); the full fit starts from the step's own probe (or the start
     /// grid's best point, `grid`).
     pub ladder: &'static [f64],
 }

@@ -1,24 +1,34 @@
-//! The diagnosis proof: synthetic drives with one concealed effect
-//! each — every catalogue effect, random magnitudes within the generator's realistic ranges,
-//! different roads and driving — plus drives with no effect and drives with an effect outside
-//! the catalogue; the diagnosis runs blind on each (it sees the drive and the nominal vehicle
-//! file, never the answer) and is scored against the answers kept apart.
+//! The diagnosis proof: synthetic drives with one concealed effect each — every catalogue
+//! effect the truth can hide, random magnitudes within realistic ranges, different roads and
+//! driving — plus drives with no effect and drives with an effect outside the catalogue; the
+//! diagnosis runs blind on each (it sees the drive and the nominal vehicle file, never the
+//! answer) and is scored against the answers kept apart. This module sits above the diagnosis
+//! and the generators; the diagnosis imports neither.
+//!
+//! # Truth
+//! [`TruthSource::Independent`] (the default, the proof) draws the drives from the independent
+//! truth plant ([`crate::truth`]), which shares no code with the models the diagnosis fits,
+//! has more structure than they do, and draws the truck's parameters around the vehicle file
+//! within its tolerances on every drive, the no-effect drives included.
+//! [`TruthSource::Model`] draws them from the diagnosis's own extended model
+//! ([`crate::synth::effects`]): an inversion check, labelled as such in every summary.
 //!
 //! # Plan
 //! Case `i` of a proof with seed `S` has the drive seed `S + i`. Effects cycle through the
-//! catalogue with extra slots per cycle: [`ProofConfig::clean_per_cycle`] drives without effect
-//! (4 by default, so that the false-positive rate is measured on more than a handful) and
-//! [`ProofConfig::out_of_catalogue_per_cycle`] with the out-of-catalogue stretch of extra
-//! rolling resistance (2), so `22 k` drives hold every effect `k` times. The road rule set is drawn per case (highway-se, freeway-us, city-se, urban-us
-//! with weights 3:3:2:2 — fleet trucks drive mostly on highways), the length uniformly in
-//! [`ProofConfig::length_km`]. The driving is drawn per case too ([`Driving::Drawn`],
+//! catalogue ([`ProofConfig::effects`]: the ten longitudinal effects on the independent truth,
+//! all sixteen on the model) with extra slots per cycle: [`ProofConfig::clean_per_cycle`]
+//! drives without effect (4) and [`ProofConfig::out_of_catalogue_per_cycle`] with an effect
+//! outside the catalogue on one stretch ([`Outside`]: 3 on the independent truth, one of each
+//! kind in turn; 2 on the model). The road rule set is drawn per case (highway-se, freeway-us,
+//! city-se, urban-us with weights 3:3:2:2 — fleet trucks drive mostly on highways), the length
+//! uniformly in [`ProofConfig::length_km`]; both truths drive the same roads and lengths case
+//! for case. On the model truth the driving is drawn per case too ([`Driving::Drawn`],
 //! [`drive_config`]): how briskly the driver accelerates and brakes, how tightly they hold the
-//! speed, how much their foot varies the torque, how often they lift off while driving on, and
-//! how long they stand at a stop. Every drive has the real-log conditions of issue 7 point 7:
-//! multi-rate quantised CAN with noise, launches, stops and AMT shifts, standstills, CAN
-//! dropouts ([`ProofConfig::dropouts`]), and starts from an unknown state for the diagnosis.
-//! The slope sensor is fine (0.1 %) unless the case hides `slope_quantization`, which is then
-//! the sensor's coarser step.
+//! speed, how much their foot varies the torque, how often they lift off, how long they stand
+//! at a stop; the independent truth has its own driver. Every drive has the conditions of a
+//! real log: multi-rate quantised CAN with noise, launches, stops and gear shifts,
+//! standstills, CAN dropouts ([`ProofConfig::dropouts`]), and starts from an unknown state for
+//! the diagnosis.
 //!
 //! # Scores
 //! - *named*: the first finding's effect (`none` for a drive without finding; `unexplained`

@@ -212,7 +212,7 @@ impl EffectChoice {
     /// parameter's unit).
     ///
     /// # Errors
-    /// [`EffectError::Unknown`] for an id outside the catalogue; [`EffectError::BadValue`] for a
+    /// [`EffectError::Unknown`] for an id outside the catalogue; [`EffectError::Parameter`] for a
     /// value that is not a number.
     pub fn parse(s: &str) -> Result<EffectChoice, EffectError> {
         match s {
