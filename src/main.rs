@@ -224,9 +224,10 @@ enum Command {
         /// the whole plan of --drives and --seed.
         #[arg(long, value_delimiter = ',')]
         cases: Vec<usize>,
-        /// The drives' driving: `drawn`, a driver drawn per drive (acceleration, braking,
-        /// speed holding, torque tips, lift-offs, stop time); `fixed`, the generator's one
-        /// default driver for every drive (the README's tables dated before the drawn driving).
+        /// The drives' driving on the model truth: `drawn`, a driver drawn per drive
+        /// (acceleration, braking, speed holding, torque tips, lift-offs, stop time); `fixed`,
+        /// the generator's one default driver for every drive. The independent truth has its
+        /// own driver and ignores it.
         #[arg(long, value_enum, default_value = "drawn")]
         driving: DrivingArg,
     },
