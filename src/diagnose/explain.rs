@@ -84,10 +84,14 @@
 //!    overlap the band `θ₀ ± w` around the file's value ([`crate::model::tolerance`]: the
 //!    file's `[tolerance]` entry, else the default of the parameter's kind). A vehicle file's
 //!    values are nominal: a healthy truck's drag area or shaft stiffness is never exactly the
-//!    file's, and a long drive fits it tightly enough to exclude the file's value. A
-//!    candidate that passes rules 1 to 3 with an interval inside or across the band is
-//!    reported as an estimate consistent with the file ([`ConsistentEstimate`]), and the next
-//!    passing candidate is tried. A switch has no band.
+//!    file's, and a long drive fits it tightly enough to exclude the file's value. When the
+//!    best candidate that passes rules 1 to 3 has an interval inside or across its band, the
+//!    round ends in an estimate consistent with the file ([`ConsistentEstimate`], with the
+//!    candidates that explain the data alike as its ambiguity set), not a finding: the
+//!    parameter takes its estimate, and the next round searches the remaining residual (at
+//!    most [`MAX_CONSISTENT_ROUNDS`] such rounds). A lesser candidate is not named in its
+//!    place: a reading within the file's tolerance explains the data better. A switch has no
+//!    band.
 //!
 //! Why 25 %: a catalogue effect at fleet magnitudes that the recorded signals can see removes
 //! most of the mismatch it causes (with its truth value the extended model reproduces the
