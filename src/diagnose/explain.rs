@@ -732,6 +732,37 @@ fn rule_gain(
     }
 }
 
+/// The passing candidates that explain the data alike with `fits[i]` (module documentation,
+/// "Ranking and isolability"): at least [`AMBIGUITY_GAIN_RATIO`] of its explained share and a
+/// fitted correction correlated with its own by at least [`AMBIGUITY_MIN_CORRELATION`] in
+/// absolute value; each with that correlation, in `passing`'s order.
+fn ambiguity_set(
+    ev: &Evaluator<'_, '_>,
+    base: &Eval,
+    fits: &[CandidateFit],
+    passing: &[usize],
+    i: usize,
+) -> Vec<(&'static str, f64)> {
+    let f = &fits[i];
+    let best = f.eval.as_ref().expect("fits keep their simulation");
+    passing
+        .iter()
+        .filter(|&&j| {
+            let floor = AMBIGUITY_GAIN_RATIO * f.explained;
+            j != i && fits[j].explained.partial_cmp(&floor) != Some(std::cmp::Ordering::Less)
+        })
+        .filter_map(|&j| {
+            let other = &fits[j];
+            let c = ev.correction_correlation(
+                base,
+                best,
+                other.eval.as_ref().expect("fits keep their simulation"),
+            );
+            (c.abs() >= AMBIGUITY_MIN_CORRELATION).then_some((other.effect, c))
+        })
+        .collect()
+}
+
 /// Explains `problem` (module documentation).
 ///
 /// # Errors
@@ -826,21 +857,10 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 ci_high: ci.hi,
                 unit: e.unit(),
             };
-            let mut ambiguous = Vec::new();
-            for &j in &passing {
-                if j == i || fits[j].explained < AMBIGUITY_GAIN_RATIO * f.explained {
-                    continue;
-                }
-                let other = &fits[j];
-                let c = ev.correction_correlation(
-                    &base,
-                    best,
-                    other.eval.as_ref().expect("fits keep their simulation"),
-                );
-                if c.abs() >= AMBIGUITY_MIN_CORRELATION {
-                    ambiguous.push(other.effect);
-                }
-            }
+            let ambiguous: Vec<&'static str> = ambiguity_set(&ev, &base, &fits, &passing, i)
+                .into_iter()
+                .map(|(a, _)| a)
+                .collect();
             let mut sentence =
                 consistent_sentence(e, nominal.get(e), &estimate, cfg.tolerances.of_effect(e));
             if !ambiguous.is_empty() {
@@ -887,23 +907,9 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         let f = &fits[i];
         let e = Effect::from_id(f.effect).expect("catalogue id");
         let best = f.eval.as_ref().expect("fits keep their simulation");
-        let mut ambiguous = Vec::new();
-        let mut corr = BTreeMap::new();
-        for &j in &passing {
-            if j == i || fits[j].explained < AMBIGUITY_GAIN_RATIO * f.explained {
-                continue;
-            }
-            let other = &fits[j];
-            let c = ev.correction_correlation(
-                &base,
-                best,
-                other.eval.as_ref().expect("fits keep their simulation"),
-            );
-            if c.abs() >= AMBIGUITY_MIN_CORRELATION {
-                ambiguous.push(other.effect);
-                corr.insert(other.effect.to_string(), c);
-            }
-        }
+        let set = ambiguity_set(&ev, &base, &fits, &passing, i);
+        let ambiguous: Vec<&'static str> = set.iter().map(|(a, _)| *a).collect();
+        let corr: BTreeMap<String, f64> = set.iter().map(|(a, c)| (a.to_string(), *c)).collect();
         // accept: new parameters; the fit's simulation holds every model's new outputs
         let before = std::mem::replace(&mut bases, best.outputs.clone());
         theta.set(e, f.value);

@@ -122,28 +122,26 @@ pub fn generate(
     drives_dir: &Path,
     answers_dir: &Path,
 ) -> Result<GeneratedCase, GenerateError> {
+    let name = format!("case-{:04}", case.index);
+    let dir = drives_dir.join(&name);
+    let answer = answers_dir.join(format!("{name}.json"));
     match cfg.truth {
-        TruthSource::Model => generate_model(case, vehicle, cfg, drives_dir, answers_dir)
+        TruthSource::Model => generate_model(case, vehicle, cfg, &dir, &answer)
             .map_err(|e| GenerateError::Model(Box::new(e))),
-        TruthSource::Independent => {
-            generate_independent(case, vehicle, cfg, drives_dir, answers_dir)
-        }
+        TruthSource::Independent => generate_independent(case, vehicle, cfg, &dir, &answer),
     }
 }
 
-/// [`generate`] on the independent truth: the truck drawn around the vehicle file within
+/// [`generate`] on the independent truth (the drive into `dir`, the answer into `answer`): the truck drawn around the vehicle file within
 /// its tolerances, the case's concealed effect, `cfg`'s CAN dropouts; logged, ingested and
 /// written as the model-based drives are.
 fn generate_independent(
     case: &ProofCase,
     vehicle: &Path,
     cfg: &ProofConfig,
-    drives_dir: &Path,
-    answers_dir: &Path,
+    dir: &Path,
+    answer: &Path,
 ) -> Result<GeneratedCase, GenerateError> {
-    let name = format!("case-{:04}", case.index);
-    let dir = drives_dir.join(&name);
-    let answer = answers_dir.join(format!("{name}.json"));
     let vf = VehicleFile::load(vehicle)?;
     let effect = match case.hidden {
         Hidden::Nothing => TruthEffect::None,
@@ -162,15 +160,17 @@ fn generate_independent(
         },
     )?;
     drive.bus = drive.bus.clone().with_dropouts(cfg.dropouts);
-    crate::truth::write_independent_drive(&drive, vehicle, &dir, case.seed)?;
+    crate::truth::write_independent_drive(&drive, vehicle, dir, case.seed)?;
     // the answer goes apart from the drive's folder, which the diagnosis reads
     let beside = dir.join("answer.json");
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| GenerateError::Io { path, source }
     };
-    std::fs::create_dir_all(answers_dir).map_err(io(answers_dir))?;
-    std::fs::rename(&beside, &answer).map_err(io(&answer))?;
+    if let Some(answers_dir) = answer.parent() {
+        std::fs::create_dir_all(answers_dir).map_err(io(answers_dir))?;
+    }
+    std::fs::rename(&beside, answer).map_err(io(answer))?;
     let (injection, stretch) = match &drive.concealed {
         Concealed::None => (None, None),
         Concealed::Catalogue {
@@ -195,7 +195,7 @@ fn generate_independent(
         case: case.clone(),
         drive: dir.join("drive.parquet"),
         vehicle: dir.join("vehicle.toml"),
-        answer,
+        answer: answer.to_path_buf(),
         truth: ProofTruth {
             hidden: case.hidden,
             injection,
@@ -205,17 +205,14 @@ fn generate_independent(
     })
 }
 
-/// [`generate`] on the model truth.
+/// [`generate`] on the model truth: the drive into `dir`, the answer into `answer`.
 fn generate_model(
     case: &ProofCase,
     vehicle: &Path,
     cfg: &ProofConfig,
-    drives_dir: &Path,
-    answers_dir: &Path,
+    dir: &Path,
+    answer: &Path,
 ) -> Result<GeneratedCase, DriveError> {
-    let name = format!("case-{:04}", case.index);
-    let dir = drives_dir.join(&name);
-    let answer = answers_dir.join(format!("{name}.json"));
     let choice = match case.hidden {
         Hidden::Nothing => EffectChoice::None,
         Hidden::Effect(e) => EffectChoice::Given(e, None),
@@ -226,18 +223,18 @@ fn generate_model(
         case.rules,
         case.length_km,
         case.seed,
-        &dir,
+        dir,
         &drive_config(case, cfg),
         Some(&HiddenEffect {
             choice,
-            answer_path: answer.clone(),
+            answer_path: answer.to_path_buf(),
         }),
     )?;
     Ok(GeneratedCase {
         case: case.clone(),
         drive: r.parquet,
         vehicle: r.vehicle,
-        answer,
+        answer: answer.to_path_buf(),
         truth: ProofTruth {
             hidden: case.hidden,
             injection: r.injection,
