@@ -129,6 +129,9 @@ pub struct Engagement {
     pub rows: Range<usize>,
     /// Measured vehicle speed at the window start, m/s (NaN without a speed column).
     pub speed_mps: f64,
+    /// Mean recorded engine torque over the window, N·m (0 without a torque column; the
+    /// finite samples only).
+    pub engine_torque_nm: f64,
 }
 
 /// The clutch closings of `log` whose analysis window is usable (see [`ModalConfig`] for the
@@ -151,6 +154,19 @@ pub fn engagements(log: &DriveLog, cfg: &ModalConfig) -> Vec<Engagement> {
     let speed = log
         .signal("vehicle_speed")
         .and_then(|v| fill_gaps(v, Interpolation::Linear));
+    let torque = log.signal("engine_torque");
+    let mean_torque = |r: Range<usize>| {
+        let Some(m) = torque else { return 0.0 };
+        let (sum, k) = m[r]
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold((0.0, 0usize), |(s, k), x| (s + x, k + 1));
+        if k > 0 {
+            sum / k as f64
+        } else {
+            0.0
+        }
+    };
     let n = t.len();
     let mut out = Vec::new();
     let mut prev_open = false;
@@ -183,6 +199,7 @@ pub fn engagements(log: &DriveLog, cfg: &ModalConfig) -> Vec<Engagement> {
                     gear: g0.round() as usize,
                     rows: a..b,
                     speed_mps: speed.as_ref().map_or(f64::NAN, |v| v[a]),
+                    engine_torque_nm: mean_torque(a..b),
                 });
             }
         }
@@ -545,14 +562,14 @@ fn t_test(x: &[f64]) -> Option<(f64, f64, f64)> {
 
 /// Fits the mode of every usable engagement of `log` ([`engagements`]) on the measured engine
 /// speed `measured` and the simulated `simulated` (rad/s on the log's rows; the same rows for
-/// both), adds the nominal linearised mode when `nominal` (driveline parameters and gear
-/// ratios) is given, and compares the measured modes with `reference` per gear and for the
+/// both), adds the nominal linearised mode when `nominal` (driveline parameters, gear ratios
+/// and the drive's tyre share of the main flexibility, [`tyre_mode`]) is given, and compares the measured modes with `reference` per gear and for the
 /// drive (see the module documentation).
 pub fn compare_modes(
     log: &DriveLog,
     measured: &[f64],
     simulated: &[f64],
-    nominal: Option<(&DrivelineParams, &[f64])>,
+    nominal: Option<(&DrivelineParams, &[f64], f64)>,
     reference: Reference,
     cfg: &ModalConfig,
 ) -> ModalComparison {
@@ -564,9 +581,11 @@ pub fn compare_modes(
             EngagementModes {
                 measured: fit_damped_sinusoid(&t[r.clone()], &measured[r.clone()], cfg),
                 simulated: fit_damped_sinusoid(&t[r.clone()], &simulated[r], cfg),
-                linearised: nominal.and_then(|(p, ratios)| {
+                linearised: nominal.and_then(|(p, ratios, share)| {
                     (e.gear <= ratios.len() && e.speed_mps.is_finite())
-                        .then(|| locked_mode(p, ratios, e.gear, e.speed_mps))
+                        .then(|| {
+                            tyre_mode(p, ratios, e.gear, e.speed_mps, e.engine_torque_nm, share)
+                        })
                         .flatten()
                 }),
                 engagement: e,
@@ -736,9 +755,12 @@ pub fn locked_mode(
     if gear == 0 || gear > ratios.len() {
         return None;
     }
-    let lin = crate::model::linear::linearize(p, ratios, gear, v0_mps);
-    lin.open
-        .eigenvalues()
+    lowest_mode(&crate::model::linear::linearize(p, ratios, gear, v0_mps).open)
+}
+
+/// The lowest-frequency complex eigenvalue pair of `ss` as a mode.
+fn lowest_mode(ss: &crate::model::linear::StateSpace) -> Option<LockedMode> {
+    ss.eigenvalues()
         .into_iter()
         .filter(|l| l.im > 1e-6)
         .min_by(|a, b| a.im.total_cmp(&b.im))
@@ -748,8 +770,70 @@ pub fn locked_mode(
         })
 }
 
-/// The relative shift of the first torsional mode that the vehicle file's tolerances allow
-/// in `gear` at `v0_mps`: each stiffness (`k_c`, `k_p`, `k_d`) and each inertia (`J_e`,
+/// Friction coefficient of the driven tyres on the road, 1: dry asphalt under a truck tyre
+/// (0.7–0.9); sets the force their tangent stiffness falls with ([`tyre_mode`]).
+pub const TYRE_FRICTION: f64 = 0.8;
+/// Share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's drive
+/// axle at its EU limit of 11.5 t (Directive 96/53/EC). Sets the driven tyres' load and, as a
+/// share of `J_w`, their inertia ([`tyre_mode`]).
+pub const DRIVEN_LOAD_SHARE: f64 = 0.29;
+
+/// The driven tyres of `p` taking the share `share` of the main flexibility `k_d`
+/// ([`crate::model::linear::DrivenTyres`]) under the recorded engine torque `engine_torque_nm`
+/// in `gear`: traction force `F_x = M_e·i_t·i_f/r_w` against `F_x,max` =
+/// [`TYRE_FRICTION`]` · `[`DRIVEN_LOAD_SHARE`]` · m g` (|ρ| at most 0.95), relaxation length
+/// `r_w` (the order of magnitude Pacejka §7.2 gives: of the tyre's radius), driven-wheel
+/// inertia [`DRIVEN_LOAD_SHARE`]` · J_w`.
+pub fn driven_tyres(
+    p: &DrivelineParams,
+    ratios: &[f64],
+    gear: usize,
+    engine_torque_nm: f64,
+    share: f64,
+) -> crate::model::linear::DrivenTyres {
+    let i = ratios.get(gear.wrapping_sub(1)).copied().unwrap_or(1.0) * p.final_drive_ratio;
+    let f_x = engine_torque_nm * i / p.wheel_radius_m;
+    let f_max = TYRE_FRICTION * DRIVEN_LOAD_SHARE * p.mass_kg * p.gravity_m_per_s2;
+    crate::model::linear::DrivenTyres {
+        share,
+        traction_ratio: if f_max > 0.0 && f_x.is_finite() {
+            (f_x / f_max).clamp(-0.95, 0.95)
+        } else {
+            0.0
+        },
+        relaxation_length_m: p.wheel_radius_m,
+        wheel_inertia_kg_m2: DRIVEN_LOAD_SHARE * p.j_w_kg_m2,
+    }
+}
+
+/// [`locked_mode`] with the driven tyres taking the share `share` of the main flexibility
+/// under the engine torque `engine_torque_nm` ([`driven_tyres`],
+/// [`crate::model::linear::linearize_with_tyres`]): the tyres' relaxation at speed, their
+/// stiffness falling with the traction force and the driven wheels' inertia inside the
+/// flexibility all move the shuffle mode. `share = 0` is [`locked_mode`].
+pub fn tyre_mode(
+    p: &DrivelineParams,
+    ratios: &[f64],
+    gear: usize,
+    v0_mps: f64,
+    engine_torque_nm: f64,
+    share: f64,
+) -> Option<LockedMode> {
+    if gear == 0 || gear > ratios.len() {
+        return None;
+    }
+    if share <= 0.0 {
+        return locked_mode(p, ratios, gear, v0_mps);
+    }
+    let t = driven_tyres(p, ratios, gear, engine_torque_nm, share);
+    lowest_mode(&crate::model::linear::linearize_with_tyres(
+        p, ratios, gear, v0_mps, &t,
+    ))
+}
+
+/// The relative shift of the first torsional mode (the driven tyres taking `share` of the main
+/// flexibility, no traction, [`tyre_mode`]) that the vehicle file's tolerances allow in `gear`
+/// at `v0_mps`: each stiffness (`k_c`, `k_p`, `k_d`) and each inertia (`J_e`,
 /// `J_c`, `J_t`, `J_p`, `J_f`, `J_d`, `J_w`) and the mass moved alone to the edge of its band
 /// ([`Tolerances::of_key`]), the relative change of the linearised frequency taken in
 /// magnitude, and the magnitudes summed: the largest shift a driveline whose every value lies
@@ -763,9 +847,11 @@ pub fn tolerance_shift(
     ratios: &[f64],
     gear: usize,
     v0_mps: f64,
+    share: f64,
     tolerances: &Tolerances,
 ) -> f64 {
-    let Some(f0) = locked_mode(p, ratios, gear, v0_mps).map(|m| m.frequency_hz) else {
+    let mode = |q: &DrivelineParams| tyre_mode(q, ratios, gear, v0_mps, 0.0, share);
+    let Some(f0) = mode(p).map(|m| m.frequency_hz) else {
         return 0.0;
     };
     type Set = fn(&mut DrivelineParams, f64);
@@ -799,7 +885,7 @@ pub fn tolerance_shift(
             let shift = |factor: f64| {
                 let mut q = p.clone();
                 set(&mut q, factor);
-                locked_mode(&q, ratios, gear, v0_mps).map(|m| (m.frequency_hz / f0 - 1.0).abs())
+                mode(&q).map(|m| (m.frequency_hz / f0 - 1.0).abs())
             };
             Some(
                 shift(1.0 + r)
@@ -1124,6 +1210,7 @@ pub(crate) mod tests {
                 gear,
                 rows: 0..1,
                 speed_mps: 10.0,
+                engine_torque_nm: 0.0,
             },
             measured: Ok(fit(fm)),
             simulated: Ok(fit(fs)),
@@ -1242,6 +1329,7 @@ pub(crate) mod tests {
                         gear,
                         rows: 0..1,
                         speed_mps: v,
+                        engine_torque_nm: 0.0,
                     },
                     measured: Ok(fit(f + jitter)),
                     simulated: Err(ModalReject::TooShort),
@@ -1301,7 +1389,7 @@ pub(crate) mod tests {
             "mass_kg",
         ];
         // every band closed: no shift allowed
-        assert_eq!(tolerance_shift(&p, &ratios, 1, 3.0, &zero(&all)), 0.0);
+        assert_eq!(tolerance_shift(&p, &ratios, 1, 3.0, 0.0, &zero(&all)), 0.0);
         // only k_d's ±10 % open: at most the square-root law's 1 − √0.9 = 5.1 %, and most of
         // it, since the drive shafts are the main flexibility
         let only_kd: Vec<&str> = all
@@ -1309,10 +1397,10 @@ pub(crate) mod tests {
             .copied()
             .filter(|k| *k != "k_d_nm_per_rad")
             .collect();
-        let s = tolerance_shift(&p, &ratios, 1, 3.0, &zero(&only_kd));
+        let s = tolerance_shift(&p, &ratios, 1, 3.0, 0.0, &zero(&only_kd));
         assert!(s > 0.03 && s <= 1.0 - 0.9_f64.sqrt() + 1e-12, "{s}");
         // the default bands add the others' shifts on top
-        let d = tolerance_shift(&p, &ratios, 1, 3.0, &Tolerances::default());
+        let d = tolerance_shift(&p, &ratios, 1, 3.0, 0.0, &Tolerances::default());
         assert!(d > s && d < 0.15, "{d} vs {s}");
     }
 
@@ -1333,7 +1421,7 @@ pub(crate) mod tests {
             let margin = (1..=4)
                 .map(|g| {
                     let v0 = vehicle_speed_at(d, r, g, OPERATING_ENGINE_SPEED_RAD_S);
-                    tolerance_shift(d, r, g, v0, &vf.tolerance)
+                    tolerance_shift(d, r, g, v0, 0.0, &vf.tolerance)
                 })
                 .fold(0.0, f64::max);
             eprintln!("{file}: modal tolerance margin {:.2} %", 100.0 * margin);

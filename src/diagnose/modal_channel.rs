@@ -51,7 +51,7 @@
 //! part of the split; otherwise the longitudinal model is compared on the speeds alone (a drive
 //! with few engagements keeps its diagnosis).
 
-use super::modal::{engagements, fit_damped_sinusoid, locked_mode, ModalConfig};
+use super::modal::{engagements, fit_damped_sinusoid, locked_mode, tyre_mode, ModalConfig};
 use crate::model::driveline::DrivelineParams;
 use crate::table::DriveLog;
 
@@ -77,6 +77,8 @@ pub struct ModeSample {
     pub gear: usize,
     /// Measured vehicle speed at the window start, m/s.
     pub speed_mps: f64,
+    /// Mean recorded engine torque over the window, N·m.
+    pub engine_torque_nm: f64,
     /// Measured `ln f` (f in Hz).
     pub ln_frequency: f64,
     /// Weight `1 / (s_i² + s_floor²)`.
@@ -121,6 +123,7 @@ pub fn measure(
                 row: e.rows.start,
                 gear: e.gear,
                 speed_mps: e.speed_mps,
+                engine_torque_nm: e.engine_torque_nm,
                 ln_frequency: fit.frequency_hz.ln(),
                 weight: 1.0 / var,
             })
@@ -129,22 +132,147 @@ pub fn measure(
         .collect()
 }
 
-/// The simulated channel on `n` rows for the driveline `p`: `ln f` of the linearised mode on
-/// each sample's row, 0 on every other row (not valid there). Where the linearised driveline
-/// of `p` has no oscillating mode (parameters far outside any truck's), the sample's measured
-/// value minus 10 stands in: a residual far outside any floor, rather than a NaN or −∞ that
-/// would poison the sums.
-pub fn simulate(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64], n: usize) -> Vec<f64> {
+/// The simulated channel on `n` rows for the driveline `p` whose driven tyres take the share
+/// `tyre_share` of the main flexibility ([`fit_tyre_share`]): `ln f` of the linearised mode
+/// ([`tyre_mode`], at the sample's speed and engine torque) on each sample's row, 0 on every
+/// other row (not valid there). Where the linearised driveline of `p` has no oscillating mode
+/// (parameters far outside any truck's), the sample's measured value minus 10 stands in: a
+/// residual far outside any floor, rather than a NaN or −∞ that would poison the sums.
+pub fn simulate(
+    samples: &[ModeSample],
+    p: &DrivelineParams,
+    ratios: &[f64],
+    tyre_share: f64,
+    n: usize,
+) -> Vec<f64> {
     let mut out = vec![0.0; n];
     for s in samples {
         if let Some(v) = out.get_mut(s.row) {
-            *v = match locked_mode(p, ratios, s.gear, s.speed_mps) {
+            *v = match sample_mode(s, p, ratios, tyre_share) {
                 Some(m) if m.frequency_hz > 0.0 => m.frequency_hz.ln(),
                 _ => s.ln_frequency - 10.0,
             };
         }
     }
     out
+}
+
+/// The linearised mode of sample `s` ([`tyre_mode`]).
+fn sample_mode(
+    s: &ModeSample,
+    p: &DrivelineParams,
+    ratios: &[f64],
+    tyre_share: f64,
+) -> Option<super::modal::LockedMode> {
+    tyre_mode(
+        p,
+        ratios,
+        s.gear,
+        s.speed_mps,
+        s.engine_torque_nm,
+        tyre_share,
+    )
+}
+
+/// Largest tyre share of the main flexibility [`fit_tyre_share`] considers.
+pub const MAX_TYRE_SHARE: f64 = 0.95;
+
+/// The drive's share of the main flexibility taken by the driven tyres
+/// ([`crate::model::linear::DrivenTyres`]), estimated from its shuffle modes: weighted least
+/// squares of `ln f_measured − ln f(k_d·e^x, s)` ([`tyre_mode`] at each sample's gear, speed
+/// and engine torque) over `(x, s)`, the drive-shaft stiffness free beside the share so that a
+/// stiffness off its nominal value is not taken for tyre compliance. The share acts through
+/// the traction force (the tyres soften under it), the speed (they relax) and the gear (the
+/// driven wheels' inertia weighs more against a small engine-side inertia), the stiffness on
+/// every mode alike, so a drive's engagements separate the two. Search: the best `x`
+/// (Gauss–Newton, central differences, 8 steps) on each share of the grid `0, 0.05, …,`
+/// [`MAX_TYRE_SHARE`], then golden-section refinement of the share within ±0.05 of the grid's
+/// best (the best `x` again at each).
+///
+/// Model structure, not a catalogue effect: the vehicle file lumps shafts and tyres in `k_d`
+/// and says nothing of how they share it (docs/diagnosis.md, "Model-form residual"). 0 (the
+/// nominal model) with fewer than three samples.
+pub fn fit_tyre_share(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64]) -> f64 {
+    if samples.len() < 3 {
+        return 0.0;
+    }
+    let k0 = p.k_d_nm_per_rad;
+    let residuals = |x: f64, share: f64| -> Option<Vec<f64>> {
+        let mut q = p.clone();
+        q.k_d_nm_per_rad = k0 * x.exp();
+        samples
+            .iter()
+            .map(|s| {
+                let f = sample_mode(s, &q, ratios, share)?.frequency_hz;
+                (f > 0.0).then(|| (s.ln_frequency - f.ln()) * s.weight.sqrt())
+            })
+            .collect()
+    };
+    let ss = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    // the best x at a share, and its sum of squares
+    let profile = |share: f64| -> f64 {
+        let h = 1e-3;
+        let mut x = 0.0_f64;
+        for _ in 0..8 {
+            let (Some(rp), Some(rm), Some(r)) = (
+                residuals(x + h, share),
+                residuals(x - h, share),
+                residuals(x, share),
+            ) else {
+                return f64::INFINITY;
+            };
+            let (mut a, mut g) = (0.0, 0.0);
+            for i in 0..r.len() {
+                let j = (rp[i] - rm[i]) / (2.0 * h);
+                a += j * j;
+                g += j * r[i];
+            }
+            if a <= 0.0 {
+                break;
+            }
+            let x1 = (x - g / a).clamp(-2.0, 2.0);
+            let done = (x1 - x).abs() < 1e-7;
+            x = x1;
+            if done {
+                break;
+            }
+        }
+        residuals(x, share).map_or(f64::INFINITY, |r| ss(&r))
+    };
+    let steps = (MAX_TYRE_SHARE / 0.05).round() as usize;
+    let (mut best, mut best_ss) = (0.0, f64::INFINITY);
+    for k in 0..=steps {
+        let share = 0.05 * k as f64;
+        let v = profile(share);
+        if v < best_ss {
+            (best, best_ss) = (share, v);
+        }
+    }
+    if !best_ss.is_finite() {
+        return 0.0;
+    }
+    // golden section on [best − 0.05, best + 0.05] ∩ [0, MAX]
+    let (mut a, mut b) = ((best - 0.05).max(0.0), (best + 0.05).min(MAX_TYRE_SHARE));
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (profile(c), profile(d));
+    for _ in 0..12 {
+        if fc < fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - g * (b - a);
+            fc = profile(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + g * (b - a);
+            fd = profile(d);
+        }
+    }
+    let (m, fm) = if fc < fd { (c, fc) } else { (d, fd) };
+    if fm < best_ss {
+        m
+    } else {
+        best
+    }
 }
 
 #[cfg(test)]
@@ -160,13 +288,14 @@ mod tests {
             row: 3,
             gear: 8,
             speed_mps: 12.0,
+            engine_torque_nm: 0.0,
             ln_frequency: 0.0,
             weight: 1.0,
         };
-        let a = simulate(&[s], &p, &ratios, 5);
+        let a = simulate(&[s], &p, &ratios, 0.0, 5);
         let mut stiff = p.clone();
         stiff.k_d_nm_per_rad *= 1.21;
-        let b = simulate(&[s], &stiff, &ratios, 5);
+        let b = simulate(&[s], &stiff, &ratios, 0.0, 5);
         // other rows are not valid and hold 0
         assert_eq!((a[0], a[4], b[0]), (0.0, 0.0, 0.0));
         // a stiffer shaft raises ln f by at most ½ ln 1.21 (the shaft is one of the mode's
@@ -176,8 +305,98 @@ mod tests {
         // a heavier truck lowers it, by far less than the stiffness raises it
         let mut heavy = p.clone();
         heavy.mass_kg *= 1.19;
-        let c = simulate(&[s], &heavy, &ratios, 5);
+        let c = simulate(&[s], &heavy, &ratios, 0.0, 5);
         assert!(c[3] < a[3] && a[3] - c[3] < d, "{} {} {}", a[3], c[3], d);
+    }
+
+    #[test]
+    fn the_tyre_mode_reduces_to_the_lumped_mode_and_softens_with_traction_speed_and_share() {
+        let (p, ratios) = vehicle();
+        // share 0 is the nominal model
+        for gear in [1, 6, 12] {
+            let a = locked_mode(&p, &ratios, gear, 10.0).unwrap();
+            let b = tyre_mode(&p, &ratios, gear, 10.0, 500.0, 0.0).unwrap();
+            assert_eq!(a, b);
+        }
+        // at standstill (no relaxation), no traction and a negligible driven-wheel inertia the
+        // split flexibility is the lumped one: shafts and tyres in series are k_d
+        let lin = crate::model::linear::linearize(&p, &ratios, 3, 0.0);
+        let t = crate::model::linear::DrivenTyres {
+            share: 0.6,
+            traction_ratio: 0.0,
+            relaxation_length_m: 0.5,
+            wheel_inertia_kg_m2: 1e-6,
+        };
+        let split = crate::model::linear::linearize_with_tyres(&p, &ratios, 3, 0.0, &t);
+        let f = |ss: &crate::model::linear::StateSpace| {
+            ss.eigenvalues()
+                .into_iter()
+                .filter(|l| l.im > 1e-6)
+                .map(|l| l.im)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (f0, f1) = (f(&lin.open), f(&split));
+        // within 0.5 %: the lumped damper c_d acts across the shafts alone in the split model,
+        // which moves the damped frequency by 0.2 % here
+        assert!((f1 / f0 - 1.0).abs() < 5e-3, "{f0} {f1}");
+        // traction softens the tyres: the mode falls with the engine torque, either sign
+        let mode = |gear, v, tq, share| tyre_mode(&p, &ratios, gear, v, tq, share).unwrap();
+        let (idle, pull, brake) = (
+            mode(3, 3.0, 0.0, 0.6),
+            mode(3, 3.0, 1500.0, 0.6),
+            mode(3, 3.0, -1500.0, 0.6),
+        );
+        assert!(pull.frequency_hz < idle.frequency_hz);
+        assert!((pull.frequency_hz - brake.frequency_hz).abs() < 1e-9);
+        // the driven wheels inside the flexibility lower a high gear's mode, where the
+        // engine-side inertia is small against them
+        let (rigid, split) = (
+            locked_mode(&p, &ratios, 12, 1.0).unwrap(),
+            mode(12, 1.0, 0.0, 0.8),
+        );
+        assert!(
+            split.frequency_hz < 0.99 * rigid.frequency_hz,
+            "{split:?} {rigid:?}"
+        );
+    }
+
+    #[test]
+    fn the_tyre_share_is_recovered_beside_a_stiffness_error_and_is_zero_on_a_rigid_driveline() {
+        let (p, ratios) = vehicle();
+        // engagements as a drive has them: gears 2–12 at their speeds, various torques
+        let cases: Vec<(usize, f64, f64)> = (2..=12)
+            .flat_map(|g| {
+                let v = 1.0 + 1.8 * g as f64;
+                [(g, v, 300.0), (g, v, 1200.0), (g, v + 1.0, -150.0)]
+            })
+            .collect();
+        let samples = |q: &DrivelineParams, share: f64| -> Vec<ModeSample> {
+            cases
+                .iter()
+                .enumerate()
+                .map(|(row, &(gear, v, tq))| ModeSample {
+                    row,
+                    gear,
+                    speed_mps: v,
+                    engine_torque_nm: tq,
+                    ln_frequency: tyre_mode(q, &ratios, gear, v, tq, share)
+                        .unwrap()
+                        .frequency_hz
+                        .ln(),
+                    weight: 1.0 / (LN_FREQUENCY_FLOOR * LN_FREQUENCY_FLOOR),
+                })
+                .collect()
+        };
+        // a shaft 20 % softer and tyres taking 60 %: the share comes back, not absorbed by k_d
+        let mut soft = p.clone();
+        soft.k_d_nm_per_rad *= 0.8;
+        let s = fit_tyre_share(&samples(&soft, 0.6), &p, &ratios);
+        assert!((s - 0.6).abs() < 0.02, "{s}");
+        // the nominal model's own modes: no tyre share
+        let s0 = fit_tyre_share(&samples(&p, 0.0), &p, &ratios);
+        assert!(s0 < 0.02, "{s0}");
+        // too few samples: the nominal model
+        assert_eq!(fit_tyre_share(&samples(&p, 0.6)[..2], &p, &ratios), 0.0);
     }
 
     #[test]

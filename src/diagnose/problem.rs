@@ -259,6 +259,7 @@ pub struct Problem<'a> {
     left_out: Vec<String>,
     nominal_outputs: Vec<Vec<Vec<f64>>>,
     modes: Vec<ModeSample>,
+    tyre_share: f64,
     reversals: Vec<ReversalSample>,
     views: Vec<View>,
 }
@@ -460,6 +461,7 @@ impl<'a> Problem<'a> {
             Some(ch)
         };
         let mut modes = Vec::new();
+        let mut tyre_share = 0.0;
         let mut reversals = Vec::new();
         if let Some(m) = &long {
             let steady = super::compare::longitudinal_rows(log);
@@ -497,6 +499,9 @@ impl<'a> Problem<'a> {
                 ratios,
                 &ModalConfig::default(),
             );
+            // how the driven tyres share the main flexibility: model structure estimated on
+            // every engagement (modal_channel::fit_tyre_share)
+            tyre_share = modal_channel::fit_tyre_share(&samples, &nominal_truth.driveline, ratios);
             let events: Vec<(usize, f64, f64)> = samples
                 .iter()
                 .map(|s| (s.row, s.ln_frequency, s.weight))
@@ -515,6 +520,7 @@ impl<'a> Problem<'a> {
                         &samples,
                         &nominal_truth.driveline,
                         ratios,
+                        tyre_share,
                         n,
                     )],
                 ));
@@ -609,6 +615,7 @@ impl<'a> Problem<'a> {
             left_out,
             nominal_outputs,
             modes,
+            tyre_share,
             reversals,
             views,
         })
@@ -765,6 +772,12 @@ impl<'a> Problem<'a> {
         &self.left_out
     }
 
+    /// The share of the driveline's main flexibility the driven tyres take, estimated on this
+    /// drive's shuffle modes ([`super::modal_channel::fit_tyre_share`]; 0 without enough).
+    pub fn tyre_share(&self) -> f64 {
+        self.tyre_share
+    }
+
     /// Step of the recorded slope's quantisation lattice (tan α), when it has one.
     pub fn slope_step(&self) -> Option<f64> {
         self.slope_step
@@ -825,6 +838,7 @@ impl<'a> Problem<'a> {
                     &self.modes,
                     &p,
                     m.ratios(),
+                    self.tyre_share,
                     self.log.len(),
                 ))
             }

@@ -392,7 +392,14 @@ pub fn diagnose(
             let allowed = (1..=setup.ratios.len().min(MODAL_TOLERANCE_GEARS))
                 .map(|g| {
                     let v0 = vehicle_speed_at(d, &setup.ratios, g, OPERATING_ENGINE_SPEED_RAD_S);
-                    tolerance_shift(d, &setup.ratios, g, v0, &vehicle.tolerance)
+                    tolerance_shift(
+                        d,
+                        &setup.ratios,
+                        g,
+                        v0,
+                        problem.tyre_share(),
+                        &vehicle.tolerance,
+                    )
                 })
                 .fold(0.0, f64::max);
             let mut mcfg = ModalConfig::default();
@@ -401,7 +408,11 @@ pub fn diagnose(
                 log,
                 &es.measured,
                 &es.simulated,
-                Some((&setup.nominal_truth.driveline, &setup.ratios)),
+                Some((
+                    &setup.nominal_truth.driveline,
+                    &setup.ratios,
+                    problem.tyre_share(),
+                )),
                 Reference::Linearised,
                 &mcfg,
             );

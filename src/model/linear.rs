@@ -181,6 +181,82 @@ pub fn linearize(p: &DrivelineParams, ratios: &[f64], gear: usize, v0_mps: f64) 
     }
 }
 
+/// The driven tyres as part of the driveline's main flexibility, for
+/// [`linearize_with_tyres`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrivenTyres {
+    /// Share `s` of the lumped compliance `1/k_d` that the tyres take, in `[0, 1)`: the drive
+    /// shafts are `k_s = k_d/(1 − s)`, the tyres `k_ty = k_d/s` (in series: `k_d`).
+    pub share: f64,
+    /// Traction ratio `ρ = F_x/F_x,max` of the driven tyres, `|ρ| < 1`: their tangent stiffness
+    /// is `k_ty·(1 − ρ²)` (a saturating force law `F = F_max·tanh(C_κ κ/F_max)` has the slope
+    /// `C_κ·(1 − (F/F_max)²)`).
+    pub traction_ratio: f64,
+    /// Longitudinal relaxation length `σ`, m: the tyre deflection leaks at `|v₀|/σ`.
+    pub relaxation_length_m: f64,
+    /// Inertia of the driven wheels, kg·m², taken from the wheel-and-vehicle inertia `J4` to the
+    /// node between shafts and tyres.
+    pub wheel_inertia_kg_m2: f64,
+}
+
+/// The open-loop linear driveline of [`linearize`] with the main flexibility split into drive
+/// shafts and driven tyres ([`DrivenTyres`]), the driven wheels between them:
+/// `x = (ω_e, θ_e − θ_t, ω_p, θ_p − θ_f, ω_d, θ_d − θ_w, ω_w, u, ω_v)` — the first six as in
+/// [`linearize`]; `ω_w` the driven wheels (inertia `J_wd`); `u` the tyres' deflection angle at
+/// the wheel, `u̇ = ω_w − ω_v − (|v₀|/σ)·u` (Pacejka, "Tire and Vehicle Dynamics", 3rd ed.,
+/// Elsevier 2012, §7.2, the stretched-string relaxation); `ω_v = v/r_w` the vehicle with the
+/// other wheels (inertia `J4 − J_wd`). Torques: shafts `k_s·x₆ + c_d·(ω_d − ω_w)`, tyres
+/// `k_ty·(1 − ρ²)·u`; the linearised resistance acts on `ω_v`. Inputs `(M_e, F_dr)`, output
+/// `v = r_w·ω_v`. With `s = 0` the tyres are rigid and [`linearize`]'s open loop is returned.
+pub fn linearize_with_tyres(
+    p: &DrivelineParams,
+    ratios: &[f64],
+    gear: usize,
+    v0_mps: f64,
+    t: &DrivenTyres,
+) -> StateSpace {
+    let lin = linearize(p, ratios, gear, v0_mps);
+    let s = t.share.clamp(0.0, 0.99);
+    if s <= 1e-6 {
+        return lin.open;
+    }
+    let rw = p.wheel_radius_m;
+    let j4 = p.j4();
+    let jwd = t.wheel_inertia_kg_m2.clamp(1e-3 * j4, 0.5 * j4);
+    let jv = j4 - jwd;
+    let kd = p.k_d_nm_per_rad;
+    let (ks, kt) = (
+        kd / (1.0 - s),
+        kd / s * (1.0 - t.traction_ratio.powi(2)).max(0.01),
+    );
+    let cd = p.c_d_nm_s_per_rad;
+    let j3 = p.j_f_kg_m2 + p.j_d_kg_m2;
+    let leak = v0_mps.abs() / t.relaxation_length_m.max(1e-3);
+    let mut a = DMatrix::zeros(9, 9);
+    a.view_mut((0, 0), (6, 7))
+        .copy_from(&lin.open.a.view((0, 0), (6, 7)));
+    // ω̇_d: the shaft spring is k_s now
+    a[(4, 5)] = -ks / j3;
+    // ω̇_w = (k_s x₆ + c_d(ω_d − ω_w) − k_te u)/J_wd
+    a[(6, 4)] = cd / jwd;
+    a[(6, 5)] = ks / jwd;
+    a[(6, 6)] = -cd / jwd;
+    a[(6, 7)] = -kt / jwd;
+    // u̇ = ω_w − ω_v − leak·u
+    a[(7, 6)] = 1.0;
+    a[(7, 7)] = -leak;
+    a[(7, 8)] = -1.0;
+    // ω̇_v = (k_te u − r_w F)/J_v, the linearised resistance as in linearize (per J4 there)
+    a[(8, 7)] = kt / jv;
+    a[(8, 8)] = lin.open.a[(6, 6)] * j4 / jv + cd / jv;
+    let mut b = DMatrix::zeros(9, 2);
+    b[(0, 0)] = lin.open.b[(0, 0)];
+    b[(8, 1)] = -rw / jv;
+    let mut c = DMatrix::zeros(1, 9);
+    c[(0, 8)] = rw;
+    StateSpace { a, b, c }
+}
+
 /// The rigid-driveline ("low-frequency") response the flexible model tends to below its
 /// resonances: every inertia referred to the wheel, `J_tot = J4 + J3 + J2·i_f² + J1·(i_t i_f)²`,
 /// losses referred likewise, `F_dr → v` and `M_e → v` as first-order lags. Used as the reference
