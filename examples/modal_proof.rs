@@ -63,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &log,
             model.measured_engine_speed(),
             &sim.engine_speed,
-            Some((dl, &setup.ratios)),
+            Some((dl, &setup.ratios, 0.0)),
             Reference::Simulated,
             &cfg,
         );

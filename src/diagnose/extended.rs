@@ -411,12 +411,15 @@ pub struct LongitudinalConfig {
     /// The spans about the torque reversals integrate at [`FINE_STEP_S`] ([`fine_spans`]);
     /// `false` integrates them at `dt_s` too (kept to show what the fine spans change).
     pub fine_at_reversals: bool,
+    /// The driven tyres' slip is part of the model, its stiffness estimated on the drive
+    /// ([`super::tyre_slip`]); `false` keeps the wheels at the vehicle's speed.
+    pub tyre_slip: bool,
 }
 
 impl Default for LongitudinalConfig {
     /// 20 s windows (long enough for drag and mass to show as speed drift, short enough that
     /// the slope sensor's quantisation bias cannot build up), 5 ms steps, 1 m/s, the engine
-    /// side of a locked start from the measured engine speed.
+    /// side of a locked start from the measured engine speed, the tyres' slip modelled.
     fn default() -> Self {
         Self {
             window_s: 20.0,
@@ -424,6 +427,7 @@ impl Default for LongitudinalConfig {
             min_speed_mps: 1.0,
             measured_engine_side: true,
             fine_at_reversals: true,
+            tyre_slip: true,
         }
     }
 }
@@ -452,6 +456,7 @@ pub struct LongitudinalModel<'a> {
     fine: Vec<(f64, f64)>,
     v_meas: Vec<f64>,
     w_meas: Vec<f64>,
+    slip: super::tyre_slip::SlipEstimate,
     cfg: LongitudinalConfig,
 }
 
@@ -637,6 +642,15 @@ impl<'a> LongitudinalModel<'a> {
         let v_meas = filled(log, "vehicle_speed")?;
         let w_meas = filled(log, "engine_speed")?;
         let t: Vec<f64> = log.seconds_from_start();
+        let slip = if cfg.tyre_slip {
+            super::tyre_slip::estimate(log, &nominal_truth.driveline, ratios)
+        } else {
+            super::tyre_slip::SlipEstimate {
+                slip_per_newton: 0.0,
+                normalised_stiffness: f64::INFINITY,
+                rows: 0,
+            }
+        };
         Ok(Self {
             log,
             nominal_truth,
@@ -648,8 +662,14 @@ impl<'a> LongitudinalModel<'a> {
             t,
             v_meas,
             w_meas,
+            slip,
             cfg,
         })
+    }
+
+    /// The drive's tyre-slip estimate ([`super::tyre_slip::estimate`]).
+    pub fn slip(&self) -> super::tyre_slip::SlipEstimate {
+        self.slip
     }
 
     /// The nominal parameters.
@@ -798,6 +818,9 @@ impl<'a> LongitudinalModel<'a> {
             Some(p.final_drive_ratio / p.wheel_radius_m),
         )?;
         let sc = &rec.scenario;
+        // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
+        // a window's engine side starts from the recorded engine speed without it
+        let kappa = super::tyre_slip::slip_of_rows(&log, p, self.ratios, self.slip.slip_per_newton);
         let dt = if tm.lash_rad > 0.0 {
             self.cfg.dt_s.min(FINE_STEP_S)
         } else {
@@ -810,6 +833,14 @@ impl<'a> LongitudinalModel<'a> {
         let starts = &self.starts;
         let n_win = starts.len();
         let (mut ts, mut vs, mut ws) = (Vec::new(), Vec::new(), Vec::new());
+        // the driven tyres' slip of a sample, from the model's drive-shaft torque
+        // M_d = k_d·(twist beyond the lash) + c_d·(ω_d − ω_w), F_x = M_d / r_w
+        let slip_of = |y: &[f64; crate::sim::hybrid::N_STATES]| {
+            let half = 0.5 * tm.lash_rad;
+            let twist = y[6] - y[6].clamp(-half, half);
+            let m_d = p.k_d_nm_per_rad * twist + p.c_d_nm_s_per_rad * (y[5] - y[7]);
+            (self.slip.slip_per_newton * m_d / p.wheel_radius_m).clamp(-0.2, 0.2)
+        };
         for w in 0..n_win {
             let ta = starts[w];
             let tb = starts
@@ -828,12 +859,15 @@ impl<'a> LongitudinalModel<'a> {
             let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
             // a closed clutch whose engine runs well above the gearbox slips (a worn clutch
             // under full torque): the window starts slipping from the measured engine speed
-            let we = interp_linear(&self.t, &self.w_meas, ta);
+            // the recorded engine speed without the tyres' slip, which the model adds back on
+            // its output (both clutch modes: a slipping clutch's engine is compared in the
+            // same coordinates)
+            let we = interp_linear(&self.t, &self.w_meas, ta)
+                / (1.0 + interp_linear(&self.t, &kappa, ta));
             let slipping = we.is_finite() && we - y0[0] > SLIP_START_MIN_RAD_S;
             let mode = if engaged && v0 >= self.cfg.min_speed_mps && !slipping {
                 ClutchMode::Locked
             } else {
-                let we = interp_linear(&self.t, &self.w_meas, ta);
                 let sigma = if we >= y0[1] { 1.0 } else { -1.0 };
                 y0[0] = we;
                 ClutchMode::Slipping(sigma)
@@ -876,7 +910,8 @@ impl<'a> LongitudinalModel<'a> {
                 for k in 0..keep {
                     ts.push(tr.t[k]);
                     vs.push(p.wheel_radius_m * tr.y[k][7]);
-                    ws.push(tr.y[k][0]);
+                    // the engine turns faster than the vehicle's speed carries it by the slip
+                    ws.push(tr.y[k][0] * (1.0 + slip_of(&tr.y[k])));
                 }
             }
         }

@@ -15,3 +15,4 @@ pub mod problem;
 pub mod reversal_channel;
 pub mod run;
 pub mod setup;
+pub mod tyre_slip;

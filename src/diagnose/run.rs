@@ -44,10 +44,10 @@ use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig,
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::problem::{ExplainError, Problem};
 use super::setup::Setup;
+use super::tyre_slip::tyre_slip_variance;
 use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
 use crate::io::OutputError;
 use crate::model::catalogue::Effect;
-use crate::model::driveline::DrivelineParams;
 use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
 use crate::model::tolerance::Tolerances;
 use crate::model::vehicle::VehicleFile;
@@ -150,47 +150,6 @@ pub fn tolerance_variance(
         }
     }
     Ok(out)
-}
-
-/// Smallest normalised longitudinal slip stiffness `C_κ / F_z` of a driven heavy-truck axle
-/// on a dry road, 1 (per unit slip): truck tyres measure about 8–15 (Pacejka, "Tire and
-/// Vehicle Dynamics", Elsevier); the lower end gives the larger slip.
-pub const SLIP_STIFFNESS_MIN: f64 = 8.0;
-/// Smallest share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's
-/// drive axle carries about 11.5 t (29 %); rigid trucks more.
-pub const DRIVEN_LOAD_SHARE_MIN: f64 = 0.25;
-
-/// Per row, the variance of the engine speed that the driven tyres' longitudinal slip, which
-/// the nominal model leaves out, allows: a wheel-based speed from free-rolling wheels misses
-/// the slip `κ = |F_x| / (C_κ F_z)` of the driven tyres, so the engine turns `ω_e κ` faster
-/// (drive) or slower (engine braking) than the rigid model predicts. `F_x = M_e i_t i_f / r_w`
-/// from the recorded torque and gear, `C_κ / F_z ≥` [`SLIP_STIFFNESS_MIN`] and
-/// `F_z ≥` [`DRIVEN_LOAD_SHARE_MIN`]` · m g` bound `κ` from above; `κ` is taken as spread
-/// uniformly up to that bound's magnitude about the model, variance `(ω_e κ_max)²/3`, as the
-/// tolerances are. `None` without the channels it needs. NaN-free: rows without a finite
-/// torque, gear or speed get 0.
-pub fn tyre_slip_variance(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> Option<Vec<f64>> {
-    let torque = log.signal("engine_torque")?;
-    let gear = log.signal("gear")?;
-    let w = log.signal("engine_speed")?;
-    let f_z = DRIVEN_LOAD_SHARE_MIN * p.mass_kg * p.gravity_m_per_s2;
-    Some(
-        (0..log.len())
-            .map(|i| {
-                let g = gear[i].round();
-                if !(torque[i].is_finite() && w[i].is_finite() && g >= 1.0) {
-                    return 0.0;
-                }
-                let Some(&i_t) = ratios.get(g as usize - 1) else {
-                    return 0.0;
-                };
-                let f_x = torque[i] * i_t * p.final_drive_ratio / p.wheel_radius_m;
-                let kappa = f_x.abs() / (SLIP_STIFFNESS_MIN * f_z);
-                let d = w[i] * kappa;
-                d * d / 3.0
-            })
-            .collect(),
-    )
 }
 
 /// Gears whose shuffle mode sets the modal test's tolerance margin ([`tolerance_shift`]): the
@@ -696,6 +655,7 @@ fn write_staged(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::tyre_slip::{DRIVEN_LOAD_SHARE_MIN, SLIP_STIFFNESS_MIN};
 
     #[test]
     fn tyre_slip_variance_follows_the_traction_force_bound() {
