@@ -48,7 +48,10 @@
 //! under load); then, as with an open or actuated clutch, it starts slipping from the measured
 //! engine speed. A locked start takes its engine side from the measured engine speed too, the
 //! wheel from the vehicle speed, so that it starts in the phase of a running shuffle
-//! (`LongitudinalModel::measured_twist_rate`). [`AxleModel::simulate`]: the three bellow
+//! (`LongitudinalModel::measured_twist_rate`). The driven tyres slip
+//! ([`super::tyre_slip`]): the engine speed is reported as the model's times `1 + κ`, `κ` from
+//! the model's drive-shaft torque and the drive's fitted slip stiffness, and a window's engine
+//! side starts from the measured engine speed divided by `1 + κ`. [`AxleModel::simulate`]: the three bellow
 //! pressures on the log's rows, open loop from the steady state (the suspension is stable,
 //! nothing drifts).
 
@@ -857,11 +860,10 @@ impl<'a> LongitudinalModel<'a> {
             let x = sc.clutch_x.eval(ta + 1e-9);
             let (mut y0, _) = steady_state_locked(p, self.ratios, gear, v0, slope, sc.smoothing);
             let engaged = x <= p.clutch_l_lower * p.clutch_x_max;
-            // a closed clutch whose engine runs well above the gearbox slips (a worn clutch
-            // under full torque): the window starts slipping from the measured engine speed
             // the recorded engine speed without the tyres' slip, which the model adds back on
-            // its output (both clutch modes: a slipping clutch's engine is compared in the
-            // same coordinates)
+            // its output (both clutch modes alike); a closed clutch whose engine runs well
+            // above the gearbox slips (a worn clutch under full torque): the window starts
+            // slipping from it
             let we = interp_linear(&self.t, &self.w_meas, ta)
                 / (1.0 + interp_linear(&self.t, &kappa, ta));
             let slipping = we.is_finite() && we - y0[0] > SLIP_START_MIN_RAD_S;

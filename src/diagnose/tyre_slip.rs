@@ -184,10 +184,12 @@ pub fn slip_of_rows(
         .collect()
 }
 
-/// Per row, the variance of the engine speed that the driven tyres' longitudinal slip, which
-/// the nominal model leaves out, allows: a wheel-based speed from free-rolling wheels misses
-/// the slip `κ = |F_x| / (C_κ F_z)` of the driven tyres, so the engine turns `ω_e κ` faster
-/// (drive) or slower (engine braking) than the rigid model predicts. `F_x = M_e i_t i_f / r_w`
+/// Per row, the variance of the engine speed that the driven tyres' longitudinal slip allows
+/// about a model without it: a wheel-based speed from free-rolling wheels misses the slip
+/// `κ = |F_x| / (C_κ F_z)` of the driven tyres, so the engine turns `ω_e κ` faster (drive) or
+/// slower (engine braking) than a rigid model predicts. The located floor keeps this bound
+/// although the longitudinal model carries the slip ([`estimate`]): the estimate's own error
+/// and the slip's transients stay inside it. `F_x = M_e i_t i_f / r_w`
 /// from the recorded torque and gear, `C_κ / F_z ≥` [`SLIP_STIFFNESS_MIN`] and
 /// `F_z ≥` [`DRIVEN_LOAD_SHARE_MIN`]` · m g` bound `κ` from above; `κ` is taken as spread
 /// uniformly up to that bound's magnitude about the model, variance `(ω_e κ_max)²/3`, as the
