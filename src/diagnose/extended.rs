@@ -648,11 +648,7 @@ impl<'a> LongitudinalModel<'a> {
         let slip = if cfg.tyre_slip {
             super::tyre_slip::estimate(log, &nominal_truth.driveline, ratios)
         } else {
-            super::tyre_slip::SlipEstimate {
-                slip_per_newton: 0.0,
-                normalised_stiffness: f64::INFINITY,
-                rows: 0,
-            }
+            super::tyre_slip::SlipEstimate::RIGID
         };
         Ok(Self {
             log,

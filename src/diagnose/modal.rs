@@ -39,6 +39,7 @@
 //! Marquardt, J. SIAM 11 (1963) — the damped Gauss–Newton step (`λ·diag(JᵀJ)` scaling);
 //! Holm, Scand. J. Statist. 6 (1979) — the step-down correction.
 
+use super::tyre_slip::{DRIVEN_LOAD_SHARE, TYRE_FRICTION};
 use crate::model::catalogue::Tolerance;
 use crate::model::driveline::DrivelineParams;
 use crate::model::tolerance::Tolerances;
@@ -770,20 +771,12 @@ fn lowest_mode(ss: &crate::model::linear::StateSpace) -> Option<LockedMode> {
         })
 }
 
-/// Friction coefficient of the driven tyres on the road, 1: dry asphalt under a truck tyre
-/// (0.7–0.9); sets the force their tangent stiffness falls with ([`tyre_mode`]).
-pub const TYRE_FRICTION: f64 = 0.8;
-/// Share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's drive
-/// axle at its EU limit of 11.5 t (Directive 96/53/EC). Sets the driven tyres' load and, as a
-/// share of `J_w`, their inertia ([`tyre_mode`]).
-pub const DRIVEN_LOAD_SHARE: f64 = 0.29;
-
 /// The driven tyres of `p` taking the share `share` of the main flexibility `k_d`
 /// ([`crate::model::linear::DrivenTyres`]) under the recorded engine torque `engine_torque_nm`
 /// in `gear`: traction force `F_x = M_e·i_t·i_f/r_w` against `F_x,max` =
-/// [`TYRE_FRICTION`]` · `[`DRIVEN_LOAD_SHARE`]` · m g` (|ρ| at most 0.95), relaxation length
-/// `r_w` (the order of magnitude Pacejka §7.2 gives: of the tyre's radius), driven-wheel
-/// inertia [`DRIVEN_LOAD_SHARE`]` · J_w`.
+/// [`TYRE_FRICTION`]` · `[`DRIVEN_LOAD_SHARE`]` · m g` (|ρ| at most 0.95; constants of
+/// [`super::tyre_slip`]), relaxation length `r_w` (the order of magnitude Pacejka §7.2 gives:
+/// of the tyre's radius), driven-wheel inertia [`DRIVEN_LOAD_SHARE`]` · J_w`.
 pub fn driven_tyres(
     p: &DrivelineParams,
     ratios: &[f64],

@@ -39,11 +39,19 @@ pub const SLIP_STIFFNESS_MIN: f64 = 8.0;
 /// Smallest share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's
 /// drive axle carries about 11.5 t (29 %); rigid trucks more.
 pub const DRIVEN_LOAD_SHARE_MIN: f64 = 0.25;
+/// Friction coefficient of the driven tyres on the road, 1: dry asphalt under a truck tyre
+/// (0.7–0.9); sets the force their slip and tangent stiffness are limited by.
+pub const TYRE_FRICTION: f64 = 0.8;
+/// Typical share of the vehicle's weight on its driven axle, 1: a 40 t tractor-semitrailer's
+/// drive axle at its EU limit of 11.5 t (Directive 96/53/EC). Sets the driven tyres' load
+/// and, as a share of `J_w`, their inertia ([`super::modal::tyre_mode`]); the normalisation
+/// of [`SlipEstimate::normalised_stiffness`].
+pub const DRIVEN_LOAD_SHARE: f64 = 0.29;
 /// Lowest recorded speed of a row [`estimate`] uses, m/s: below it the relative slip
 /// `ω_e/(G v) − 1` divides by a small speed and the speed sensor's resolution dominates.
 pub const MIN_SPEED_MPS: f64 = 3.0;
 /// Largest traction force [`estimate`] uses, as a share of the tyres' friction limit
-/// `µ F_z,min` (µ = 0.8): the linear range of the force–slip curve.
+/// `µ F_z,min` (µ = [`TYRE_FRICTION`]): the linear range of the force–slip curve.
 pub const MAX_TRACTION_SHARE: f64 = 0.4;
 /// Largest relative slip beyond the bound `|F_x| / (C_κ,min)` a row [`estimate`] uses may show,
 /// 1: the rolling radius's deviation from the file's (tread wear and inflation, ±1–2 %) plus
@@ -57,10 +65,20 @@ pub const MIN_ROWS: usize = 200;
 pub struct SlipEstimate {
     /// Slip per newton of traction force `b = 1/C_κ`, 1/N (0: the rigid nominal model).
     pub slip_per_newton: f64,
-    /// Normalised slip stiffness `C_κ / (0.29 m g)` it corresponds to (infinite at 0).
+    /// Normalised slip stiffness `C_κ / (`[`DRIVEN_LOAD_SHARE`]` · m g)` it corresponds to
+    /// (infinite at 0).
     pub normalised_stiffness: f64,
     /// Rows used after trimming.
     pub rows: usize,
+}
+
+impl SlipEstimate {
+    /// No slip: the rigid nominal model.
+    pub const RIGID: SlipEstimate = SlipEstimate {
+        slip_per_newton: 0.0,
+        normalised_stiffness: f64::INFINITY,
+        rows: 0,
+    };
 }
 
 /// `(F_x, G)` of row `i`: traction force from the recorded torque and gear, N, and the
@@ -84,11 +102,7 @@ fn traction(
 /// Fits the drive's slip per newton (module documentation). The rigid model (`b = 0`) without
 /// the columns it needs or with fewer than [`MIN_ROWS`] usable rows.
 pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEstimate {
-    let rigid = SlipEstimate {
-        slip_per_newton: 0.0,
-        normalised_stiffness: f64::INFINITY,
-        rows: 0,
-    };
+    let rigid = SlipEstimate::RIGID;
     let (Some(torque), Some(gear), Some(w), Some(v), Some(clutch)) = (
         log.signal("engine_torque"),
         log.signal("gear"),
@@ -99,7 +113,7 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
         return rigid;
     };
     let weight = p.mass_kg * p.gravity_m_per_s2;
-    let f_max = 0.8 * DRIVEN_LOAD_SHARE_MIN * weight;
+    let f_max = TYRE_FRICTION * DRIVEN_LOAD_SHARE_MIN * weight;
     let b_max = 1.0 / (SLIP_STIFFNESS_MIN * DRIVEN_LOAD_SHARE_MIN * weight);
     let mut pts: Vec<(f64, f64)> = (0..log.len())
         .filter_map(|i| {
@@ -150,7 +164,7 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
     SlipEstimate {
         slip_per_newton: b,
         normalised_stiffness: if b > 0.0 {
-            1.0 / (b * 0.29 * weight)
+            1.0 / (b * DRIVEN_LOAD_SHARE * weight)
         } else {
             f64::INFINITY
         },
@@ -203,14 +217,12 @@ pub fn tyre_slip_variance(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -
     Some(
         (0..log.len())
             .map(|i| {
-                let g = gear[i].round();
-                if !(torque[i].is_finite() && w[i].is_finite() && g >= 1.0) {
-                    return 0.0;
-                }
-                let Some(&i_t) = ratios.get(g as usize - 1) else {
+                let Some((f_x, _)) = traction(torque, gear, i, p, ratios) else {
                     return 0.0;
                 };
-                let f_x = torque[i] * i_t * p.final_drive_ratio / p.wheel_radius_m;
+                if !w[i].is_finite() {
+                    return 0.0;
+                }
                 let kappa = f_x.abs() / (SLIP_STIFFNESS_MIN * f_z);
                 let d = w[i] * kappa;
                 d * d / 3.0
@@ -269,7 +281,7 @@ mod tests {
     fn the_slip_stiffness_is_recovered_and_a_rigid_drive_has_none() {
         let (p, ratios) = truck();
         // C_κ/F_z = 10 on 29 % of the weight; a rolling radius 1 % off the file's
-        let c = 10.0 * 0.29 * p.mass_kg * p.gravity_m_per_s2;
+        let c = 10.0 * DRIVEN_LOAD_SHARE * p.mass_kg * p.gravity_m_per_s2;
         let e = estimate(&drive(&p, &ratios, 0.01, 1.0 / c), &p, &ratios);
         assert!((e.normalised_stiffness / 10.0 - 1.0).abs() < 0.05, "{e:?}");
         assert!(e.rows > 2500, "{e:?}");
