@@ -1,8 +1,8 @@
 //! One drive-hour of the half-truck axle-load model (`sim::axle`): the deterministic stop-and-go
-//! drive of `sim::axle_scenarios::stop_and_go` on the seed 002 truck — drive torque, auxiliary
-//! braking, service braking to stops, grade within ±3 % — with its inputs sampled at 10 Hz as a
-//! recording provides them (36 000 samples per signal) and the outputs sampled at 10 Hz. The
-//! model integrates with fixed-step RK4 (step from `HalfTruck::step_s`, at most 2 ms).
+//! drive of `sim::axle_scenarios::stop_and_go` on the axle-load thesis truck — drive torque,
+//! auxiliary braking, service braking to stops, grade within ±3 % — with its inputs sampled at 10
+//! Hz as a recording provides them (36 000 samples per signal) and the outputs sampled at 10 Hz.
+//! The model integrates with fixed-step RK4 (step from `HalfTruck::step_s`, at most 2 ms).
 //! Real-time factor = 3600 s / wall time.
 //!
 //! Run: `cargo bench --bench axle`.

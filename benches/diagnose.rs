@@ -1,10 +1,10 @@
-//! Speed of the diagnosis (issue 7 point 8: one drive-hour in under 60 s on 2 cores): one
-//! synthetic drive of about an hour (65 km of Swedish main road, `highway-se`, seed 3, the
-//! seed 002 6x2 diesel truck, multi-rate quantised CAN with dropouts, a stop every 5 km) with a
-//! hidden aerodynamic-drag change, diagnosed from its canonical Parquet log as `fleetdyn
-//! diagnose` does (ingest → setup → compare → noise floor (12 Monte-Carlo copies) → locate →
-//! explain → verdict → contract files, report and plots), on the machine's cores (rayon's
-//! global pool; the CI machines have 2).
+//! Speed of the diagnosis (target: one drive-hour in under 60 s on 2 cores): one synthetic drive of
+//! about an hour (65 km of Swedish main road, `highway-se`, seed 3, the diesel variant of the
+//! axle-load thesis 6x2 truck, multi-rate quantised CAN with dropouts, a stop every 5 km) with a
+//! hidden aerodynamic-drag change, diagnosed from its canonical Parquet log as `fleetdyn diagnose`
+//! does (ingest → setup → compare → noise floor (12 Monte-Carlo copies) → locate → explain →
+//! verdict → contract files, report and plots), on the machine's cores (rayon's global pool; the CI
+//! machines have 2).
 //!
 //! A plain timing harness, not criterion: one run takes tens of seconds, and criterion's
 //! minimum of 10 samples would make the bench several minutes for no better figure. It prints

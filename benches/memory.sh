@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Peak memory of the nightly pipeline (issue 9 point 4), measured as the peak resident set size
+# Peak memory of the nightly pipeline, measured as the peak resident set size
 # (`/usr/bin/time -v`, "Maximum resident set size") of the fleetdyn process:
 #   (a) one 10-hour synthetic drive (fleetdyn synth drive, MCAP as CAN delivers it, and the
 #       canonical Parquet of the same drive) through pipelines/nightly.toml, one job;
@@ -9,7 +9,7 @@
 #
 #   bash benches/memory.sh [--drives N] [--hours H] [--keep DIR]
 #
-# Prints one line per measurement. Bound for (a): 1 GB (issue 9). Results: docs/memory.md.
+# Prints one line per measurement. Bound for (a): 1 GB. Results: docs/validation/benchmarks.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -335,7 +335,7 @@ fn slope_filter_response_matches_scipy() {
             assert!(dm <= 1e-8, "f={f}: {m} dB, got {}", sos.gain_db(*f, fs));
             assert!(dp <= 1e-9, "f={f}: phase {ph}, got {}", h.arg());
         }
-        // seed 000 §5: −30 dB required at 2e-2 1/m, ≈ −42 dB expected.
+        // Myklebust & Eriksson (2012), §5: −30 dB required at 2e-2 1/m, ≈ −42 dB expected.
         let g = sos.gain_db(2e-2, fs);
         assert!(g <= -30.0 && (g + 42.0).abs() < 0.5, "gain at 2e-2: {g}");
         println!(
@@ -427,7 +427,7 @@ fn alternative(sos: &Sos, x: &[f64], pad: usize, m: usize, kind: u8) -> Vec<f64>
 
 #[test]
 fn edge_error_matched_beats_scipy_default() {
-    // The seed 000 §5 slope filter, distance-sampled at 1 m.
+    // The road-slope filter of Myklebust & Eriksson (2012), §5, distance-sampled at 1 m.
     let sos = butter(3, 4e-3, 1.0, BandType::Lowpass).unwrap();
     let scipy = EdgeMode::Scipy { padlen: None };
     let matched = EdgeMode::default();

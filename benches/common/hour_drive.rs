@@ -1,9 +1,9 @@
 //! The drive-hour the stage benchmarks share (`benches/diagnose.rs`, `benches/peers/peer_side.rs`):
 //! one synthetic drive of about an hour — 65 km of Swedish main road (`highway-se`, seed 3), the
-//! seed 002 6x2 diesel truck, multi-rate quantised CAN with dropouts (start probability 0.001
-//! per sample, mean 0.3 s), a stop every 5 km, a hidden aerodynamic-drag change (c_w·A 6.6 m²
-//! instead of 5.5 m²) so a diagnosis has something to find. Written as `drive.mcap` (the JSON
-//! topics at their CAN rates) and `drive.parquet` (canonical) under the given folder.
+//! diesel variant of the axle-load thesis 6x2 truck, multi-rate quantised CAN with dropouts (start
+//! probability 0.001 per sample, mean 0.3 s), a stop every 5 km, a hidden aerodynamic-drag change
+//! (c_w·A 6.6 m² instead of 5.5 m²) so a diagnosis has something to find. Written as `drive.mcap`
+//! (the JSON topics at their CAN rates) and `drive.parquet` (canonical) under the given folder.
 
 use fleetdyn::model::catalogue::Effect;
 use fleetdyn::synth::can::Dropouts;

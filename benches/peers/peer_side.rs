@@ -1,14 +1,14 @@
-//! fleetdyn's side of the peer benchmark (`benches/peers/run.sh`, issue 8): runs one operation
-//! on inputs written by `benches/peers/peers.py`, repeats it, writes the result for the
-//! comparison and prints the timings as one JSON line (median and every run, s).
+//! fleetdyn's side of the peer benchmark (`benches/peers/run.sh`): runs one operation on inputs
+//! written by `benches/peers/peers.py`, repeats it, writes the result for the comparison and prints
+//! the timings as one JSON line (median and every run, s).
 //!
 //! ```text
 //! peer_side OP REPEATS ARG…
 //! ```
 //! Raw vectors are little-endian f64 files. Operations (the same parameters as the Python side):
 //! - `sosfiltfilt IN OUT`: 3rd-order Butterworth low-pass at 0.004 of the sampling rate (the
-//!   seed 000 §5 slope filter on a 1 m grid), zero-phase with scipy's edge handling (odd
-//!   extension, scipy's padlen) — fleetdyn's `EdgeMode::Scipy`;
+//!   road-slope filter of Myklebust & Eriksson (2012), §5, on a 1 m grid), zero-phase with scipy's
+//!   edge handling (odd extension, scipy's padlen) — fleetdyn's `EdgeMode::Scipy`;
 //! - `welch IN OUT`: Welch PSD, fs = 1, Hann window, nperseg 4096, 50 % overlap, density
 //!   scaling, constant detrend; written as the PSD values (fleetdyn also computes the χ²
 //!   interval, which scipy does not — included in its time);
@@ -17,14 +17,14 @@
 //! - `floor_sum IN OUT`: read the input once (a reduction: what a PSD that reads every sample
 //!   once cannot go below);
 //! - `driveline_accurate IN OUT TOL` / `driveline_fast IN OUT`: the locked-clutch driveline of
-//!   physics.md §1 (truck-40t, fixed gear, prescribed engine torque — an ideal torque source —
-//!   and road slope, both linear between input samples) simulated by the accurate
-//!   Dormand–Prince integrator (`HybridDriveline`, rtol = TOL, restarting at every input
-//!   sample) or the exponential integrator (`FastDriveline`, dt = one input sample). IN holds
-//!   `[fs_hz, gear, v0_mps, n, dM_e[0..=n], slope[0..=n]]`; the engine torque is the steady
-//!   torque at `v0` on `slope[0]` plus `dM_e`. OUT holds `[y0 (9 states), M_e[0..=n],
-//!   v[0..=n], w_e[0..=n]]` (the state at start, the torque used, vehicle and engine speed on
-//!   the input grid) so the peer integrates exactly the same problem;
+//!   docs/models/driveline.md (truck-40t, fixed gear, prescribed engine torque — an ideal torque
+//!   source — and road slope, both linear between input samples) simulated by the accurate
+//!   Dormand–Prince integrator (`HybridDriveline`, rtol = TOL, restarting at every input sample) or
+//!   the exponential integrator (`FastDriveline`, dt = one input sample). IN holds
+//!   `[fs_hz, gear, v0_mps, n, dM_e[0..=n], slope[0..=n]]`; the engine torque is the steady torque
+//!   at `v0` on `slope[0]` plus `dM_e`. OUT holds
+//!   `[y0 (9 states), M_e[0..=n], v[0..=n], w_e[0..=n]]` (the state at start, the torque used,
+//!   vehicle and engine speed on the input grid) so the peer integrates exactly the same problem;
 //! - `hour_drive DIR`: generates the bench drive-hour (`benches/common/hour_drive.rs`) into
 //!   DIR and prints its files and duration (not timed);
 //! - `ingest IN OUT`: `ingest_file` of an MCAP or Parquet log into the canonical drive log in

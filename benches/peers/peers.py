@@ -1,5 +1,5 @@
-"""Side-by-side benchmark of fleetdyn and the Python peers users would otherwise reach for
-(issue 8), in one run: the same inputs through the peer and through fleetdyn, outputs checked to
+"""Side-by-side benchmark of fleetdyn and the Python peers users would otherwise reach for,
+in one run: the same inputs through the peer and through fleetdyn, outputs checked to
 agree within stated tolerances, times as medians over repeats, and each stage's physical floor
 (the time to only move the same bytes), timed by fleetdyn's side on the same data.
 
@@ -17,11 +17,12 @@ Sections, what is compared, and the tolerance of "outputs agree":
              vs fleetdyn welch: max relative |Δ| ≤ 1e-9 per bin above 1e-12 of the peak (FFT
              round-off differs between pocketfft and realfft). Floors: copy (16 B/sample) for
              the filter, read (8 B/sample) for the PSD.
-  driveline  The locked-clutch driveline of physics.md §1 (truck-40t, gear 12, prescribed
-             engine torque and road slope sampled at 100 Hz, linear between samples; peer_side.rs
-             documents the input) — scipy.integrate.solve_ivp (Radau, LSODA; the right-hand side
-             written in plain Python floats, no Jacobian: what a user writes) against fleetdyn's
-             accurate Dormand–Prince (rtol 1e-8) and exponential (dt 10 ms) integrators.
+  driveline  The locked-clutch driveline of docs/models/driveline.md (truck-40t, gear 12,
+             prescribed engine torque and road slope sampled at 100 Hz, linear between samples;
+             peer_side.rs documents the input) — scipy.integrate.solve_ivp (Radau, LSODA; the
+             right-hand side written in plain Python floats, no Jacobian: what a user writes)
+             against fleetdyn's accurate Dormand–Prince (rtol 1e-8) and exponential (dt 10 ms)
+             integrators.
              Accuracy: max |Δv| and max |Δω_e| on the 100 Hz grid against a reference, solve_ivp
              Radau at rtol 1e-12 (cross-checked against fleetdyn's accurate integrator at 1e-12;
              their difference δ is the resolution of every error below). Matched accuracy: for
@@ -172,8 +173,9 @@ def driveline_input(t_end_s):
 
 
 class LockedDriveline:
-    """physics.md §1 with the clutch locked and a prescribed engine torque, as a user would
-    write it for solve_ivp (plain floats; inputs linear between the 100 Hz samples)."""
+    """The driveline of docs/models/driveline.md with the clutch locked and a prescribed engine
+    torque, as a user would write it for solve_ivp (plain floats; inputs linear between the 100 Hz
+    samples)."""
 
     def __init__(self, m_e, slope):
         with open(os.path.join(ROOT, "fixtures/vehicles/truck-40t.toml"), "rb") as f:

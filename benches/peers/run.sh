@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The side-by-side comparison of fleetdyn with its Python peers (issue 8), in one command:
+# The side-by-side comparison of fleetdyn with its Python peers, in one command:
 #   bash benches/peers/run.sh [--repeats R] [--n N] [--driveline-s T] [--only S,S] [--markdown FILE]
 # Makes its own venv (.venv-peers, ignored) with the pinned peers, builds fleetdyn's side
 # (benches/peers/peer_side.rs, release), runs the same inputs through both, checks the outputs

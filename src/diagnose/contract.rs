@@ -1,7 +1,7 @@
-//! The diagnosis output contract (diagnosis.md, "Output contract"): `diagnosis.json` and the same
-//! content as two Parquet tables for fleet-wide queries (`mismatch.parquet`,
-//! `findings.parquet`, schemas/outputs/{mismatch,findings}.toml). Field names are part of the
-//! contract; units are SI and named in every parameter entry.
+//! The diagnosis output contract (docs/diagnosis/contract.md): `diagnosis.json` and the same
+//! content as two Parquet tables for fleet-wide queries (`mismatch.parquet`, `findings.parquet`,
+//! schemas/outputs/{mismatch,findings}.toml). Field names are part of the contract; units are SI
+//! and named in every parameter entry.
 
 use crate::io::{config_hash, write_table, AtomicFile, OutColumn, OutData, OutputError, TableMeta};
 use serde::Serialize;

@@ -1,5 +1,5 @@
 //! Event features of a recorded drive for the driveline effects the windowed comparison cannot
-//! see (issue 7, `clutch_slip` and `driveline_backlash`; the study is `docs/events.md`):
+//! see (`clutch_slip` and `driveline_backlash`; the study is docs/diagnosis/events.md):
 //!
 //! - [`launch_clutch_torques`]: per launch from standstill, the clutch torque the recording
 //!   implies while the clutch slips, as a fraction of the nominal capacity at the recorded
@@ -9,10 +9,10 @@
 //!   each — where a lash in the driveline (`driveline_backlash`) shows.
 //!
 //! # Launch clutch torque
-//! While the clutch slips, the engine side obeys `J_e ω̇_e = M_e − M_k` (physics.md §1: the
-//! clutch passes its kinetic capacity `M_k`, signed by the slip, here positive: the engine
-//! drives), so the recording gives the transmitted torque `M̂_k = M_e − J_e ω̇_e` from the
-//! engine torque and the engine speed alone. The nominal capacity at the recorded position is
+//! While the clutch slips, the engine side obeys `J_e ω̇_e = M_e − M_k` (docs/models/driveline.md:
+//! the clutch passes its kinetic capacity `M_k`, signed by the slip, here positive: the engine
+//! drives), so the recording gives the transmitted torque `M̂_k = M_e − J_e ω̇_e` from the engine
+//! torque and the engine speed alone. The nominal capacity at the recorded position is
 //! [`DrivelineParams::clutch_capacity`]. Over the launch's slipping samples:
 //! - `ratio = Σ M̂_k C / Σ C²` (least squares through the origin): 1 for a clutch as the vehicle
 //!   file says, `M_k,true / M_k,nominal` for a worn one;
@@ -23,10 +23,10 @@
 //! A sample counts as slipping when the engine runs at least [`EventConfig::min_slip_rad_s`]
 //! faster than the gear's input speed `i_t i_f v / r_w`. Why that margin: right after a launch
 //! locks, the 1st-gear shuffle swings the engine speed against the wheels by up to ~100 rpm
-//! (overall ratio ~46), and those locked samples carry less than the capacity (measured on the
-//! 66 proof drives: a 50 rpm margin put clean launches' ratios as low as 0.3, 150 rpm kept 177
-//! of 181 launches of drives without a clutch or engine-torque effect within 0.84–0.99,
-//! `docs/events.md`). `ω̇_e` is the centred difference over
+//! (overall ratio ~46), and those locked samples carry less than the capacity (on the 66 proof
+//! drives a 50 rpm margin puts clean launches' ratios as low as 0.3, while 150 rpm keeps 177 of
+//! 181 launches of drives without a clutch or engine-torque effect within 0.84–0.99;
+//! docs/diagnosis/events.md). `ω̇_e` is the centred difference over
 //! ±[`EventConfig::derivative_halfwidth_s`].
 //!
 //! # Torque reversals
@@ -42,7 +42,7 @@
 //!
 //! # Conventions
 //! Times in s from the log's first row; speeds rad/s (engine) and m/s (vehicle); torques N·m,
-//! positive driving; clutch position 0 = engaged … 1 = open (drive-log.md).
+//! positive driving; clutch position 0 = engaged … 1 = open (docs/inputs.md).
 
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
@@ -56,7 +56,7 @@ pub struct EventConfig {
     /// Clutch position at or above which the clutch counts as open, fraction of travel.
     pub clutch_open_min: f64,
     /// Clutch position at or below which the clutch counts as closed (the 2 % of
-    /// [`super::compare::longitudinal_rows`]).
+    /// [`super::rows::longitudinal_rows`]).
     pub clutch_closed_max: f64,
     /// A launch starts below this measured speed, m/s (the AMT's standstill limit, 0.3 m/s).
     pub launch_speed_max_mps: f64,

@@ -1,5 +1,5 @@
-//! Step 3 of the diagnosis, explain (diagnosis.md): which catalogue effect the nominal model
-//! left out, fitted, scored on held-out data, accepted only by a rule fixed in advance — or
+//! Step 3 of the diagnosis, explain (docs/diagnosis/method.md): which catalogue effect the nominal
+//! model left out, fitted, scored on held-out data, accepted only by a rule fixed in advance — or
 //! nothing.
 //!
 //! # Method
@@ -40,8 +40,7 @@
 //! noise and floor for the reversals, each actuated row's own null variance for the clutch;
 //! [`super::problem`]).
 //!
-//! # Acceptance rule (fixed in advance; diagnosis.md "accept it only when a rule fixed in
-//! advance holds")
+//! # Acceptance rule (fixed in advance; docs/diagnosis/method.md)
 //! A fitted candidate is accepted only when all four hold:
 //! 1. **held-out error falls**: the held-out weighted RMSE of the signals of the effect's own
 //!    model falls by at least [`MIN_HELDOUT_GAIN`] (25 %) from the round's parameters (over
@@ -68,17 +67,16 @@
 //!    of exceeding 3.84 is largest at `D = 3.84`: `P(Z > 1.96)` = 2.5 %. The screen, which
 //!    looks at the same rows first (a switch is screened on every row, [`super::fit`]), can
 //!    only make passing rarer: for one fixed alternative the chance that the screen selects
-//!    it and the test passes is at most the test's own. Before, the switch was tested on
-//!    the train part alone, as a fitted parameter is, and five drives of the proof (seeds
-//!    2, 3, 5001, 7001) whose cure passed rules 1 and 2 failed there (train statistics
-//!    0.7–3.4 against 3.84), the held-out blocks holding more of the sensor's rounding than
-//!    the train blocks. For the same reason a
+//!    it and the test passes is at most the test's own. Tested on the train part alone, as a
+//!    fitted parameter is, a cure that passes rules 1 and 2 can fail where the held-out
+//!    blocks hold more of the sensor's rounding than the train blocks (train statistics
+//!    0.7–3.4 against 3.84 on such proof drives). For the same reason a
 //!    switch's rules 1 and 2 score every row too (each part's weighted mean square summed,
 //!    each part's non-white power averaged): with nothing fitted, the train rows are as much
 //!    held out as the held-out ones, and a whole-percent sensor's rounding shows where the
-//!    road crosses its steps, which on a 5 km drive may be mostly in one part (seed 9001's
-//!    case 48 at the truth: speeds 0.682 → 0.132 on the train blocks, 0.218 → 0.149 on the
-//!    held-out ones).
+//!    road crosses its steps, which on a 5 km drive may be mostly in one part (a proof drive
+//!    at the truth: the speeds' mean square 0.682 → 0.132 on the train blocks, 0.218 → 0.149
+//!    on the held-out ones).
 //!
 //! 4. **the interval lies outside the vehicle file's tolerance**: the 95 % interval does not
 //!    overlap the band `θ₀ ± w` around the file's value ([`crate::model::tolerance`]: the
@@ -97,9 +95,9 @@
 //! most of the mismatch it causes (with its truth value the extended model reproduces the
 //! drive to the clean drive's floor, `tests/it/diagnose_extended.rs`), whereas a wrong effect
 //! fitted to a clean drive's remaining mismatch (the whole-percent slope sensor's drift and
-//! bias, sensor noise) gains little on held-out blocks. Measured on 16 clean drives before the
-//! rule was fixed (city-se 5 km and highway-se 10 km, seeds 1–8, the test suite's
-//! `explain_table`): the largest held-out gains of fitted candidates were 0.38 (one highway
+//! bias, sensor noise) gains little on held-out blocks. On 16 clean drives, measured before
+//! the rule was fixed (city-se 5 km and highway-se 10 km, seeds 1–8, the test suite's
+//! `explain_table`), the largest held-out gains of fitted candidates are 0.38 (one highway
 //! drive), 0.21, 0.18, 0.14 and below 0.13 on the others; 25 % lies above all but the first.
 //! That one drive's mismatch is a real constant force of about 0.1 % of m·g — the partly
 //! dithered whole-percent slope sensor's mean quantisation error on that road — which no
@@ -108,7 +106,7 @@
 //!
 //! Why the non-white power and not `Q/n` alone: `Q/n` is normalised, and rises whenever a fit
 //! removes a fast structured error and leaves a smaller but slower one (measured on
-//! `signal_delay` drives: `Q/n` 0.37 → 0.62 while the held-out RMSE fell 57 %); the non-white
+//! `signal_delay` drives: `Q/n` 0.37 → 0.62 while the held-out RMSE falls 57 %); the non-white
 //! power falls when less of the residual is structure, and stays 0 for white noise of any
 //! level.
 //!
@@ -116,13 +114,11 @@
 //! is `mean_k c_k² / c_0`, which *grows* when a fit removes an error that is white at the
 //! lags (it lowers `c_0` and leaves every `c_k`), whereas `√(Q/n)·MS = √(mean_k c_k²)` is the
 //! autocovariance at the lags alone: white noise of any level leaves it as it is, and only
-//! less structure lowers it. This form replaced the first after the proof showed the flaw
-//! (`fleetdyn prove --seed 1`, case 49, `signal_delay`; `examples/whiteness_views.rs`): at
-//! the hidden delay the speeds' held-out mean square fell 1.94 → 1.32 and the reversals'
-//! 61.5 → 0.81, yet `(Q/n)·MS` rose on the speeds (0.47 → 0.60) — the delay's fast error was
-//! gone, the sensors' slow drift left — and rule 2 rejected the truth itself. Measured on
-//! four seeds of the proof (1, 2, 3, 1001), the change named that drive and
-//! changed nothing else (README, "Diagnosis proof").
+//! less structure lowers it. On a proof drive with a hidden `signal_delay`
+//! (`research/studies/whiteness_views.rs`), the fit at the true delay lowers the speeds'
+//! held-out mean square 1.94 → 1.32 and the reversals' 61.5 → 0.81, yet `(Q/n)·MS` rises on
+//! the speeds (0.47 → 0.60) — the delay's fast error is gone, the sensors' slow drift left —
+//! so a rule 2 on `(Q/n)·MS` would reject the truth itself.
 //!
 //! # Which views the rule scores
 //! Rules 1 and 2 score the views of the effect's own model that the fitted change moves by a
@@ -131,15 +127,15 @@
 //! view the fit barely moves cannot fall by itself, and averaged in it only dilutes the
 //! figure of the views that carry the effect: the slope cure moves the torque reversals by
 //! 1.3·10⁻⁴–4.7·10⁻³ (the screen's threshold of a change is 10⁻⁴, [`super::fit`]), whose
-//! mean square is 0.02–5, so on seed 9001's case 4 at the truth the rule's gain was 0.01
-//! with the reversals averaged in (held-out 2.404 → 2.410) and is 0.17 on the speeds alone
-//! (0.162 → 0.112). Measured at the truth on the 336 effect drives of the proof's seven
-//! seeds (`fleetdyn prove --seed S`, drawn driving; `examples/oracle_folds.rs` prints each
-//! view's change), 35 of the 508 changed (effect, view) pairs moved less than 10⁻²: the
+//! mean square is 0.02–5, so on a slope-cure drive of the proof at the truth the rule's gain
+//! is 0.01 with the reversals averaged in (held-out 2.404 → 2.410) and 0.17 on the speeds
+//! alone (0.162 → 0.112). At the truth on the 336 effect drives of the proof's seven seeds
+//! (`fleetdyn prove --seed S`, drawn driving; `research/studies/oracle_folds.rs` prints each
+//! view's change), 35 of the 508 changed (effect, view) pairs move less than 10⁻²: the
 //! reversals under the slope cure (13 of 13, at most 4.7·10⁻³) and under the mass (15 of
 //! 18) and the torque offset (2 of 6), the speeds under three worn clutches that hardly
-//! slipped on the road, one mass drive's shuffle modes (6.4·10⁻³) and one stiffness drive's
-//! reversals (1.6·10⁻³, where their mean square is 0.004). Every other pair moved 0.07 or
+//! slip on the road, one mass drive's shuffle modes (6.4·10⁻³) and one stiffness drive's
+//! reversals (1.6·10⁻³, where their mean square is 0.004). Every other pair moves 0.07 or
 //! more, most of them by far more (the lash the reversals by 7.7–180, the clutch the
 //! actuated engine speed by 0.17–2400). The fit and rule 3 still use every view the effect
 //! changes.
@@ -351,7 +347,7 @@ pub struct Round {
     pub consistent: Option<&'static str>,
 }
 
-/// A fitted parameter (diagnosis.md output contract).
+/// A fitted parameter (docs/diagnosis/contract.md).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ParameterEstimate {
     /// Value.
@@ -364,7 +360,7 @@ pub struct ParameterEstimate {
     pub unit: &'static str,
 }
 
-/// Before/after error of one signal (diagnosis.md output contract: RMSE).
+/// Before/after error of one signal (docs/diagnosis/contract.md: RMSE).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SignalFit {
     /// Train RMSE before.
@@ -392,7 +388,7 @@ pub struct BeforeAfter {
     pub heldout_after: f64,
 }
 
-/// RMSE, MAE and fit % of one signal before and after (diagnosis.md "Show").
+/// RMSE, MAE and fit % of one signal before and after (docs/diagnosis/method.md, "show").
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SignalMetrics {
     /// SI unit of RMSE and MAE.
@@ -442,7 +438,7 @@ pub struct Evidence {
     pub evaluations: usize,
 }
 
-/// One explained effect (diagnosis.md output contract: `effect`, `ambiguous_with`,
+/// One explained effect (docs/diagnosis/contract.md: `effect`, `ambiguous_with`,
 /// `sentence`, `parameters`, `fit`; `metrics` and `evidence` add MAE, fit % and the
 /// acceptance statistics).
 #[derive(Debug, Clone, Serialize)]
@@ -486,7 +482,7 @@ pub struct Explanation {
     pub theta: Theta,
 }
 
-/// Diagnosis verdict (diagnosis.md output contract), the contract's type.
+/// Diagnosis verdict (docs/diagnosis/contract.md), the contract's type.
 pub use super::contract::Verdict;
 
 /// The verdict from the findings, the estimates consistent with the vehicle file and step 2's

@@ -1,8 +1,8 @@
-//! The nominal models extended by every catalogue effect (diagnosis.md step 3): one parameter
-//! vector [`Theta`] whose component per [`Effect`] is that effect's parameter, in the same SI
-//! quantity the catalogue names (`c_w_a_f_m2`, `mass_kg`,
-//! `slope_offset_rad`, …; [`Effect::parameter`]). At the nominal values ([`Theta::nominal`]) the
-//! extended models are the nominal ones.
+//! The nominal models extended by every catalogue effect (docs/diagnosis/method.md, step 3): one
+//! parameter vector [`Theta`] whose component per [`Effect`] is that effect's parameter, in the
+//! same SI quantity the catalogue names (`c_w_a_f_m2`, `mass_kg`, `slope_offset_rad`, …;
+//! [`Effect::parameter`]). At the nominal values ([`Theta::nominal`]) the extended models are the
+//! nominal ones.
 //!
 //! # What each component does to the model
 //! - plant parameters (drag area, rolling resistance, mass, shaft stiffness, clutch capacity,
@@ -19,20 +19,20 @@
 //!   value changes), the centred hold. On a hill the lag is a grade error `(dα/dt)·P/2` of
 //!   one sign while the grade climbs — at 24.5 m/s on a 2.5·10⁻⁴ 1/m grade change and 10 Hz,
 //!   3·10⁻⁴ (55 N on the 18.7 t proof truck), 0.06 m/s of speed over a 20 s window — which
-//!   the noise floor, drawn about the recording, does not carry. Measured on the 84 no-effect
-//!   drives of `fleetdyn prove` seeds 1, 2, 3, 1001, 5001, 7001, 9001 (drawn driving): the
-//!   vehicle-speed windows below p = 10⁻⁴ fell from 0.45 % to 0.045 %, engine speed's from
-//!   0.86 % to 0.32 %; `examples/truth_residual.rs` had traced the largest share of four of the
-//!   eight clean `unexplained` windows it followed to the recorded slope;
+//!   the noise floor, drawn about the recording, does not carry. On the 84 no-effect drives of
+//!   `fleetdyn prove` seeds 1, 2, 3, 1001, 5001, 7001, 9001 (drawn driving), 0.45 % of the
+//!   vehicle-speed windows fall below p = 10⁻⁴ with the slope read as recorded and 0.045 % with
+//!   it read ahead, 0.86 % and 0.32 % of engine speed's; the lag is the largest share of most
+//!   clean `unexplained` windows read as recorded (`research/studies/truth_residual.rs`);
 //! - `slope_quantization`'s parameter is the slope sensor's resolution `Δ` (tan α per step): a
 //!   value above the nominal resolution replaces the recorded slope by its consistent
 //!   reconstruction from cells of width `Δ` on the 1 m distance grid, each widened by the
 //!   sensor's noise as the recording shows it ([`crate::signal::dequantise`]; a zero-phase
 //!   spatial reconstruction, the kind of cure the catalogue names; [`SlopeGrid::cured`]), so
-//!   the model no longer sees the steps. The seed 000 §5 low-pass
-//!   (4·10⁻³ 1/m) it replaces removed real grade on city hills (measured on the proof's seed 1
-//!   city drives: 0.013–0.019 rms of grade removed against 0.005 of quantisation error); the
-//!   reconstruction never moves a sample more than `Δ/2` plus the noise's σ.
+//!   the model does not see the steps. The road-slope low-pass of Myklebust & Eriksson (2012),
+//!   §5 (4·10⁻³ 1/m), would remove real grade on city hills (on the proof's seed-1 city drives,
+//!   0.013–0.019 rms of grade against 0.005 of quantisation error); the reconstruction never
+//!   moves a sample more than `Δ/2` plus the noise's σ.
 //!
 //! # Outputs
 //! [`LongitudinalModel::simulate`]: vehicle and engine speed on the log's rows, from windows
@@ -40,9 +40,9 @@
 //! stretch whose inputs the recording does not determine ([`window_starts`]): open-loop drift cannot
 //! accumulate over more than one window. A window starts at the recorded vehicle speed
 //! interpolated at its start. (A least-squares line through the second of samples before the
-//! start, to average the sensor's noise out of the start state, was tried and dropped: while
-//! the truck accelerates through the gears the windows then ran 0.10–0.13 m/s off, and all 12
-//! clean drives of `fleetdyn prove --seed 1` became `unexplained`.) A window starts with the
+//! start would average the sensor's noise out of the start state, but while the truck
+//! accelerates through the gears it puts the windows 0.10–0.13 m/s off, enough to make every
+//! clean drive of `fleetdyn prove --seed 1` `unexplained`.) A window starts with the
 //! clutch locked when it reads closed and the truck moves, unless the measured engine speed
 //! runs more than [`SLIP_START_MIN_RAD_S`] above the locked driveline's (a clutch slipping
 //! under load); then, as with an open or actuated clutch, it starts slipping from the measured
@@ -55,7 +55,6 @@
 //! pressures on the log's rows, open loop from the steady state (the suspension is stable,
 //! nothing drifts).
 
-use super::noise::{estimate_sensor_noise, grid_step_s, SampleKind};
 use crate::model::axle::AxleParams;
 use crate::model::catalogue::Effect;
 use crate::model::driveline::DrivelineParams;
@@ -64,6 +63,7 @@ use crate::schema::Interpolation;
 use crate::signal::dequantise::{dequantise, DequantiseConfig};
 use crate::signal::distance::{fill_gaps, resample_to_distance, DistanceMap, ResampleConfig};
 use crate::signal::interp_linear;
+use crate::signal::sensor_noise::{estimate_sensor_noise, grid_step_s, SampleKind};
 use crate::sim::axle::{HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
 use crate::sim::fast::FastDriveline;
@@ -161,14 +161,14 @@ pub fn index(e: Effect) -> usize {
 /// the recorded slope's changes, over those at most 1.5× their 10th percentile; the cure is
 /// built from the held samples, so it carries the same lag). A service-brake force is read
 /// as a released brake (0) where no sample within
-/// ±[`super::compare::BRAKE_EPISODE_HALFWIDTH_S`] reaches
-/// [`super::compare::BRAKE_RELEASED_BELOW_N`]; inside a braking episode every value counts,
+/// ±[`super::rows::BRAKE_EPISODE_HALFWIDTH_S`] reaches
+/// [`super::rows::BRAKE_RELEASED_BELOW_N`]; inside a braking episode every value counts,
 /// and so does every value at a standstill (recorded speed below the axle input's
 /// [`AxleRecordConfig::standstill_speed_mps`]), where the brakes hold the truck on the grade
-/// with whatever force it asks for ([`crate::sim::axle_recorded`]). Measured on a clean proof
-/// drive (seed 65, 18.7 t standing 6 s on 0.44 %): the 0.81 kN holding force was read as
-/// released, and the axle model, fed every input at its truth, ran 2.4 kPa above the rear
-/// bellow's true pressure for as long as the truck stood.
+/// with whatever force it asks for ([`crate::sim::axle_recorded`]). Read as released, the
+/// 0.81 kN holding force of a clean proof drive (18.7 t standing 6 s on 0.44 %) puts the axle
+/// model, fed every input at its truth, 2.4 kPa above the rear bellow's true pressure for as
+/// long as the truck stands.
 pub fn corrected_log(log: &DriveLog, theta: &Theta, cured_slope: Option<&[f64]>) -> DriveLog {
     let mut out = log.clone();
     let t: Vec<f64> = log.seconds_from_start();
@@ -205,10 +205,10 @@ pub fn corrected_log(log: &DriveLog, theta: &Theta, cured_slope: Option<&[f64]>)
                 }
             }
             "brake_force" => {
-                let busy = windowed_max(&t, &s.values, super::compare::BRAKE_EPISODE_HALFWIDTH_S);
+                let busy = windowed_max(&t, &s.values, super::rows::BRAKE_EPISODE_HALFWIDTH_S);
                 for (k, (v, m)) in s.values.iter_mut().zip(busy).enumerate() {
                     let stands = speed.is_some_and(|u| u[k].abs() < standstill_mps);
-                    if m < super::compare::BRAKE_RELEASED_BELOW_N && !stands {
+                    if m < super::rows::BRAKE_RELEASED_BELOW_N && !stands {
                         *v = 0.0;
                     }
                 }
@@ -396,13 +396,13 @@ pub struct LongitudinalConfig {
     /// [`FINE_STEP_S`]); [`FINE_STEP_S`] everywhere when the drive-shaft lash is non-zero. The
     /// default is 5 ms. Why not 10 ms (the recording's row spacing): the exponential integrator
     /// ([`FastDriveline`]) holds the inputs and the road force over a step and detects clutch
-    /// mode switches at step ends. On the drawn-driving proof (`fleetdyn prove --seed 1`,
-    /// 1001) three drives without an effect were named a 2–3 % weaker clutch or a lash of
-    /// 5·10⁻⁵ rad at 10 ms (a lash only switched the step to 1 ms); at 5 ms none of the 84
-    /// no-effect drives of seven seeds is (2 ms did the same on seed 1). 1 ms everywhere cost
-    /// about 110 s per drive-hour on one drive (seed 1 case 31: 9.9 s against 3.9 s at 10 ms;
-    /// the budget is 60 s); 5 ms costs 4 % more than 10 ms (the seven seeds' median times per
-    /// drive-hour).
+    /// mode switches at step ends. At 10 ms three drives without an effect of the
+    /// drawn-driving proof (`fleetdyn prove --seed 1`, `--seed 1001`) are named a 2–3 % weaker
+    /// clutch or a lash of 5·10⁻⁵ rad (a lash only switches the step to 1 ms); at 5 ms none of
+    /// the 84 no-effect drives of seven seeds is, and 2 ms does the same on seed 1. 1 ms
+    /// everywhere costs about 110 s per drive-hour on a proof drive (9.9 s against 3.9 s at
+    /// 10 ms; the budget is 60 s); 5 ms costs 4 % more than 10 ms (the seven seeds' median times
+    /// per drive-hour).
     pub dt_s: f64,
     /// Samples below this measured speed do not count, m/s.
     pub min_speed_mps: f64,
@@ -473,12 +473,12 @@ fn filled(log: &DriveLog, name: &str) -> Result<Vec<f64>, ExtendedError> {
 }
 
 /// Engine speed above the locked driveline's at which a window with the clutch closed starts
-/// slipping instead of locked ([`LongitudinalModel::simulate`]), rad/s (150 rpm). Why that
-/// margin: right after a clutch closes the first-gear shuffle swings the engine against the
-/// wheels by up to ~100 rpm (docs/events.md), and a window that starts slipping on such a
-/// swing locks again within milliseconds under the clutch's full capacity, whereas a clutch
-/// that cannot carry the engine torque (`clutch_slip` at full load: measured 100–390 rpm
-/// for tens of seconds on the proof) keeps slipping — which a locked start never reproduces.
+/// slipping instead of locked ([`LongitudinalModel::simulate`]), rad/s (150 rpm). Why that margin:
+/// right after a clutch closes the first-gear shuffle swings the engine against the wheels by up to
+/// ~100 rpm (docs/diagnosis/events.md), and a window that starts slipping on such a swing locks
+/// again within milliseconds under the clutch's full capacity, whereas a clutch that cannot carry
+/// the engine torque (`clutch_slip` at full load: measured 100–390 rpm for tens of seconds on the
+/// proof) keeps slipping — which a locked start never reproduces.
 pub const SLIP_START_MIN_RAD_S: f64 = 150.0 * std::f64::consts::PI / 30.0;
 
 /// Step of the longitudinal model about the torque reversals, and everywhere with a drive-shaft
@@ -489,13 +489,13 @@ pub const FINE_STEP_S: f64 = 1e-3;
 /// reversal channel samples ([`super::reversal_channel::reversal_times`]) with its
 /// [`super::reversal_channel::EVENT_SPAN_S`], overlaps merged. Why: the channel compares the
 /// engine against the wheels there, a few rpm decide it, and the step moves the feature by
-/// up to 3.5 rpm between 5 ms and 1 ms (`fleetdyn prove --seed 1`, case 38, 14 reversals;
-/// 0.003 rpm with these spans, pinned in the test suite). A lash candidate integrates at the
-/// fine step, so with the nominal model coarser there the step alone would be part of what a
-/// lash explains; and a clutch a percent weaker reproduced one reversal of an out-of-catalogue
-/// drive at 5 ms (`--seed 2`, case 21: `clutch_slip` at 3422 N·m named), which with these
-/// spans no clutch does. A drive has a few reversals, so the spans cost little: the seven
-/// drawn-driving seeds' median diagnosis time per drive-hour rose by 2.4 % (−1 … +6 % per
+/// up to 3.5 rpm between 5 ms and 1 ms (a drive of `fleetdyn prove --seed 1` with 14
+/// reversals; 0.003 rpm with these spans, pinned in the test suite). A lash candidate
+/// integrates at the fine step, so with the nominal model coarser there the step alone would be
+/// part of what a lash explains; and at 5 ms a clutch a percent weaker reproduces a reversal of
+/// an out-of-catalogue drive (`fleetdyn prove --seed 2`: `clutch_slip` at 3422 N·m named), which
+/// with these spans no clutch does. A drive has a few reversals, so the spans cost little:
+/// 2.4 % of the seven drawn-driving seeds' median diagnosis time per drive-hour (−1 … +6 % per
 /// seed).
 pub fn fine_spans(log: &DriveLog) -> Vec<(f64, f64)> {
     use super::reversal_channel::{reversal_times, EVENT_SPAN_S};
@@ -541,23 +541,22 @@ pub const STEP_CLEAR_S: f64 = 1.0;
 
 /// Start times of the longitudinal model's windows on `log`, s from the first row: every
 /// `window_s`, and wherever the recording determines the model's mode again after a stretch it
-/// did not ([`super::compare::longitudinal_rows`] switching back on: a clutch transition, a
+/// did not ([`super::rows::longitudinal_rows`] switching back on: a clutch transition, a
 /// brake step or an input gap has ended) unless a regular start follows within 2 s. Why: the
 /// rows inside such a stretch do not count, but an error the model makes there (measured on
 /// clean synthetic drives: 0.1 m/s after one upshift on a climb, from the clutch closing
 /// between two 10 Hz samples) would otherwise be carried as a speed offset to the window's end.
 ///
 /// A regular start that falls on an engine-torque step (more than
-/// [`super::compare::TORQUE_STEP_NM`] within [`super::compare::STEP_WINDOW_S`], detected from
-/// 0.3 s before the start to [`STEP_CLEAR_S`] after it) with the clutch closed (≤ 2 %) and a
-/// gear held from the new start to [`STEP_CLEAR_S`] after the old one (not a shift's torque
-/// recovery) moves to [`STEP_CLEAR_S`] before the step's first detection, if the window
-/// before keeps at least 2 s. Why: a window started on a step begins with the new torque's
-/// shaft twists, so it never crosses a lash or rings as the drive did (measured on the
-/// proof's case 28, a tip-out at 260.0 s: +80 rpm of engine-speed residual at the nominal and
-/// at the true lash alike, docs/events.md). The moved window's first rows then lie in the
-/// block before; they are simulated from the measured state like every window's, so no
-/// fitted quantity crosses the split.
+/// [`super::rows::TORQUE_STEP_NM`] within [`super::rows::STEP_WINDOW_S`], detected from 0.3 s
+/// before the start to [`STEP_CLEAR_S`] after it) with the clutch closed (≤ 2 %) and a gear held
+/// from the new start to [`STEP_CLEAR_S`] after the old one (not a shift's torque recovery) moves
+/// to [`STEP_CLEAR_S`] before the step's first detection, if the window before keeps at least 2 s.
+/// Why: a window started on a step begins with the new torque's shaft twists, so it never crosses a
+/// lash or rings as the drive did (at a proof lash drive's tip-out: +80 rpm of engine-speed
+/// residual at the nominal and at the true lash alike, docs/diagnosis/events.md). The moved
+/// window's first rows then lie in the block before; they are simulated from the measured state
+/// like every window's, so no fitted quantity crosses the split.
 pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
     let n = log.len();
     if n == 0 {
@@ -577,12 +576,12 @@ pub fn window_starts(log: &DriveLog, window_s: f64) -> Vec<f64> {
         let hi = t.partition_point(|&x| x <= b);
         (lo..hi)
             .find(|&i| {
-                let j = t.partition_point(|&x| x < t[i] - super::compare::STEP_WINDOW_S);
-                (m[i] - m[j]).abs() > super::compare::TORQUE_STEP_NM
+                let j = t.partition_point(|&x| x < t[i] - super::rows::STEP_WINDOW_S);
+                (m[i] - m[j]).abs() > super::rows::TORQUE_STEP_NM
             })
             .map(|i| t[i])
     };
-    let ok = super::compare::longitudinal_rows(log);
+    let ok = super::rows::longitudinal_rows(log);
     let held = |c: &str| {
         log.signal(c)
             .and_then(|g| crate::signal::distance::fill_gaps(g, crate::schema::Interpolation::Hold))
@@ -729,10 +728,10 @@ impl<'a> LongitudinalModel<'a> {
     /// carry the recorded engine torque at `ta` with the measured acceleration: with
     /// `ω̇_w = a/r_w`, `M_c = M_e − (J_e + J_c) i_t i_f ω̇_w`,
     /// `M_p = i_t M_c − b_t ω_p − (J_t + J_p) i_f ω̇_w`, `M_d = i_f M_p − b_f ω_d − (J_f + J_d) ω̇_w`
-    /// (physics.md §1 with every shaft rigid), twist = torque / stiffness. The road-load steady
-    /// state assumes zero acceleration; under full drive torque its twist is far from the
-    /// recording's, and the window started ringing at the shuffle frequency (measured: ±8 rad/s
-    /// of engine speed for 0.2 s after a re-initialisation at 0.7 m/s² in 11th gear).
+    /// (docs/models/driveline.md with every shaft rigid), twist = torque / stiffness. The
+    /// road-load steady state assumes zero acceleration; under full drive torque its twist is far
+    /// from the recording's, and a window started from it rings at the shuffle frequency
+    /// (±8 rad/s of engine speed for 0.2 s after a re-initialisation at 0.7 m/s² in 11th gear).
     fn load_twists(
         &self,
         p: &DrivelineParams,
@@ -765,20 +764,20 @@ impl<'a> LongitudinalModel<'a> {
     }
 
     /// Sets the engine side of a locked-clutch start state `y0` (every speed from the recorded
-    /// vehicle speed, [`steady_state_locked`]) to the measured engine speed `we`, rad/s: the
-    /// engine and clutch disc at `we`, the gearbox output at `we / i_t` and the final drive's at
-    /// `we / (i_t i_f)`, the wheel left at the recorded vehicle speed. The difference between
-    /// the two sides is then the drive shafts' twist rate (the most compliant shaft, physics.md
-    /// §1), so a window started during the shuffle starts in its phase. `we` is clamped to
-    /// within [`SLIP_START_MIN_RAD_S`] of the locked engine speed (a faster engine starts the
-    /// window slipping instead); not finite, the state is left as it is.
+    /// vehicle speed, [`steady_state_locked`]) to the measured engine speed `we`, rad/s: the engine
+    /// and clutch disc at `we`, the gearbox output at `we / i_t` and the final drive's at
+    /// `we / (i_t i_f)`, the wheel left at the recorded vehicle speed. The difference between the
+    /// two sides is then the drive shafts' twist rate (the most compliant shaft,
+    /// docs/models/driveline.md), so a window started during the shuffle starts in its phase. `we`
+    /// is clamped to within [`SLIP_START_MIN_RAD_S`] of the locked engine speed (a faster engine
+    /// starts the window slipping instead); not finite, the state is left as it is.
     ///
-    /// Why: right after a launch the first gear's shuffle swings the wheel speed by ±0.1 m/s
-    /// at 2–3 Hz; started at the locked engine speed of one such sample, a window kept the
-    /// sample's offset to its end (measured on `fleetdyn prove --seed 1001` case 29, a clean
-    /// launch at 15.3 s: engine speed 8–11 rad/s and vehicle speed 0.1 m/s below the recording
-    /// for the 4.7 s to the next window, the same with every input at its truth). From the
-    /// measured engine speed the same window stays within ±3 rad/s.
+    /// Why: right after a launch the first gear's shuffle swings the wheel speed by ±0.1 m/s at 2–3
+    /// Hz; started at the locked engine speed of one such sample, a window keeps the sample's
+    /// offset to its end (after a clean launch of `fleetdyn prove --seed 1001`: engine speed 8–11
+    /// rad/s and vehicle speed 0.1 m/s below the recording for the 4.7 s to the next window, the
+    /// same with every input at its truth). From the measured engine speed the same window stays
+    /// within ±3 rad/s.
     fn measured_twist_rate(
         &self,
         p: &DrivelineParams,

@@ -1,11 +1,11 @@
-//! Screen and full fit of the explain step (diagnosis.md step 3; [`super::explain`] runs
-//! them).
+//! Screen and full fit of the explain step (docs/diagnosis/method.md, step 3;
+//! [`super::explain`] runs them).
 //!
 //! # Screen (fast)
 //! For every applicable catalogue effect, the sensitivity of the simulated outputs to its
 //! parameter is a finite difference of the extended model, `S_e = (y(θ + h_e) − y(θ)) / h_e`,
 //! with a physically sized step `h_e` ([`fit_spec`]; about the middle of the magnitudes a fleet
-//! meets, README "Hidden effects") — large enough to cross thresholds (the clutch only slips
+//! meets, docs/validation/proof.md) — large enough to cross thresholds (the clutch only slips
 //! below its load, lash only shows beyond it). For the three effects whose outputs respond by
 //! a threshold or a shift (`clutch_slip`, `driveline_backlash`, `signal_delay`) one step reads
 //! a curved response at one arbitrary point, so the screen also probes ½ and 1½ times the
@@ -14,7 +14,7 @@
 //! step's probe as every other's does
 //! (or from a start grid's best point where that is lower: `signal_delay`, `clutch_slip`).
 //! Steps and domains are the catalogue's ([`crate::model::catalogue::FitRule`], the "fit step"
-//! and "fit domain" columns of docs/diagnosis.md; θ₀ the vehicle file's value)
+//! and "fit domain" columns of docs/diagnosis/catalogue.md; θ₀ the vehicle file's value)
 //! (the step's sign flips where the domain ends). The probe simulates the effect's own model
 //! and, for longitudinal effects, the axle model too; the models whose outputs change are the
 //! ones the effect is fitted and scored on. Probes are taken once, in the first greedy round,
@@ -29,10 +29,10 @@
 //! every row, train and held-out (each part's inner products as the cost weights them,
 //! summed), as the acceptance rule tests it ([`super::explain`], rule 3), and is a candidate
 //! whenever it removes any of that SSE: the threshold rations full fits, and a switch needs
-//! none (its probe is its one simulation). Seed 5001's case 26 (`fleetdyn prove --seed 5001
-//! --cases 26`, both drivers), whose rounding shows mostly in its held-out blocks, had its
-//! cure left out at 9.5 % (fixed driver) and 9.7 % (drawn) of the train SSE; on every row
-//! with the threshold, seed 9001's case 4 fell below it instead. Both are named now.
+//! none (its probe is its one simulation). With a threshold, a quantised-slope drive of the
+//! proof whose rounding shows mostly in its held-out blocks would leave its cure out (it
+//! removes 9.5 % of the train SSE with the fixed driver, 9.7 % with the drawn one), and on
+//! every row another such drive falls below it.
 //!
 //! # Full fit
 //! Levenberg–Marquardt on the one scalar parameter (accepted ones held), minimising the
@@ -409,9 +409,9 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// square `J_v` is 1 at them), scaled by the reference's overdispersion when its residual
     /// exceeds them (a quasi-likelihood). Why not the profiled form `N_v ln(J_v(x)/J_v(r))` of
     /// the pooled views: with a few events a one-parameter fit can leave a near-zero residual,
-    /// and a variance profiled from it makes any other value look excluded (measured on the
-    /// proof's case 28, one train reversal: a 95 % lash interval of ±3.5 % around 0.030 rad,
-    /// which the true 0.037 rad lies far outside). A group `x` and `r` both leave at zero
+    /// and a variance profiled from it makes any other value look excluded (a proof lash drive
+    /// with one train reversal: a 95 % lash interval of ±3.5 % around 0.030 rad, which the true
+    /// 0.037 rad lies far outside). A group `x` and `r` both leave at zero
     /// cost adds nothing.
     pub fn deviance(&self, x: &Eval, r: &Eval, active: &[bool], n_pooled: f64, part: Part) -> f64 {
         let pooled = self.pooled(active);

@@ -1,6 +1,6 @@
-//! Step 2 of the diagnosis, locate (diagnosis.md): where, at what frequencies and under which
-//! operating conditions the residual `measured − simulated` of a [`Comparison`] stands above its
-//! noise floor ([`super::noise`]).
+//! Step 2 of the diagnosis, locate (docs/diagnosis/method.md): where, at what frequencies and under
+//! which operating conditions the residual `measured − simulated` of a [`Comparison`] stands above
+//! its noise floor ([`super::noise`]).
 //!
 //! # In time and distance
 //! The drive is cut into windows ([`WindowAxis`], default 10 s: ≥ 100 native samples of a
@@ -65,6 +65,7 @@ use crate::model::driveline::DrivelineParams;
 use crate::model::resonance::{resonance, Path};
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
+use crate::signal::stats::runs;
 use crate::signal::{csd_pieces, WelchConfig};
 use crate::table::DriveLog;
 use realfft::RealFftPlanner;
@@ -248,9 +249,9 @@ impl LocateConfig {
     }
 }
 
-/// The driveline shuffle band of a vehicle: from 0.8× the lowest to 1.25× the highest
-/// engine-torque → speed resonance over all gears ([`resonance`], seed 000 §3); `None` when no
-/// gear has a peak.
+/// The driveline shuffle band of a vehicle: from 0.8× the lowest to 1.25× the highest engine-torque
+/// → speed resonance over all gears ([`resonance`]; Myklebust & Eriksson (2012), §3); `None` when
+/// no gear has a peak.
 pub fn shuffle_band_hz(p: &DrivelineParams, ratios: &[f64]) -> Option<[f64; 2]> {
     let peaks: Vec<f64> = (1..=ratios.len())
         .filter_map(|g| resonance(p, ratios, g, Path::EngineTorqueOpen).peak_hz)
@@ -699,24 +700,6 @@ fn band_power(freq: &[f64], psd: &[f64], lo: f64, hi: f64) -> (f64, usize) {
         }
     }
     (s, k)
-}
-
-/// Contiguous runs `[a, b)` of `ok` rows.
-pub(crate) fn runs(ok: &[bool]) -> Vec<(usize, usize)> {
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < ok.len() {
-        if !ok[i] {
-            i += 1;
-            continue;
-        }
-        let a = i;
-        while i < ok.len() && ok[i] {
-            i += 1;
-        }
-        out.push((a, i));
-    }
-    out
 }
 
 /// A condition column: `None` when empty (not recorded), else checked for length.

@@ -1,4 +1,4 @@
-//! Model-vs-recording mismatch diagnosis (issue 7, `diagnosis.md`): compare, locate, explain,
+//! Model-vs-recording mismatch diagnosis (docs/diagnosis/method.md): compare, locate, explain,
 //! show.
 
 pub mod compare;
@@ -13,6 +13,7 @@ pub mod modal_channel;
 pub mod noise;
 pub mod problem;
 pub mod reversal_channel;
+pub mod rows;
 pub mod run;
 pub mod setup;
 pub mod tyre_slip;

@@ -1,10 +1,10 @@
-//! Shuffle modes per clutch engagement, measured against simulated (issue 7, diagnosis.md
-//! step 2/3 for the driveline effects): after a clutch closes, the locked driveline rings at its
-//! first torsional ("shuffle") mode, whose frequency is set by the drive-shaft stiffness `k_d`
-//! and the inertias of the engaged gear (physics.md §1). A change of `k_d`
-//! (`driveline_compliance`) moves that frequency; it hides in the time-domain engine-speed
-//! residual (whose floor is input-driven, 0.33–0.43 rad/s on the proof drives) but not in the
-//! frequency of the ringing.
+//! Shuffle modes per clutch engagement, measured against simulated (docs/diagnosis/method.md, steps
+//! 2 and 3 for the driveline effects): after a clutch closes, the locked driveline rings at its
+//! first torsional ("shuffle") mode, whose frequency is set by the drive-shaft stiffness `k_d` and
+//! the inertias of the engaged gear (docs/models/driveline.md). A change of `k_d`
+//! (`driveline_compliance`) moves that frequency; it hides in the time-domain engine-speed residual
+//! (whose floor is input-driven, 0.33–0.43 rad/s on the proof drives) but not in the frequency of
+//! the ringing.
 //!
 //! # Method
 //! 1. [`engagements`]: every clutch closing after which the clutch stays closed, the gear stays
@@ -56,7 +56,7 @@ use std::ops::Range;
 pub struct ModalConfig {
     /// Clutch position at or below which the clutch counts as closed, fraction of travel
     /// (0.02: the 2 % the comparison uses for a clutch transition,
-    /// [`super::compare::longitudinal_rows`]).
+    /// [`super::rows::longitudinal_rows`]).
     pub clutch_closed_max: f64,
     /// Start of the analysis window after the first closed clutch sample, s. 0.2 s: the clutch
     /// position comes at 10 Hz, so the closing is known to 0.1 s; one more sample makes sure
@@ -833,7 +833,7 @@ pub fn tyre_mode(
 /// in its band can show to first order (the worst corner, not a spread). 0 without a mode.
 ///
 /// A measured shuffle frequency this close to the nominal model's is consistent with the
-/// vehicle file; [`ModalConfig::min_relative_shift`] is raised to it (docs/diagnosis.md,
+/// vehicle file; [`ModalConfig::min_relative_shift`] is raised to it (docs/diagnosis/method.md,
 /// "Model-form residual").
 pub fn tolerance_shift(
     p: &DrivelineParams,
@@ -1262,7 +1262,8 @@ pub(crate) mod tests {
         assert!(t.p_value < cfg.alpha && !t.flagged, "{t:?}");
     }
 
-    /// The proof's vehicle (seed 002 6×2 diesel): driveline parameters and gear ratios.
+    /// The proof's vehicle (the diesel variant of the axle-load thesis 6×2): driveline parameters
+    /// and gear ratios.
     pub(crate) fn vehicle() -> (DrivelineParams, Vec<f64>) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("fixtures/vehicles/seed002-6x2-diesel.toml");
@@ -1397,7 +1398,7 @@ pub(crate) mod tests {
         assert!(d > s && d < 0.15, "{d} vs {s}");
     }
 
-    /// The margin docs/diagnosis.md quotes for the bundled truck files (gears 1–4 at
+    /// The margin docs/diagnosis/method.md quotes for the bundled truck files (gears 1–4 at
     /// 1200 rpm, default tolerances): the shaft stiffness's ±10 % gives up to 5.1 % (square-root
     /// law), the inertias' ±5 % and the mass's ±3 % the rest. Printed with
     /// `cargo test --release --lib tolerance_margin_of_the_bundled -- --nocapture`.

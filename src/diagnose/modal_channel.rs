@@ -1,13 +1,13 @@
-//! The shuffle modes as a compared output of the longitudinal model (issue 7, diagnosis.md
+//! The shuffle modes as a compared output of the longitudinal model (docs/diagnosis/method.md,
 //! step 3 for `driveline_compliance`): one sample per clutch engagement, scored by the same
 //! fixed acceptance rule as the speeds.
 //!
-//! Why: a drive-shaft stiffness change hides in the time-domain speed residual (the scorer's
-//! oracle check: with the hidden stiffness at its truth, the held-out weighted RMSE of the
-//! speeds changes by −1 % to +3.4 % on the proof's compliance drives) but moves the frequency of
-//! the ringing after every clutch closing by several per cent ([`super::modal`],
-//! docs/modal.md). As a channel of the longitudinal model the frequency is fitted, held out and
-//! tested like any other output, so no second rule decides.
+//! Why: a drive-shaft stiffness change hides in the time-domain speed residual (the scorer's oracle
+//! check: with the hidden stiffness at its truth, the held-out weighted RMSE of the speeds changes
+//! by −1 % to +3.4 % on the proof's compliance drives) but moves the frequency of the ringing after
+//! every clutch closing by several per cent ([`super::modal`], docs/models/driveline.md). As a
+//! channel of the longitudinal model the frequency is fitted, held out and tested like any other
+//! output, so no second rule decides.
 //!
 //! # The channel `shuffle_frequency`
 //! - **Measured** (per engagement, [`super::modal::engagements`] and
@@ -28,11 +28,11 @@
 //!   precision of the linearised reference itself; the channel's `σ_c` is 1, so a residual
 //!   within its standard errors scores about 1 like a speed residual at its noise floor.
 //!
-//! The floor: on the 12 clean drives of `fleetdyn prove --seed 1` the per-gear mean shifts
-//! against the linearised mode lie mostly within ±0.03 Hz at 5–8 Hz (±0.5 %), single
-//! engagements up to −0.25 Hz (about −4 %, docs/modal.md), while the fit's own standard errors
-//! are often below 0.3 % (white-residual lower bounds). 1 % keeps a clean drive's standardised
-//! residual near 1 without hiding a 25 % stiffness change (a 5–12 % frequency shift).
+//! The floor: on the 12 clean drives of `fleetdyn prove --seed 1` the per-gear mean shifts against
+//! the linearised mode lie mostly within ±0.03 Hz at 5–8 Hz (±0.5 %), single engagements up to
+//! −0.25 Hz (about −4 %, docs/models/driveline.md), while the fit's own standard errors are often
+//! below 0.3 % (white-residual lower bounds). 1 % keeps a clean drive's standardised residual near
+//! 1 without hiding a 25 % stiffness change (a 5–12 % frequency shift).
 //!
 //! Only clean ringing counts: an engagement is a sample when the damped sinusoid explains at
 //! least [`MIN_R2`] (90 %) of the detrended engine-speed variance (the modal analysis itself
@@ -44,8 +44,8 @@
 //! (standardised 0.47, largest 2.8) over the 583 with R² ≥ 0.95, 1.0 % (standardised 0.77,
 //! largest 2.6) over the 77 with R² 0.9–0.95, and 4.3 % (standardised 3.05, largest 8.4)
 //! over the 81 with R² 0.6–0.9. One of those (gear 10, R² 0.83, −9.7 % at a 0.8 % standard
-//! error) put the held-out modes of a city `vehicle_mass` drive 2.8 standard errors off under
-//! a different split (docs/events.md).
+//! error) puts the held-out modes of a city `vehicle_mass` drive 2.8 standard errors off under
+//! a different split (docs/diagnosis/events.md).
 //!
 //! The channel is used when at least [`MIN_ENGAGEMENTS_PER_PART`] engagements fall in each
 //! part of the split; otherwise the longitudinal model is compared on the speeds alone (a drive
@@ -189,8 +189,8 @@ pub const MAX_TYRE_SHARE: f64 = 0.95;
 /// [`MAX_TYRE_SHARE`], then golden-section refinement of the share within ±0.05 of the grid's
 /// best (the best `x` again at each).
 ///
-/// Model structure, not a catalogue effect: the vehicle file lumps shafts and tyres in `k_d`
-/// and says nothing of how they share it (docs/diagnosis.md, "Model-form residual"). 0 (the
+/// Model structure, not a catalogue effect: the vehicle file lumps shafts and tyres in `k_d` and
+/// says nothing of how they share it (docs/diagnosis/method.md, "Model-form residual"). 0 (the
 /// nominal model) with fewer than three samples.
 pub fn fit_tyre_share(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64]) -> f64 {
     if samples.len() < 3 {

@@ -1,7 +1,7 @@
-//! The explain step's view of one recording (diagnosis.md step 3): which outputs are compared,
-//! the train / held-out split, the per-signal weights, the extended models' simulations on
-//! those outputs, and the residual statistics the acceptance rule uses (weighted RMSE, MAE,
-//! fit %, whiteness, effective number of independent samples).
+//! The explain step's view of one recording (docs/diagnosis/method.md, step 3): which outputs are
+//! compared, the train / held-out split, the per-signal weights, the extended models' simulations
+//! on those outputs, and the residual statistics the acceptance rule uses (weighted RMSE, MAE, fit
+//! %, whiteness, effective number of independent samples).
 //!
 //! # Compared outputs (channels)
 //! - longitudinal model ([`LongitudinalModel`], 20 s windows re-initialised from the measured
@@ -14,12 +14,12 @@
 //!   at each engine-torque reversal with the clutch closed, one weighted sample per reversal
 //!   ([`super::reversal_channel`]), when at least one reversal falls in each part; and
 //!   `engine_speed_actuated`: the engine speed on the rows the other two speeds leave out
-//!   while the clutch is actuated ([`super::compare::actuation_channel_rows`]), each row
+//!   while the clutch is actuated ([`super::rows::actuation_channel_rows`]), each row
 //!   weighted by its own null variance from the noise floor's copies
 //!   ([`Problem::with_actuation`]), when the diagnosis computed that floor and each part has
 //!   at least [`MIN_SAMPLES_PER_PART`] such rows;
 //! - axle model ([`AxleModel`], open loop, stable): `bellow_pressure_front` / `_rear` / `_tag`
-//!   (Pa), on rows with a real sample away from shifts ([`super::compare::axle_rows`]).
+//!   (Pa), on rows with a real sample away from shifts ([`super::rows::axle_rows`]).
 //!
 //! A model is used when the recording has its outputs and inputs; which ones were used is
 //! reported ([`Problem::domains`]).
@@ -74,6 +74,7 @@ use super::reversal_channel::{self, ReversalSample};
 use crate::model::catalogue::{Domain, Effect};
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::quantization::estimate_quantization;
+use crate::signal::stats::index_runs;
 use crate::table::DriveLog;
 use realfft::RealFftPlanner;
 use serde::Serialize;
@@ -304,11 +305,11 @@ impl ViewKind {
         )
     }
 
-    /// The effects a view is fitted and scored for, when it is not every effect that changes
-    /// it: the clutch-actuation view serves `clutch_slip`, whose catalogue fingerprint it is
-    /// (diagnosis.md), and `signal_delay`, whose delayed torque ramps land against the clutch
-    /// at every shift — rows the nominal model reproduces only to the 10 Hz clutch's timing,
-    /// which every other longitudinal effect moves a little without carrying its evidence
+    /// The effects a view is fitted and scored for, when it is not every effect that changes it:
+    /// the clutch-actuation view serves `clutch_slip`, whose catalogue fingerprint it is
+    /// (docs/diagnosis/catalogue.md), and `signal_delay`, whose delayed torque ramps land against
+    /// the clutch at every shift — rows the nominal model reproduces only to the 10 Hz clutch's
+    /// timing, which every other longitudinal effect moves a little without carrying its evidence
     /// there; scored for all of them it would dilute their held-out figures.
     pub fn only_for(self) -> Option<&'static [Effect]> {
         match self {
@@ -464,14 +465,14 @@ impl<'a> Problem<'a> {
         let mut tyre_share = 0.0;
         let mut reversals = Vec::new();
         if let Some(m) = &long {
-            let steady = super::compare::longitudinal_rows(log);
+            let steady = super::rows::longitudinal_rows(log);
             let moving: Vec<bool> = m
                 .measured_speed()
                 .iter()
                 .zip(&steady)
                 .map(|(v, s)| *v >= long_cfg.min_speed_mps && *s)
                 .collect();
-            let engine = super::compare::engine_speed_rows(log);
+            let engine = super::rows::engine_speed_rows(log);
             for ((name, unit), meas) in long_channel_names()
                 .into_iter()
                 .zip([m.measured_speed(), m.measured_engine_speed()])
@@ -570,7 +571,7 @@ impl<'a> Problem<'a> {
                 },
                 std::mem::take(&mut axle_nominal),
             ));
-            let steady = super::compare::axle_rows(log);
+            let steady = super::rows::axle_rows(log);
             for name in PRESSURES {
                 let raw = log.signal(name).unwrap_or(&[]);
                 let meas =
@@ -621,16 +622,16 @@ impl<'a> Problem<'a> {
         })
     }
 
-    /// Adds the clutch-actuation view: the engine speed on the rows where the clutch is
-    /// actuated ([`super::compare::actuation_channel_rows`], the vehicle at the longitudinal
-    /// model's minimum speed or faster), each row weighted by its own null variance `variance`
-    /// (rad²/s² on the log's rows, NaN where a row does not count: the noise floor's copies of
-    /// [`super::compare::ACTUATION_CHANNEL`], which carry the 10 Hz clutch's sampling phase).
-    /// The rows the speeds leave out because the model's clutch closes only to a 0.1 s sample
-    /// are where a worn clutch shows (diagnosis.md: "engine speed mismatch while clutch
-    /// actuated"); weighted by what that timing alone explains, they score about 1 on a drive
-    /// the model reproduces. The view is its own deviance term, scored for `clutch_slip`
-    /// and `signal_delay` alone ([`ViewKind::only_for`]), and used when each part has at least
+    /// Adds the clutch-actuation view: the engine speed on the rows where the clutch is actuated
+    /// ([`super::rows::actuation_channel_rows`], the vehicle at the longitudinal model's minimum
+    /// speed or faster), each row weighted by its own null variance `variance` (rad²/s² on the
+    /// log's rows, NaN where a row does not count: the noise floor's copies of
+    /// [`super::rows::ACTUATION_CHANNEL`], which carry the 10 Hz clutch's sampling phase). The
+    /// rows the speeds leave out because the model's clutch closes only to a 0.1 s sample are where
+    /// a worn clutch shows (docs/diagnosis/catalogue.md: "engine speed mismatch while clutch
+    /// actuated"); weighted by what that timing alone explains, they score about 1 on a drive the
+    /// model reproduces. The view is its own deviance term, scored for `clutch_slip` and
+    /// `signal_delay` alone ([`ViewKind::only_for`]), and used when each part has at least
     /// [`MIN_SAMPLES_PER_PART`] such rows; otherwise the problem is returned unchanged.
     pub fn with_actuation(mut self, variance: &[f64]) -> Self {
         let Some(m) = &self.long else {
@@ -643,7 +644,7 @@ impl<'a> Problem<'a> {
         let Some(speeds) = self.views.iter().position(|v| v.kind == ViewKind::Speeds) else {
             return self;
         };
-        let act = super::compare::actuation_channel_rows(
+        let act = super::rows::actuation_channel_rows(
             self.log,
             LongitudinalConfig::default().min_speed_mps,
         );
@@ -670,7 +671,7 @@ impl<'a> Problem<'a> {
         let ch = Channel {
             events: None,
             row_weights: Some(weights),
-            name: super::compare::ACTUATION_CHANNEL.into(),
+            name: super::rows::ACTUATION_CHANNEL.into(),
             unit: "rad/s",
             domain: Domain::Longitudinal,
             measured: w.to_vec(),
@@ -910,7 +911,7 @@ pub struct Metrics {
     pub rmse: f64,
     /// Mean absolute error.
     pub mae: f64,
-    /// `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)` (diagnosis.md).
+    /// `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)` (docs/diagnosis/method.md).
     pub fit_percent: f64,
 }
 
@@ -957,21 +958,6 @@ pub fn weighted_ms(
         j += se / (rows.len().max(1) as f64 * s * s);
     }
     j / chans.len().max(1) as f64
-}
-
-/// Contiguous runs of `rows` (sorted row indices): consecutive indices belong to one run.
-fn runs(rows: &[usize]) -> Vec<&[usize]> {
-    let mut out = Vec::new();
-    let mut start = 0;
-    for k in 1..=rows.len() {
-        if k == rows.len() || rows[k] != rows[k - 1] + 1 {
-            if k > start {
-                out.push(&rows[start..k]);
-            }
-            start = k;
-        }
-    }
-    out
 }
 
 /// Lags (s) of the whiteness statistic: 0.1 s to 2 s in 0.1 s steps — from the driveline's
@@ -1045,7 +1031,7 @@ pub fn whiteness(
         // positions of the runs in `r`
         let mut bounds = Vec::new();
         let mut pos = 0;
-        for run in runs(rows) {
+        for run in index_runs(rows) {
             bounds.push((pos, pos + run.len()));
             pos += run.len();
         }
@@ -1117,7 +1103,7 @@ pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
     let mut planner = RealFftPlanner::<f64>::new();
     let mut acov: Vec<f64> = Vec::new();
     let mut pos = 0;
-    for run in runs(rows) {
+    for run in index_runs(rows) {
         let len = run.len();
         let x: Vec<f64> = r[pos..pos + len].iter().map(|v| v - mean).collect();
         pos += len;
@@ -1160,7 +1146,7 @@ pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::road::rng::Xoshiro256StarStar;
+    use crate::rng::Xoshiro256StarStar;
 
     fn channel(measured: Vec<f64>) -> Channel {
         let n = measured.len();
@@ -1220,7 +1206,7 @@ mod tests {
         // a fit that removes a fast error leaves the sensors' slow drift: slow structure (a
         // 0.05 Hz sine, power 0.125) with and without white noise of power 1. The non-white
         // power is the autocovariance at the lags, which the white part does not change; the
-        // first form, (Q/n)·MS = mean c_k² / c_0, rose about 9-fold when it was removed
+        // other form, (Q/n)·MS = mean c_k² / c_0, rises about 9-fold when it is removed
         let n = 50_000;
         let mut rng = Xoshiro256StarStar::seed_from_u64(3);
         let slow: Vec<f64> = (0..n)

@@ -1,26 +1,25 @@
 //! The driveline's relative speed at torque reversals as a compared output of the longitudinal
-//! model (issue 7, diagnosis.md step 3 for `driveline_backlash`): one sample per reversal,
+//! model (docs/diagnosis/method.md, step 3 for `driveline_backlash`): one sample per reversal,
 //! scored by the same fixed acceptance rule as the speeds.
 //!
 //! Why: a lash hides in the time-domain speed residual (the proof's oracle check at the hidden
-//! lash: held-out weighted RMSE of the speeds −2.6 … +0.1 %), because a reversal lasts a few
-//! tenths of a second, reversals are rare (5.5 per drive), and the driver's tip-outs come with a
-//! service-brake step whose ±0.5 s the speeds' comparison leaves out (docs/events.md). Yet at
-//! each tip-out the engine side runs free across the gap and dips 37–53 rpm against the wheels
-//! — which the model at the true lash reproduces (docs/events.md). As a channel of the
-//! longitudinal model, that dip is fitted, held out and tested like any other output.
+//! lash: held-out weighted RMSE of the speeds −2.6 … +0.1 %), because a reversal lasts a few tenths
+//! of a second, reversals are rare (5.5 per drive), and the driver's tip-outs come with a
+//! service-brake step whose ±0.5 s the speeds' comparison leaves out (docs/diagnosis/events.md).
+//! Yet at each tip-out the engine side runs free across the gap and dips 37–53 rpm against the
+//! wheels — which the model at the true lash reproduces (docs/diagnosis/events.md). As a channel of
+//! the longitudinal model, that dip is fitted, held out and tested like any other output.
 //!
 //! # The channel `reversal_relative_speed`
 //! - **Events**: the torque reversals of [`super::events::torque_reversals`] (engine torque
-//!   crossing ±60 N·m within 1 s, clutch closed and gear held from [`QUIET_BEFORE_START_S`]
-//!   before to 0.6 s after), at a measured speed of at least the model's minimum over the
-//!   windows, with the engine and vehicle speed recorded over [`REF_WINDOW_S`]`.0` …
-//!   [`PEAK_WINDOW_S`]`.1` around it (no gap between samples longer than
-//!   [`MAX_SAMPLE_GAP_S`]: a dropout's fill is not a measurement), and no start of the
-//!   model's windows ([`super::extended::window_starts`]) within [`QUIET_BEFORE_START_S`]
-//!   before it to [`PEAK_WINDOW_S`]`.1` after it (a window started at the reversal begins on
-//!   the new flank and cannot cross the lash, docs/events.md; one started inside the windows
-//!   would copy the measured dip).
+//!   crossing ±60 N·m within 1 s, clutch closed and gear held from [`QUIET_BEFORE_START_S`] before
+//!   to 0.6 s after), at a measured speed of at least the model's minimum over the windows, with
+//!   the engine and vehicle speed recorded over [`REF_WINDOW_S`]`.0` … [`PEAK_WINDOW_S`]`.1` around
+//!   it (no gap between samples longer than [`MAX_SAMPLE_GAP_S`]: a dropout's fill is not a
+//!   measurement), and no start of the model's windows ([`super::extended::window_starts`]) within
+//!   [`QUIET_BEFORE_START_S`] before it to [`PEAK_WINDOW_S`]`.1` after it (a window started at the
+//!   reversal begins on the new flank and cannot cross the lash, docs/diagnosis/events.md; one
+//!   started inside the windows would copy the measured dip).
 //! - **Feature** of a pair of speed traces (measured or simulated alike): the relative speed
 //!   `u = ω_e − G v` of the engine against the wheels (`G = i_t i_f / r_w` of the held gear, the
 //!   nominal vehicle's), averaged over ±[`SMOOTHING_HALFWIDTH_S`], its extreme in the direction
@@ -69,18 +68,13 @@ pub const SMOOTHING_HALFWIDTH_S: f64 = 0.04;
 /// through the reference window on the old flank (0.5 s) from its measured start state.
 pub const QUIET_BEFORE_START_S: f64 = 0.6;
 /// The model's own error of the feature, rad/s (1.9 rpm): a standard deviation per reversal.
-/// Measured with `examples/reversal_floor.rs` on `fleetdyn prove --seed 1`: on the 12 drives
-/// without an effect, `measured − nominal` has an rms of 1.28 rpm over 61 reversals (the
-/// recording's noise accounts for 0.77 rpm of it), at most 3.1 rpm; on the drives whose
-/// hidden effect does not act at a reversal (rolling resistance, torque offset, the axle
-/// effects, …) it reaches 4.6 rpm at the hidden truth. 0.2 rad/s keeps a clean drive's
-/// standardised residuals below 1 in rms and those outliers within 2.5 σ, while the lash's
-/// 6–12 rpm at the proof's lashes stand at 3–6 σ each. Measured again on the drawn-driving
-/// proof with the model's 5 ms step and the reversals at 1 ms
-/// ([`super::extended::fine_spans`]): on the no-effect drives an rms of 1.86 rpm over 115
-/// reversals, at most 5.3 rpm (`--seed 1`), and 1.75 rpm over 113, at most 4.5 rpm
-/// (`--seed 1001`), the noise's share 0.78–0.81 rpm: standardised residuals 0.85–0.9 in rms,
-/// the largest at 2.6 σ.
+/// Measured with `research/studies/reversal_floor.rs` on the drawn-driving proof, the model at
+/// its 5 ms step and the reversals at 1 ms ([`super::extended::fine_spans`]): on the no-effect
+/// drives `measured − nominal` has an rms of 1.86 rpm over 115 reversals, at most 5.3 rpm
+/// (`fleetdyn prove --seed 1`), and 1.75 rpm over 113, at most 4.5 rpm (`--seed 1001`), of
+/// which the recording's noise accounts for 0.78–0.81 rpm. 0.2 rad/s puts a clean drive's
+/// standardised residuals at 0.85–0.9 in rms, the largest at 2.6 σ, while the lash's 6–12 rpm
+/// at the proof's lashes stand at 3–6 σ each.
 pub const FLOOR_RAD_S: f64 = 0.2;
 /// Fewest reversals in each part of the split for the channel to be used.
 pub const MIN_REVERSALS_PER_PART: usize = 1;
@@ -161,21 +155,21 @@ pub fn feature(t: &[f64], w: &[f64], v: &[f64], t0: f64, direction: f64, g: f64)
 }
 
 /// Rms error of the recorded column `name` (noise and quantisation, the sensor estimate of
-/// step 2's noise floor: [`super::noise::estimate_sensor_noise`]'s `sigma_raw`); 0 when it
+/// step 2's noise floor: [`crate::signal::sensor_noise::estimate_sensor_noise`]'s `sigma_raw`); 0 when it
 /// cannot be estimated (the floor then carries the weight alone).
 fn sensor_rms(log: &DriveLog, name: &str) -> f64 {
     let (Some(s), Ok(dt)) = (
         log.signals.iter().find(|s| s.name == name),
-        super::noise::grid_step_s(log),
+        crate::signal::sensor_noise::grid_step_s(log),
     ) else {
         return 0.0;
     };
-    super::noise::estimate_sensor_noise(
+    crate::signal::sensor_noise::estimate_sensor_noise(
         &s.name,
         &s.unit,
         &s.values,
         dt,
-        super::noise::SampleKind::of_column(name),
+        crate::signal::sensor_noise::SampleKind::of_column(name),
     )
     .map_or(0.0, |e| e.sigma_raw)
     .max(0.0)

@@ -1,4 +1,4 @@
-//! The whole diagnosis of one recording (issue 7 point 1, diagnosis.md "The four steps"):
+//! The whole diagnosis of one recording (docs/diagnosis/method.md, "The four steps"):
 //! set up → compare → noise floor → locate → explain → verdict → show, and the per-drive output
 //! folder of the contract.
 //!
@@ -28,8 +28,7 @@
 //! # Output atomicity
 //! Files are written into a hidden staging folder inside the output folder and renamed into
 //! place only when all of them are written, `diagnosis.json` last: a reader never sees a
-//! partial diagnosis, and a failed one leaves the folder as it was (issue "Engineering
-//! standards": no partial outputs).
+//! partial diagnosis, and a failed one leaves the folder as it was (no partial outputs).
 
 use super::contract::{
     Diagnosis, EstimateEntry, FindingEntry, FitEntry, MismatchEntry, ParameterEntry,
@@ -45,7 +44,8 @@ use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors}
 use super::problem::{ExplainError, Problem};
 use super::setup::Setup;
 use super::tyre_slip::tyre_slip_variance;
-use crate::diagnose::compare::{Comparison, ACTUATION_CHANNEL};
+use crate::diagnose::compare::Comparison;
+use crate::diagnose::rows::ACTUATION_CHANNEL;
 use crate::io::OutputError;
 use crate::model::catalogue::Effect;
 use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
@@ -97,7 +97,7 @@ pub enum DiagnoseError {
 /// `Σ Δy²/3` — the variance of a parameter spread uniformly over `θ₀ ± w`, to first order,
 /// the parameters independent. A residual this size is what a truck whose values all lie in
 /// their bands shows against the nominal model; locate tests the residual against the sensor
-/// noise floor plus this (docs/diagnosis.md, "Model-form residual").
+/// noise floor plus this (docs/diagnosis/method.md, "Model-form residual").
 ///
 /// # Errors
 /// [`ExtendedError`] when a model fails at the nominal parameters or at a band's edge.
@@ -338,9 +338,9 @@ pub fn diagnose(
         }
     }
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
-    // the shuffle modes after clutch engagements against the nominal driveline's linearised
-    // ones (docs/modal.md: the simulated ringing is restarted inside the analysis windows);
-    // a flagged drive is a located engine-speed mismatch
+    // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
+    // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
+    // flagged drive is a located engine-speed mismatch
     let modal = cmp
         .signals
         .iter()

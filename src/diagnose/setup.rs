@@ -1,13 +1,13 @@
-//! Setting up the diagnosis of one recording: which models the recording can drive (the
-//! signals present decide, issue 7 point 1), the nominal parameters, the rows that count, and
-//! the operating condition of every row.
+//! Setting up the diagnosis of one recording: which models the recording can drive (the signals
+//! present decide), the nominal parameters, the rows that count, and the operating condition of
+//! every row.
 //!
 //! - Longitudinal/driveline: needs a vehicle `[driveline]` and the columns `vehicle_speed`,
 //!   `engine_speed`, `engine_torque`, `gear`. Rows count while the measured speed is at least
 //!   1 m/s (the model has no creep mode), the speed sample is real (not a filled gap) and no
-//!   clutch transition is near ([`super::compare::longitudinal_rows`]).
+//!   clutch transition is near ([`super::rows::longitudinal_rows`]).
 //! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Rows with a real
-//!   pressure sample count, away from shifts ([`super::compare::axle_rows`]).
+//!   pressure sample count, away from shifts ([`super::rows::axle_rows`]).
 //! - Operating conditions: [`Conditions::from_log`].
 //! - The slope sensor's resolution is estimated from the recording (`slope_quantization`'s
 //!   nominal value, [`crate::signal::quantization`]); an unquantised slope counts as 0.1 %.

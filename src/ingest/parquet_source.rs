@@ -68,7 +68,7 @@ fn open(path: &Path) -> Result<ParquetRecordBatchReaderBuilder<File>, IngestErro
 
 /// Every column chunk the footer declares must lie inside the file: the parquet crate asserts
 /// (panics) on a negative offset or length while reading (found by `cargo fuzz`, target
-/// `ingest_parquet`; docs/fuzzing.md), so a corrupt footer is refused here instead.
+/// `ingest_parquet`; docs/validation/robustness.md), so a corrupt footer is refused here instead.
 fn check_chunks(
     meta: &parquet::file::metadata::ParquetMetaData,
     file_len: u64,
@@ -120,12 +120,12 @@ thread_local! {
 
 /// Runs a Parquet read, turning a panic of the decoder into [`IngestError::Parquet`].
 ///
-/// parquet 60.1 and arrow-buffer assert on some corrupt pages (e.g. definition levels that
-/// run past their buffer: `offset + len out of bounds`, found by `cargo fuzz`, target
-/// `ingest_parquet`; docs/fuzzing.md) instead of returning an error. A corrupt file must fail
-/// its drive with a typed error, not abort the process, so the read is unwound and reported.
-/// The panic message is kept out of stderr by a hook that stays silent only while this
-/// thread is inside a guarded read (other panics reach the previous hook).
+/// parquet 60.1 and arrow-buffer assert on some corrupt pages (e.g. definition levels that run past
+/// their buffer: `offset + len out of bounds`, found by `cargo fuzz`, target `ingest_parquet`;
+/// docs/validation/robustness.md) instead of returning an error. A corrupt file must fail its drive
+/// with a typed error, not abort the process, so the read is unwound and reported. The panic
+/// message is kept out of stderr by a hook that stays silent only while this thread is inside a
+/// guarded read (other panics reach the previous hook).
 fn guarded<T>(
     path: &Path,
     read: impl FnOnce() -> Result<T, IngestError>,

@@ -48,7 +48,8 @@ pub enum OutData {
 
 /// Column data borrowed for writing: what [`OutData`] holds, without owning it, plus columns of
 /// nulls that need no values at all. Writing from borrowed data lets a large table (a 10-hour
-/// drive's `drive_log` is ~290 MB of columns) go to disk without a copy (docs/memory.md).
+/// drive's `drive_log` is ~290 MB of columns) go to disk without a copy
+/// (docs/validation/benchmarks.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DataRef<'a> {
     /// ns since the Unix epoch, written as `timestamp[ns, UTC]`.

@@ -1,14 +1,16 @@
-//! Axle-load parameters (physics.md §3, seed 002): the typed `[axles]` section of a vehicle file,
-//! checked key by key against `schemas/vehicle.toml`, then for consistency (geometry, masses
-//! against the scale weights, bellows able to carry the static load), and its static state.
+//! Axle-load parameters (docs/models/axle.md; the model follows the axle-load thesis, a Master's
+//! thesis written with Scania on the dynamic axle loads of a 6x2 electrified truck): the typed
+//! `[axles]` section of a vehicle file, checked key by key against `schemas/vehicle.toml`, then for
+//! consistency (geometry, masses against the scale weights, bellows able to carry the static load),
+//! and its static state.
 //!
-//! Conventions (docs/axle-model.md): positions `x` rearwards from the front axle, heights above
+//! Conventions (docs/models/axle.md): positions `x` rearwards from the front axle, heights above
 //! the ground, lever lengths horizontal from the arm pivot; SI units; gauge pressures.
 
 use super::driveline::{check_keys, vehicle_schema, KeyProblem};
 use serde::Deserialize;
 
-/// Axle-load parameters, SI units (physics.md §3).
+/// Axle-load parameters, SI units (docs/models/axle.md).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)] // each field is documented in schemas/vehicle.toml (meaning, unit, range)
@@ -135,7 +137,7 @@ fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
 
 impl DamperTable {
     /// Damper force pushing the ends apart, N, at compression rate `rate` (m/s, + = shortening):
-    /// `F_comp(rate)` in compression, `−F_ext(−rate)` in extension (docs/axle-model.md).
+    /// `F_comp(rate)` in compression, `−F_ext(−rate)` in extension (docs/models/axle.md).
     #[inline]
     pub fn force(&self, rate: f64) -> f64 {
         if rate >= 0.0 {
@@ -146,12 +148,12 @@ impl DamperTable {
     }
 }
 
-/// The static state the scale weights define (docs/axle-model.md, "Static state").
+/// The static state the scale weights define (docs/models/axle.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StaticState {
     /// Total mass m = m_c + Σ m_a, kg.
     pub mass_kg: f64,
-    /// Vehicle CG behind the front axle (seed 002 eq. 3.3.2), m.
+    /// Vehicle CG behind the front axle (axle-load thesis, eq. 3.3.2), m.
     pub x_cg_m: f64,
     /// Chassis (sprung) CG behind the front axle, m.
     pub chassis_x_cg_m: f64,
@@ -159,7 +161,7 @@ pub struct StaticState {
     pub h_cg_m: f64,
     /// Static normal forces front, rear, tag, N (scale weights scaled to m).
     pub normal_n: [f64; 3],
-    /// Static bellow forces, N (seed 002 eq. 3.3.9 on the arms).
+    /// Static bellow forces, N (axle-load thesis, eq. 3.3.9 on the arms).
     pub bellow_n: [f64; 3],
     /// Static bellow gauge pressures, Pa.
     pub pressure_pa: [f64; 3],
@@ -445,10 +447,10 @@ impl AxleParams {
         }
     }
 
-    /// The static state on a level road (docs/axle-model.md): normal forces from the scale
-    /// weights scaled to the model's mass, bellow forces from each arm's moment balance (seed 002
-    /// eq. 3.3.9) and the front axle's force balance, pressures `p = F/A_eff`, and the chassis CG
-    /// that makes the chassis balance (seed 002 eq. 3.3.2 less the axle masses).
+    /// The static state on a level road (docs/models/axle.md): normal forces from the scale
+    /// weights scaled to the model's mass, bellow forces from each arm's moment balance
+    /// (axle-load thesis, eq. 3.3.9) and the front axle's force balance, pressures `p = F/A_eff`,
+    /// and the chassis CG that makes the chassis balance (thesis eq. 3.3.2 less the axle masses).
     pub fn static_state(&self) -> StaticState {
         let g = self.gravity_m_per_s2;
         let m = self.mass_kg();
@@ -485,7 +487,7 @@ impl AxleParams {
     /// Static axle loads (kg, as a scale would read them) from bellow gauge pressures at rest on
     /// a level road: the inverse of [`AxleParams::static_state`] — bellow force `p·A_eff`, then
     /// the front axle's force balance `N = F + m_af g` and each arm's moment balance
-    /// `N = F l_b/l_a + m_a g` (seed 002 eqs. 3.3.4, 3.3.9).
+    /// `N = F l_b/l_a + m_a g` (axle-load thesis, eqs. 3.3.4, 3.3.9).
     pub fn axle_loads_from_pressures(&self, pressure_pa: [f64; 3]) -> [f64; 3] {
         let g = self.gravity_m_per_s2;
         [0, 1, 2].map(|k| {
@@ -497,7 +499,7 @@ impl AxleParams {
     }
 
     /// The largest auxiliary brake force at the driven wheels that keeps the slip ratio under
-    /// `slip_ratio_limit` at driven-axle normal force `n_rear` (seed 002 eq. 1.1.1 read as
+    /// `slip_ratio_limit` at driven-axle normal force `n_rear` (axle-load thesis, eq. 1.1.1 read as
     /// `F_x/N = k(µ)·i`, the longitudinal force over the normal force linear in slip), capped by
     /// the road friction `µ N`: `F_max = min(k i_lim, µ) · max(N, 0)`, N.
     pub fn slip_limited_brake_force(&self, n_rear: f64) -> f64 {
@@ -507,14 +509,14 @@ impl AxleParams {
 }
 
 /// Physics the nominal half-truck leaves out, each named by its diagnosis-catalogue id
-/// (diagnosis.md). Every field's zero is the nominal model; all are SI.
+/// (docs/diagnosis/catalogue.md). Every field's zero is the nominal model; all are SI.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct AxleExtensions {
     /// `bogie_torque_reaction`: fraction κ (1) of the driven axle's wheel torque
     /// `T = F_r r_w` (drive − auxiliary brake − the driven axle's service-brake share, + driving)
     /// whose housing reaction goes into the chassis (torque rods) instead of the trailing arm.
     /// It acts between arm and chassis as the moment pair `κ T (e_φr + e_θ)` on the generalised
-    /// forces (docs/axle-model.md sign convention: `φ` rear end up, `θ` nose up), so it loads
+    /// forces (docs/models/axle.md sign convention: `φ` rear end up, `θ` nose up), so it loads
     /// the driven-axle bellow in proportion to the torque and mirrors in braking.
     pub torque_reaction: f64,
     /// `air_spring_nonlinearity`: progression γ ≥ 0 of every bellow, 1/m: the bellow force is

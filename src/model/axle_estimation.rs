@@ -1,6 +1,6 @@
-//! Axle-model parameter estimation from measurements (seed 002 §3.3, physics.md §3): the centre of
-//! gravity from scale weights, the effective bellow area from the static state, the bellow
-//! stiffness from a force–displacement test and damper coefficients from a datasheet table.
+//! Axle-model parameter estimation from measurements (axle-load thesis, §3.3; docs/models/axle.md):
+//! the centre of gravity from scale weights, the effective bellow area from the static state, the
+//! bellow stiffness from a force–displacement test and damper coefficients from a datasheet table.
 //!
 //! Conventions: distances in m along the vehicle from the front axle, positive rearwards; masses
 //! in kg as scale weights give them; forces in N; gauge pressures in Pa; damper velocities in m/s,
@@ -24,7 +24,7 @@ pub enum EstimationError {
         /// The rule it breaks.
         rule: &'static str,
     },
-    /// Scale weights that leave no chassis load on an axle's bellows (seed 002 eq. 3.3.8:
+    /// Scale weights that leave no chassis load on an axle's bellows (axle-load thesis, eq. 3.3.8:
     /// `m_i = N_i/g − m_ai` must be positive).
     #[error("scale weight {scale_weight_kg} kg does not exceed the axle mass {axle_mass_kg} kg: no load is left on the bellows (seed 002 eq. 3.3.8)")]
     NoBellowLoad {
@@ -65,7 +65,7 @@ fn positive(quantity: &'static str, value: f64) -> Result<f64, EstimationError> 
 }
 
 /// CG from the axle scale weights of a 6x2 (front, driven rear, tag) and the rear and tag axle
-/// distances behind the front axle: `x_CG = (N_r·l_r + N_t·l_t)/(m·g)` (physics.md §3), with
+/// distances behind the front axle: `x_CG = (N_r·l_r + N_t·l_t)/(m·g)` (docs/models/axle.md), with
 /// N = weight·g so g cancels.
 ///
 /// # Errors
@@ -107,9 +107,10 @@ fn arm_bellow_force(load_kg: f64, l_a_m: f64, l_b_m: f64, g: f64) -> Result<f64,
 }
 
 /// Static bellow force of an axle from its scale weight, N: the chassis load the axle carries,
-/// `m_i = N_i/g − m_ai` (seed 002 eq. 3.3.8), through the arm's moment balance about its pivot,
-/// `F_s = m_i·g·l_a/l_b` (eq. 3.3.9; axle at l_a, bellow at l_b from the pivot). A bellow acting
-/// directly above its axle (the front axle, eq. 3.3.5: `F_s = m_f·g`) is the case `l_a = l_b`.
+/// `m_i = N_i/g − m_ai` (axle-load thesis, eq. 3.3.8), through the arm's moment balance about its
+/// pivot, `F_s = m_i·g·l_a/l_b` (eq. 3.3.9; axle at l_a, bellow at l_b from the pivot). A bellow
+/// acting directly above its axle (the front axle, eq. 3.3.5: `F_s = m_f·g`) is the case
+/// `l_a = l_b`.
 ///
 /// # Errors
 /// Non-positive weight, axle mass, levers or gravity; [`EstimationError::NoBellowLoad`] when the
@@ -134,8 +135,8 @@ pub fn static_bellow_force(
 
 /// Effective bellow area from the static state of a trailing arm: the arm's moment balance about
 /// its pivot gives the bellow force `F_s = m_i·g·l_a/l_b` (axle load m_i acting at l_a, bellow at
-/// l_b; seed 002 eq. 3.3.9), and `A_eff = F_s/p_s` with the static gauge pressure p_s (eq.
-/// 3.3.10, physics.md §3), m².
+/// l_b; axle-load thesis, eq. 3.3.9), and `A_eff = F_s/p_s` with the static gauge pressure p_s
+/// (eq. 3.3.10), m².
 ///
 /// # Errors
 /// Non-positive load, levers or pressure.
@@ -164,7 +165,7 @@ pub struct LineFit {
 }
 
 /// Bellow stiffness as the slope of a least-squares line through a force–displacement test
-/// (seed 002 §3.3), N/m.
+/// (axle-load thesis, §3.3), N/m.
 ///
 /// # Errors
 /// Fewer than two points, unequal lengths, non-finite values or no spread in displacement.
@@ -285,7 +286,8 @@ mod tests {
 
     #[test]
     fn cg_balances_the_moments_of_the_scale_weights() {
-        // seed 002 table 4.2 scale weights 7.6 / 6.8 / 4.3 t; illustrative axle positions 0, 4.0, 5.35 m
+        // axle-load thesis table 4.2 scale weights 7.6 / 6.8 / 4.3 t; illustrative axle positions
+        // 0, 4.0, 5.35 m
         let e = cg_from_scale_weights(7600.0, 6800.0, 4300.0, 4.0, 5.35).unwrap();
         assert_eq!(e.mass_kg, 18700.0);
         // moment balance about the front axle: m x_cg = N_r l_r + N_t l_t

@@ -1,6 +1,6 @@
-//! Axle-model parameters from measurements (seed 002 §3.3, physics.md §3): a measurement file
-//! (scale weights, static bellow pressures, bellow force–displacement tests, damper datasheets)
-//! is read, checked, and run through the estimation functions of
+//! Axle-model parameters from measurements (axle-load thesis, §3.3; docs/models/axle.md): a
+//! measurement file (scale weights, static bellow pressures, bellow force–displacement tests,
+//! damper datasheets) is read, checked, and run through the estimation functions of
 //! [`axle_estimation`](super::axle_estimation) with the geometry and axle masses of a vehicle
 //! file's `[axles]` section. The result compares with the vehicle file and writes the estimated
 //! `[axles]` keys as a TOML snippet (`fleetdyn estimate axle`).
@@ -38,7 +38,7 @@
 //! axle before it goes here); pressures are gauge pressures; bellow displacement and stiffness
 //! are at the bellow. Array entries are numbered from 0 in errors (`bellow_test[0]`).
 //!
-//! # Estimation (seed 002 §3.3)
+//! # Estimation (axle-load thesis, §3.3)
 //!
 //! With the scale weights `w_i` (N_i = w_i·g), the axle positions `x_r`, `x_t` behind the front
 //! axle, the axle masses `m_ai` and the arm levers `l_a`, `l_b` of the vehicle file:
@@ -50,8 +50,8 @@
 //!   front bellow acts directly above its axle, `F_s = m_f g` (eq. 3.3.5);
 //! - effective bellow area `A_eff = F_s/p_s` where a static pressure is given (eq. 3.3.10);
 //! - bellow stiffness: slope of the least-squares force–displacement line of each test (eq.
-//!   3.3.6, seed fig. 3.10), pressures converted to forces with `F = p·A_eff` (eq. 3.3.7) and the
-//!   area estimated from the static state, as the seed does; several tests of one axle are
+//!   3.3.6, thesis fig. 3.10), pressures converted to forces with `F = p·A_eff` (eq. 3.3.7) and
+//!   the area estimated from the static state, as the thesis does; several tests of one axle are
 //!   reported each, and the snippet takes the mean of their slopes;
 //! - damper coefficients per branch, least squares through the origin (§3.3.3), and the
 //!   datasheet points as the vehicle file's damper tables: extension (`v > 0`) and compression
@@ -170,7 +170,7 @@ struct RawDatasheet {
 pub enum BellowLoad {
     /// Bellow force, N.
     ForceN(Vec<f64>),
-    /// Bellow gauge pressure, Pa (converted with `F = p·A_eff`, seed 002 eq. 3.3.7).
+    /// Bellow gauge pressure, Pa (converted with `F = p·A_eff`, axle-load thesis, eq. 3.3.7).
     PressurePa(Vec<f64>),
 }
 
@@ -352,8 +352,8 @@ pub struct DamperEstimate {
     pub table: DamperTable,
 }
 
-/// Every estimate of seed 002 §3.3, SI units (the unit is in each name); per-axle arrays in
-/// [`Axle::ALL`] order.
+/// Every estimate of the axle-load thesis, §3.3, SI units (the unit is in each name); per-axle
+/// arrays in [`Axle::ALL`] order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AxleEstimate {
     /// The measurement file.
@@ -381,7 +381,7 @@ pub struct AxleEstimate {
 }
 
 /// Arm levers `(l_a, l_b)` of an axle; the front bellow acts directly above its axle, which is
-/// the lever ratio 1 (seed 002 eq. 3.3.5).
+/// the lever ratio 1 (axle-load thesis, eq. 3.3.5).
 fn levers(v: &AxleParams, a: Axle) -> (f64, f64) {
     v.arm(a).map_or((1.0, 1.0), |(_, la, lb, _, _)| (la, lb))
 }
@@ -475,8 +475,9 @@ fn datasheet_table(
     })
 }
 
-/// Runs the estimation of seed 002 §3.3 (module doc) on checked measurements with the geometry
-/// and axle masses of a vehicle file's `[axles]` section; `vehicle_file` names it in errors.
+/// Runs the estimation of the axle-load thesis, §3.3 (module doc) on checked measurements with
+/// the geometry and axle masses of a vehicle file's `[axles]` section; `vehicle_file` names it
+/// in errors.
 ///
 /// # Errors
 /// [`MeasurementError::Estimate`] naming the file and key: scale weights that leave no load on

@@ -8,9 +8,9 @@
 //! every generator of synthetic drives read the same rows, so an effect's identifier, unit
 //! and ranges cannot drift between the code that hides an effect and the code that names it.
 //! The identifiers are part of the output contract: once released, an identifier keeps its
-//! meaning (docs/diagnosis.md).
+//! meaning (docs/diagnosis/catalogue.md).
 //!
-//! The table in words is [`catalogue_markdown`], which docs/diagnosis.md carries.
+//! The table in words is [`catalogue_markdown`], which docs/diagnosis/catalogue.md carries.
 //!
 //! θ₀ is the vehicle file's value of the parameter (or the effect's "absent" value, 0 for the
 //! offsets, lash, delay and axle extensions, 1 for the tyre-stiffness factor).
@@ -150,8 +150,8 @@ impl Tolerance {
 }
 
 impl ToleranceKind {
-    /// The documented default tolerance of this kind of value (docs/diagnosis.md,
-    /// "Tolerances"): what a vehicle file's nominal value is typically off by on a healthy truck.
+    /// The documented default tolerance of this kind of value (docs/diagnosis/catalogue.md):
+    /// what a vehicle file's nominal value is typically off by on a healthy truck.
     ///
     /// | kind | default | why |
     /// |---|---|---|
@@ -625,8 +625,8 @@ impl Effect {
 }
 
 /// The catalogue as a Markdown table (one row per effect: id, domain, parameter and unit,
-/// default tolerance, draw range, fit step and domain, fingerprint), as docs/diagnosis.md
-/// carries it; a test keeps the two equal.
+/// default tolerance, draw range, fit step and domain, fingerprint), as
+/// docs/diagnosis/catalogue.md carries it; a test keeps the two equal.
 pub fn catalogue_markdown() -> String {
     fn g(x: f64) -> String {
         let s = format!("{x}");

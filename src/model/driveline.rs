@@ -1,10 +1,11 @@
-//! Driveline parameters (physics.md §1, seed 000 §2): the typed `[driveline]` section of a vehicle
+//! Driveline parameters (docs/models/driveline.md): the typed `[driveline]` section of a vehicle
 //! file, checked key by key against `schemas/vehicle.toml` (unit, range, shape).
 //!
-//! Symbols (physics.md §1): J_e engine + flywheel, J_c clutch disc, k_c/c_c clutch torsion
-//! spring, J_t(i) gearbox inertia referred to its output shaft in gear i, b_t gearbox loss,
-//! J_p/k_p/c_p propeller shaft, i_f/J_f/b_f final drive, J_d/k_d/c_d drive shafts (lumped, the
-//! main flexibility), J_w wheels, r_w wheel radius, m vehicle mass. All SI.
+//! Symbols (the model of Myklebust & Eriksson (2012), §2, as docs/models/driveline.md restates it):
+//! J_e engine + flywheel, J_c clutch disc, k_c/c_c clutch torsion spring, J_t(i) gearbox inertia
+//! referred to its output shaft in gear i, b_t gearbox loss, J_p/k_p/c_p propeller shaft,
+//! i_f/J_f/b_f final drive, J_d/k_d/c_d drive shafts (lumped, the main flexibility), J_w wheels,
+//! r_w wheel radius, m vehicle mass. All SI.
 
 use serde::Deserialize;
 use std::sync::OnceLock;
@@ -166,7 +167,7 @@ pub fn vehicle_schema() -> &'static VehicleSchema {
     S.get_or_init(|| toml::from_str(SCHEMA_TOML).expect("embedded schemas/vehicle.toml is valid"))
 }
 
-/// Driveline parameters, SI units (physics.md §1).
+/// Driveline parameters, SI units (docs/models/driveline.md).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)] // each field is documented in schemas/vehicle.toml (meaning, unit, range)
@@ -255,7 +256,7 @@ impl DrivelineParams {
         t[k - 1] + f * (t[k] - t[k - 1])
     }
 
-    /// Kinetic clutch capacity M_k at clutch position `x` (physics.md §1 actuator law:
+    /// Kinetic clutch capacity M_k at clutch position `x` (docs/models/driveline.md actuator law:
     /// `x_eff = clamp(x/x_max, L_l, L_u)`, `M_k = k_clutch (L_u − x_eff)/(L_u − L_l)`), N·m.
     pub fn clutch_capacity(&self, x: f64) -> f64 {
         let x_eff = (x / self.clutch_x_max).clamp(self.clutch_l_lower, self.clutch_l_upper);
@@ -298,7 +299,7 @@ impl DrivelineParams {
         sgn * (f_r + f_a + brake_n) + mg * slope.atan().sin()
     }
 
-    /// The rolling-resistance smoothing `f(v) = 1 − exp(−c_sr v²)` (physics.md §1), 1.
+    /// The rolling-resistance smoothing `f(v) = 1 − exp(−c_sr v²)` (docs/models/driveline.md), 1.
     ///
     /// Where `exp(−c_sr v²) < 2⁻⁵⁴` the difference rounds to exactly 1.0 in IEEE double, so for
     /// `c_sr v² > 40` (`exp(−40) ≈ 4·10⁻¹⁸`) 1.0 is returned without calling `exp` — the same

@@ -1,5 +1,6 @@
-//! Linear driveline model (physics.md §1, seed 000 eq. (27)): A, B, C for a gear and an operating
-//! speed, open loop and with the engine-speed PI controller, and its frequency response.
+//! Linear driveline model (docs/models/driveline.md; Myklebust & Eriksson (2012), eq. (27)):
+//! A, B, C for a gear and an operating speed, open loop and with the engine-speed PI controller,
+//! and its frequency response.
 //!
 //! # Conventions
 //! States (clutch locked, gear fixed, v > 0), all SI:
@@ -11,8 +12,9 @@
 //!
 //! Torques: `M_c = c_c(ω_e − i_t ω_p) + k_c x_2`, `M_p = c_p(ω_p − i_f ω_d) + k_p x_4`,
 //! `M_d = c_d(ω_d − ω_w) + k_d x_6`; inertias J1 = J_e + J_c, J2 = J_t(i) + J_p, J3 = J_f + J_d
-//! (physics.md mends the seed's J_3), J4 = m r_w² + J_w. Linearised resistance (physics.md §1):
-//! `A[7,7] += Δa77 = −r_w²·(c_r2·m·g + ρ_a·c_w·A_f·v0)/J4` (1-based indices as in the seed).
+//! (the paper's `J_3 = J_p i_f² + J_f + J_d` counts J_p and J_d twice), J4 = m r_w² + J_w.
+//! Linearised resistance: `A[7,7] += Δa77 = −r_w²·(c_r2·m·g + ρ_a·c_w·A_f·v0)/J4` (1-based
+//! indices as in the paper).
 
 use super::driveline::DrivelineParams;
 use nalgebra::{DMatrix, DVector};

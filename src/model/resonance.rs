@@ -1,6 +1,6 @@
-//! Driveline resonance per gear (seed 000 §3): where the `F_dr → v` response peaks, how high the
-//! peak stands over the rigid-driveline response, and the spatial frequency it corresponds to at
-//! the gear's top speed (so it can be set against road spectra).
+//! Driveline resonance per gear (Myklebust & Eriksson (2012), §3): where the `F_dr → v` response
+//! peaks, how high the peak stands over the rigid-driveline response, and the spatial frequency it
+//! corresponds to at the gear's top speed (so it can be set against road spectra).
 //!
 //! Definitions:
 //! - operating point: the speed at which the engine turns 1200 rpm in that gear (cruise);
@@ -11,7 +11,7 @@
 //! - peak height: 20·log10(|H(f_peak)| / |H_rigid(f_peak)|), dB — the amplification over the
 //!   response of the same vehicle with a rigid driveline ([`rigid_response`]), which is what the
 //!   flexible model follows below its resonances;
-//! - spatial frequency: f_s = f_peak / v_top(gear), 1/m (physics.md §1).
+//! - spatial frequency: f_s = f_peak / v_top(gear), 1/m (docs/models/driveline.md).
 
 use super::driveline::DrivelineParams;
 use super::linear::{linearize, rigid_response, LinearDriveline, StateSpace};

@@ -2,8 +2,8 @@
 //! key names.
 //!
 //! A file carries identification, the gearbox (ingest uses it to reject gears outside the
-//! gearbox) and, optionally, the driveline (physics.md §1) and axle-load (§3) sections, each
-//! checked key by key against `schemas/vehicle.toml`.
+//! gearbox) and, optionally, the driveline (docs/models/driveline.md) and axle-load
+//! (docs/models/axle.md) sections, each checked key by key against `schemas/vehicle.toml`.
 
 use super::axle::AxleParams;
 use super::driveline::{vehicle_schema, DrivelineParams};
@@ -41,13 +41,13 @@ pub struct VehicleFile {
     pub description: String,
     /// Gearbox.
     pub gearbox: Gearbox,
-    /// Driveline parameters (physics.md §1), checked against `schemas/vehicle.toml`.
+    /// Driveline parameters (docs/models/driveline.md), checked against `schemas/vehicle.toml`.
     #[serde(skip)]
     pub driveline: Option<DrivelineParams>,
     /// The raw `[driveline]` table as written (checked and converted by [`VehicleFile::parse`]).
     #[serde(default, rename = "driveline")]
     driveline_raw: Option<toml::Table>,
-    /// Axle-load parameters (physics.md §3), checked against `schemas/vehicle.toml`.
+    /// Axle-load parameters (docs/models/axle.md), checked against `schemas/vehicle.toml`.
     #[serde(skip)]
     pub axles: Option<AxleParams>,
     /// The raw `[axles]` table as written (checked and converted by [`VehicleFile::parse`]).

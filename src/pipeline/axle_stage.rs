@@ -1,5 +1,5 @@
-//! The axle-load stage (physics.md §3): simulate a recorded drive with the half-truck model and
-//! validate it against the recorded bellow pressures (and travel, where recorded); write
+//! The axle-load stage (docs/models/axle.md): simulate a recorded drive with the half-truck model
+//! and validate it against the recorded bellow pressures (and travel, where recorded); write
 //! `axle_sim.parquet` and `axle_validation.parquet`, both or neither.
 //!
 //! Longitudinal inputs come from the recording (torques, acceleration from speed or IMU) or, for
@@ -40,6 +40,14 @@ pub struct AxleStageConfig {
     pub longitudinal: LongitudinalSource,
     /// Slope column to use (e.g. the filtered slope added by the caller), else `road_slope`.
     pub slope_column: Option<String>,
+}
+
+impl AxleStageConfig {
+    /// Canonical text of the settings and the axle parameters `p`, for the config hash of a
+    /// single-drive simulation.
+    pub fn fingerprint(&self, p: &crate::model::axle::AxleParams) -> String {
+        format!("axle:v1 {p:?} {self:?}")
+    }
 }
 
 /// Why the stage failed for a drive.

@@ -25,7 +25,7 @@
 //! configuration wrote but the new one does not are removed. Temporary files a killed run left
 //! are removed before a target is written again.
 
-use super::run::DriveRecord;
+use super::record::DriveRecord;
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -107,3 +107,37 @@ pub fn write(
         let _ = std::fs::remove_file(distance_path);
     })
 }
+
+/// Name of the filtered road-slope column that [`add_filtered_slope`] adds to a drive log.
+pub const FILTERED_SLOPE_COLUMN: &str = "road_slope_filtered";
+
+/// Why the filtered slope could not be added to a drive log.
+#[derive(Debug, thiserror::Error)]
+pub enum FilteredSlopeError {
+    /// The drive could not be resampled to distance.
+    #[error(transparent)]
+    Resample(#[from] crate::signal::distance::ResampleError),
+    /// The slope could not be filtered.
+    #[error(transparent)]
+    Filter(#[from] crate::road::slope_filter::SlopeError),
+}
+
+/// Adds the zero-phase filtered road slope (default distance grid and filter,
+/// [`SlopeFilterConfig::default`]; Myklebust & Eriksson 2012, §5), mapped back to the log's
+/// time axis, as the column [`FILTERED_SLOPE_COLUMN`] (tan α, unit `1`) and returns its name;
+/// `None`, and the log unchanged, when the log has no `road_slope`.
+pub fn add_filtered_slope(log: &mut DriveLog) -> Result<Option<&'static str>, FilteredSlopeError> {
+    use crate::road::slope_filter::filter_slope;
+    use crate::signal::distance::{resample_to_distance, ResampleConfig};
+    if log.signal("road_slope").is_none() {
+        return Ok(None);
+    }
+    let d = resample_to_distance(log, &ResampleConfig::default())?;
+    let f = filter_slope(&d, &SlopeFilterConfig::default())?;
+    log.signals.push(crate::table::Signal {
+        name: FILTERED_SLOPE_COLUMN.into(),
+        unit: "1".into(),
+        values: f.zero_phase_time,
+    });
+    Ok(Some(FILTERED_SLOPE_COLUMN))
+}

@@ -59,11 +59,11 @@ pub enum PipelineStage {
     Ingest,
     /// Uniform distance grid.
     Resample,
-    /// Zero-phase spatial slope filter (seed 000 §5).
+    /// Zero-phase spatial slope filter (docs/models/road.md).
     Slope,
-    /// Driveline shuffle simulation and its validation (physics.md §1).
+    /// Driveline shuffle simulation and its validation (docs/models/driveline.md).
     Shuffle,
-    /// Axle-load simulation and its validation (physics.md §3).
+    /// Axle-load simulation and its validation (docs/models/axle.md).
     Axle,
     /// Slope spectrum of the drive's road (the `road study` analysis on recorded roads).
     Spectrum,
@@ -241,7 +241,8 @@ impl AxleSpec {
     }
 }
 
-/// `[spectrum]`: Welch PSD of the drive's raw road slope on the distance grid (seed 000 §4).
+/// `[spectrum]`: Welch PSD of the drive's raw road slope on the distance grid
+/// (docs/models/road.md).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SpectrumSpec {

@@ -1,7 +1,7 @@
 //! The proof's plan: which drive hides which effect, on which road, with which driver.
 
 use crate::model::catalogue::{Domain, Effect};
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 use crate::synth::can::Dropouts;
 use crate::synth::driver::{DriverConfig, LiftOffs};
 use serde::Serialize;
@@ -39,6 +39,39 @@ impl Default for ProofConfig {
 }
 
 impl ProofConfig {
+    /// Checks the plan: at least one drive, drive lengths finite with 0.5 km ≤ min ≤ max, and
+    /// every index of `only` inside the plan.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        use crate::settings::require;
+        let (lo, hi) = self.length_km;
+        require(
+            self.drives >= 1,
+            "drives",
+            self.drives,
+            "must be at least 1",
+        )?;
+        require(
+            lo.is_finite() && lo >= 0.5,
+            "min_km",
+            lo,
+            "must be finite and at least 0.5",
+        )?;
+        require(
+            hi.is_finite() && hi >= lo,
+            "max_km",
+            hi,
+            "must be finite and at least min_km",
+        )?;
+        match self.only.iter().find(|&&c| c >= self.drives) {
+            Some(c) => Err(crate::settings::InvalidSetting::new(
+                "cases",
+                c,
+                "is not an index of the plan (0 to drives - 1)",
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// The proof on the independent truth ([`crate::truth`]): 66 drives in cycles of the ten
     /// longitudinal catalogue effects, four clean drives and three out-of-catalogue ones (one
     /// of each kind in turn), so 16 of 66 drives (24 %) hide nothing; seed 1, 3–6 km, dropouts
@@ -168,8 +201,8 @@ const DRIVING_STREAM: u64 = 0x6472_6976_696E_6721;
 /// The driver of a proof drive with seed `seed` under [`Driving::Drawn`]: the generator's
 /// default driver with, drawn uniformly from the drive seed's own stream,
 /// - comfortable acceleration 0.5–1.2 m/s² (a loaded truck's gentle start to a brisk one;
-///   at 1.2 m/s² the 18.7 t seed 002 truck reaches cruise in its top gear at full torque,
-///   `fleetdyn prove --seed 1` case 38) and deceleration 0.9–1.5 m/s²;
+///   at 1.2 m/s² the 18.7 t truck of the axle-load thesis reaches cruise in its top gear at
+///   full torque on a drive of `fleetdyn prove --seed 1`) and deceleration 0.9–1.5 m/s²;
 /// - speed-error gain 0.3–0.8 1/s;
 /// - tip amplitude ±3 % to ±20 % of the torque demand;
 /// - lift-offs ([`LiftOffs`]) every 20–120 s on average (each interval 0.5–1.5 times the

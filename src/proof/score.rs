@@ -185,7 +185,7 @@ pub(crate) fn contract_held(m: &crate::diagnose::contract::FitEntry) -> (f64, f6
 
 /// The signals a diagnosis compares that the generator knows without noise (the recorded
 /// speed, engine speed and bellow pressures, and the engine speed again as the clutch view's
-/// [`crate::diagnose::compare::ACTUATION_CHANNEL`]), on the rows of `log`: the truth `signals` read at
+/// [`crate::diagnose::rows::ACTUATION_CHANNEL`]), on the rows of `log`: the truth `signals` read at
 /// each row's time (linear between the truth's samples; the log's clock starts at
 /// [`crate::synth::drive::DRIVE_START_NS`] = the truth's 0 s). The reference
 /// [`crate::diagnose::explain::fits_against`] takes to score a fit against the noise-free signals;
@@ -218,10 +218,7 @@ pub fn noise_free_reference(
         })
         .collect();
     if let Some(engine) = reference.get("engine_speed").cloned() {
-        reference.insert(
-            crate::diagnose::compare::ACTUATION_CHANNEL.to_string(),
-            engine,
-        );
+        reference.insert(crate::diagnose::rows::ACTUATION_CHANNEL.to_string(), engine);
     }
     reference
 }

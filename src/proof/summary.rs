@@ -80,16 +80,7 @@ pub struct ProofSummary {
 }
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+    (!v.is_empty()).then(|| crate::signal::stats::median(&mut v))
 }
 
 fn is_catalogue(hidden: &str) -> bool {

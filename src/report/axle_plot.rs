@@ -1,6 +1,7 @@
 //! SVG plots of an axle-load simulation: the three normal forces as scale readings (t) over
-//! time, and the three bellow gauge pressures (bar) over time — the quantities of seed 002
-//! figures 4.4/4.7 and 4.2/4.5. Each plot is rendered in memory and written atomically.
+//! time, and the three bellow gauge pressures (bar) over time — the quantities of the axle-load
+//! thesis (docs/models/axle.md), figures 4.4/4.7 and 4.2/4.5. Each plot is rendered in memory
+//! and written atomically.
 
 use crate::io::AtomicFile;
 use crate::sim::axle::AxleTrajectory;

@@ -1,5 +1,5 @@
-//! `fleetdyn bode`: the per-gear resonance table of the linear driveline model (seed 000 §3) as
-//! text, Parquet (schema `bode`) and an SVG Bode-magnitude plot.
+//! `fleetdyn bode`: the per-gear resonance table of the linear driveline model (Myklebust &
+//! Eriksson (2012), §3) as text, Parquet (schema `bode`) and an SVG Bode-magnitude plot.
 
 use crate::io::{config_hash, write_table, OutColumn, OutData, OutputError, TableMeta};
 use crate::model::driveline::DrivelineParams;
@@ -8,6 +8,11 @@ use crate::model::resonance::{resonance, Path, Resonance};
 use plotters::prelude::*;
 use std::fmt;
 use std::path::Path as FsPath;
+
+/// Canonical text of the driveline `p` and gear `ratios`, for the config hash of a Bode table.
+pub fn fingerprint(p: &DrivelineParams, ratios: &[f64]) -> String {
+    format!("bode:v1 {p:?} {ratios:?}")
+}
 
 /// One gear's row.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,4 +1,4 @@
-//! The diagnosis report (diagnosis.md step 4, "show"): `report.md` with the verdict, the noise
+//! The diagnosis report (docs/diagnosis/method.md, "show"): `report.md` with the verdict, the noise
 //! floors, the located mismatches, one paragraph per finding (its sentence, parameters with
 //! confidence intervals and units, before/after errors on training and held-out parts), and
 //! one SVG per compared signal with the residual before (nominal model) and after (with the

@@ -1,4 +1,5 @@
-//! Reports: human-readable summaries and machine-readable run reports.
+//! Reports: human-readable summaries, tables and plots of one command's results (a pipeline's
+//! run report is `pipeline::run_report`).
 
 pub mod axle_plot;
 pub mod axle_scenario;
@@ -6,7 +7,6 @@ pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
 pub mod diagnosis;
-pub mod fleet;
 mod ingest_summary;
 pub mod road_plot;
 pub mod road_spectra;

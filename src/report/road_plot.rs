@@ -1,8 +1,9 @@
-//! SVG plot of road-slope spectra (seed 000 Figure 9 style): log–log PSD over spatial frequency
-//! with a shaded band (percentiles across roads, or the confidence band of one road), PSD lines,
-//! the knees marked as vertical lines, the slope filter's cut-off f_co = 4·10⁻³ 1/m and its
-//! −30 dB frequency f_lo = 2·10⁻² 1/m as black vertical lines (seed 000 §5), and the filter's
-//! magnitude response — zero-phase |H|² and causal |H|, in dB — on a second y axis (right).
+//! SVG plot of road-slope spectra (in the style of Myklebust & Eriksson (2012), fig. 9): log–log
+//! PSD over spatial frequency with a shaded band (percentiles across roads, or the confidence band
+//! of one road), PSD lines, the knees marked as vertical lines, the slope filter's cut-off f_co =
+//! 4·10⁻³ 1/m and its −30 dB frequency f_lo = 2·10⁻² 1/m as black vertical lines (the paper's §5),
+//! and the filter's magnitude response — zero-phase |H|² and causal |H|, in dB — on a second y axis
+//! (right).
 //!
 //! To keep the SVG small the plot thins the bins to at most [`MAX_PLOT_POINTS`] log-spaced ones
 //! (every bin at low frequency, fewer at high frequency); the Parquet tables hold every bin.

@@ -1,7 +1,7 @@
 //! Spectra of drive signals: Welch PSD (scipy conventions, see [`crate::signal::welch`]) of one
 //! column in the distance domain (1/m, on the resampled grid) or the time domain (Hz, on the
 //! drive's uniform time base), with confidence bounds, cumulative power and the "knee"
-//! frequencies below which 90 % and 99 % of the power lies (seed 000 §4).
+//! frequencies below which 90 % and 99 % of the power lies (Myklebust & Eriksson (2012), §4).
 
 use crate::io::{config_hash, write_table, OutColumn, OutputError, TableMeta};
 use crate::schema::{drive_log, Interpolation};

@@ -62,22 +62,21 @@
 //! GNSS altitude is noisy (0.1 m steps, reported accuracy 1–4 m, errors correlated over tens
 //! of seconds), and differentiating it amplifies the noise at short wavelengths, so it is
 //! smoothed by a zero-phase Butterworth low-pass in distance before the slope is taken:
-//! order `smooth_order` (default 3, as the seed 000 §5 slope filter), design cut-off
+//! order `smooth_order` (default 3, as the road-slope filter), design cut-off
 //! `1/smooth_m` 1/m, run forward and backward ([`crate::signal::sosfiltfilt`], matched edges),
 //! so the magnitude is |H|²: −6 dB at the cut-off, −120 dB/decade beyond.
 //!
 //! *Default `smooth_m` = 300 m, from the data.* On the measured car drive
-//! (`fixtures/real/css-car-drive-164`, 40.6 km) the slope of the unsmoothed GNSS altitude was
-//! compared band by band (half-octaves) with the slope from the receiver's IMU pitch: the IMU
-//! slope's power exceeds the power of the difference (signal-to-noise ratio 1.6–13) at
-//! wavelengths above 440 m, the ratio is 0.46 and 0.96 in the two bands between 220 and 440 m,
-//! and below 220 m the difference dominates (0.40 at 160–220 m, 0.22 at 110–160 m, 0.08 at
-//! 55–78 m; `fixtures/gen/make_road_profile_reference.py`). A cut-off at 50–100 m wavelength
-//! would pass the bands from 55 to 220 m, where the difference carries 2.5–12 times the IMU
-//! slope's power; 300 m sits in the crossover, and it is
-//! close to the seed 000 §5 slope filter's own cut-off (4·10⁻³ 1/m = 250 m), which removes what
-//! lies beyond anyway before the slope drives a model. A hillier road or a better receiver
-//! (RTK, barometer) moves the crossover; pass `smooth_m` accordingly.
+//! (`fixtures/real/css-car-drive-164`, 40.6 km), comparing the slope of the unsmoothed GNSS
+//! altitude band by band (half-octaves) with the slope from the receiver's IMU pitch: the IMU
+//! slope's power exceeds the power of the difference (signal-to-noise ratio 1.6–13) at wavelengths
+//! above 440 m, the ratio is 0.46 and 0.96 in the two bands between 220 and 440 m, and below 220 m
+//! the difference dominates (0.40 at 160–220 m, 0.22 at 110–160 m, 0.08 at 55–78 m;
+//! `fixtures/gen/make_road_profile_reference.py`). A cut-off at 50–100 m wavelength would pass the
+//! bands from 55 to 220 m, where the difference carries 2.5–12 times the IMU slope's power; 300 m
+//! sits in the crossover, and it is close to the road-slope filter's own cut-off (4·10⁻³ 1/m = 250
+//! m), which removes what lies beyond anyway before the slope drives a model. A hillier road or a
+//! better receiver (RTK, barometer) moves the crossover; pass `smooth_m` accordingly.
 //!
 //! `slope` is the central difference of `elevation_smoothed`, `(z[k+1] − z[k−1])/(2·step_m)`,
 //! one-sided at the two ends. Within about two cut-off wavelengths of either end (600 m at the
@@ -908,49 +907,6 @@ fn profile_inner(
         longitude_deg: Some(longitude),
         imu_slope,
     })
-}
-
-/// What a road-profile input holds, recognised by content (not by the file name).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ProfileInput {
-    /// A recording for ingest (Parquet or MCAP magic, or anything that is not a VECTO cycle:
-    /// ingest then reports the unknown format).
-    Recording,
-    /// A VECTO distance-based driving cycle (`.vdri` CSV with a `<s>` header).
-    VectoCycle,
-}
-
-/// Looks at the first 4 KiB of `path`: Parquet (`PAR1`) or MCAP magic is a recording; a text
-/// whose first non-comment line has a `<s>` header cell is a VECTO cycle.
-///
-/// # Errors
-/// [`ProfileError::Io`] when the file cannot be read; [`ProfileError::Vdri`] for a time-based
-/// VECTO cycle (`<t>` without `<s>`), which has no distance axis.
-pub fn detect_input(path: &Path) -> Result<ProfileInput, ProfileError> {
-    use std::io::Read as _;
-    let file = path.display().to_string();
-    let mut head = Vec::with_capacity(4096);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(4096).read_to_end(&mut head))
-        .map_err(|source| ProfileError::Io {
-            file: file.clone(),
-            source,
-        })?;
-    if head.starts_with(b"PAR1") || head.starts_with(b"\x89MCAP") {
-        return Ok(ProfileInput::Recording);
-    }
-    match super::vdri::vecto_header(&head) {
-        Some(super::vdri::VectoHeader::Distance) => Ok(ProfileInput::VectoCycle),
-        Some(super::vdri::VectoHeader::Time) => Err(ProfileError::Vdri {
-            file,
-            line: 1,
-            column: "<t>".into(),
-            value: String::new(),
-            message: "a time-based VECTO cycle has no distance axis; a road profile needs <s>"
-                .into(),
-        }),
-        None => Ok(ProfileInput::Recording),
-    }
 }
 
 /// Writes a profile as the `road_profile` table (atomically, units on every column, the facts

@@ -1,5 +1,5 @@
-//! Road-design rule sets for synthetic roads (seed 000 §4, physics.md §2): the data that
-//! [`crate::road::synth`] draws a road from.
+//! Road-design rule sets for synthetic roads (Myklebust & Eriksson (2012), §4;
+//! docs/models/road.md): the data that [`crate::road::synth`] draws a road from.
 //!
 //! A rule set is a TOML file with units in its key names (`schemas/roads/*.toml` are bundled
 //! and embedded in the binary; a user file of the same shape works too):
@@ -17,10 +17,10 @@
 //! | `max_length_flat_m` | m | upper bound of that length at zero grade (the widest range) |
 //! | `length_e_folding_grade` | 1 (tan α) | the length range shrinks by a factor e per this much \|grade\| |
 //!
-//! Segment lengths are uniform on `[L_min, L_min + (L_flat − L_min)·exp(−|g|/g_e)]` — the seed's
-//! "range of the slope-length distributions set exponentially with respect to the inclination,
-//! with flat ground giving the widest range". Unknown keys are errors, so a misspelt key never
-//! silently falls back to nothing.
+//! Segment lengths are uniform on `[L_min, L_min + (L_flat − L_min)·exp(−|g|/g_e)]` — Myklebust &
+//! Eriksson (2012), §4: "range of the slope-length distributions set exponentially with respect to
+//! the inclination, with flat ground giving the widest range". Unknown keys are errors, so a
+//! misspelt key never silently falls back to nothing.
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -44,7 +44,8 @@ const BUNDLED: &[(&str, &str)] = &[
 ];
 
 /// Steepest `max_grade` accepted: the drive-log schema's bound on |road_slope| (beyond it the
-/// seed's small-angle simplification sin α ≈ tan α is no longer "very sound", seed 000 §3).
+/// small-angle simplification sin α ≈ tan α stops being "very sound", Myklebust & Eriksson
+/// (2012), §3).
 pub const GRADE_LIMIT: f64 = 0.3;
 
 /// Names of the bundled rule sets, in the order they are documented.

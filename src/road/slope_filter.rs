@@ -1,7 +1,8 @@
-//! The road-slope filter (seed 000 §5): a Butterworth low-pass in the *spatial* domain that
-//! removes the slope content that excites driveline shuffle while keeping the road's own grades.
+//! The road-slope filter (Myklebust & Eriksson (2012), §5): a Butterworth low-pass in the *spatial*
+//! domain that removes the slope content that excites driveline shuffle while keeping the road's
+//! own grades.
 //!
-//! Design (seed 000 §5, physics.md §2): order 3, cut-off f_co = 4·10⁻³ 1/m (a decade above the
+//! Design (docs/models/road.md): order 3, cut-off f_co = 4·10⁻³ 1/m (a decade above the
 //! city-road knee), required attenuation −30 dB at f_lo = 2·10⁻² 1/m (a 3rd-order filter gives
 //! ≈ −42 dB there). Two variants on the same distance grid:
 //! - **off-line, zero phase**: forward-backward filtering (`sosfiltfilt`); its magnitude is
@@ -119,7 +120,8 @@ pub struct SlopeFiltered {
     /// Gain of the causal filter at `stop_per_m`, dB.
     pub causal_gain_at_stop_db: f64,
     /// Gain of the single-pass zero-phase design (order `order`) at `stop_per_m`, dB — the
-    /// figure seed 000 quotes (≈ −42 dB for order 3).
+    /// figure the design requirement is checked against (≈ −42 dB for order 3; Myklebust &
+    /// Eriksson (2012), §5, round it to −40 dB).
     pub design_gain_at_stop_db: f64,
     /// Estimated slope-sensor quantisation, tan α.
     pub quantization: Option<Quantization>,

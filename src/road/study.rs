@@ -1,16 +1,17 @@
-//! Spatial spectra of road slope and studies over many random roads (seed 000 §4, physics.md §2).
+//! Spatial spectra of road slope and studies over many random roads (Myklebust & Eriksson
+//! (2012), §4; docs/models/road.md).
 //!
 //! **One road** ([`slope_spectrum`]): the Welch PSD of the slope on its distance grid
 //! (`scipy.signal.welch` conventions, see [`crate::signal::welch`]: periodic Hann segments of
-//! `segment_length_m`, 50 % overlap, mean removed per segment, one-sided density) in
-//! (tan α)²/(1/m) over spatial frequency in 1/m, its chi-square confidence band (equivalent
-//! degrees of freedom of overlapped Hann segments), the cumulative power and the "knees" — the
-//! frequencies below which 90 % and 99 % of the power lies ([`crate::signal::knee_frequency`];
-//! seed 000 §4: "most of the power is in spatial frequencies below 3·10⁻⁴ 1/m" for highways,
-//! 10⁻³ 1/m for city roads), plus the half-power frequency (50 %), which for a first-order
-//! spectrum is its corner, the knee seen on a log–log plot. Alongside, the magnitude response of the slope filter of seed 000 §5
-//! ([`crate::road::slope_filter`]: 3rd-order Butterworth, f_co = 4·10⁻³ 1/m, −30 dB required at
-//! 2·10⁻² 1/m) on the same frequencies: the off-line zero-phase filter's |H|² and the on-line
+//! `segment_length_m`, 50 % overlap, mean removed per segment, one-sided density) in (tan α)²/(1/m)
+//! over spatial frequency in 1/m, its chi-square confidence band (equivalent degrees of freedom of
+//! overlapped Hann segments), the cumulative power and the "knees" — the frequencies below which 90
+//! % and 99 % of the power lies ([`crate::signal::knee_frequency`]; Myklebust & Eriksson (2012),
+//! §4: "most of the power is in spatial frequencies below 3·10⁻⁴ 1/m" for highways, 10⁻³ 1/m for
+//! city roads), plus the half-power frequency (50 %), which for a first-order spectrum is its
+//! corner, the knee seen on a log–log plot. Alongside, the magnitude response of the road-slope
+//! filter ([`crate::road::slope_filter`]: 3rd-order Butterworth, f_co = 4·10⁻³ 1/m, −30 dB required
+//! at 2·10⁻² 1/m) on the same frequencies: the off-line zero-phase filter's |H|² and the on-line
 //! causal filter's |H|, in dB.
 //!
 //! **A study** ([`run_study`]): `n_roads` roads drawn from one rule set with the seeds
@@ -41,7 +42,8 @@ pub const MAX_ROADS: usize = 10_000;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpectrumSettings {
     /// Welch segment length, m (rounded to whole grid steps). The frequency resolution is its
-    /// inverse: the default 16 384 m gives 6.1·10⁻⁵ 1/m, five bins below the seed's highway knee.
+    /// inverse: the default 16 384 m gives 6.1·10⁻⁵ 1/m, five bins below the highway knee of
+    /// Myklebust & Eriksson (2012), §4.
     pub segment_length_m: f64,
     /// Two-sided confidence level of the PSD band.
     pub confidence: f64,
@@ -53,6 +55,20 @@ impl Default for SpectrumSettings {
             segment_length_m: 16_384.0,
             confidence: 0.95,
         }
+    }
+}
+
+impl SpectrumSettings {
+    /// Checks the confidence level (strictly between 0 and 1); the segment length is checked
+    /// against the road's grid where the spectrum is computed.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        let c = self.confidence;
+        crate::settings::require(
+            c > 0.0 && c < 1.0,
+            "confidence",
+            c,
+            "must lie strictly between 0 and 1",
+        )
     }
 }
 
@@ -107,7 +123,8 @@ pub enum StudyError {
     },
 }
 
-/// Magnitude response of the seed 000 §5 slope filter on a set of frequencies.
+/// Magnitude response of the road-slope filter ([`crate::road::slope_filter`]) on a set of
+/// frequencies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FilterResponse {
     /// The filter's settings (defaults of [`SlopeFilterConfig`]).
@@ -164,7 +181,8 @@ pub struct RoadSpectrum {
     pub cumulative: Vec<f64>,
     /// Frequency below which half the power lies, 1/m. For a first-order (Lorentzian) spectrum
     /// `S ∝ 1/(1 + (f/f_c)²)` on an unbounded band this is exactly the corner f_c, where the PSD
-    /// starts to fall — the "knee" one reads off a log–log plot such as seed 000 Figure 9.
+    /// starts to fall — the "knee" one reads off a log–log plot such as Myklebust & Eriksson
+    /// (2012), fig. 9.
     pub knee_50: f64,
     /// Frequency below which 90 % of the power lies, 1/m.
     pub knee_90: f64,
@@ -491,7 +509,8 @@ mod tests {
         let f = [0.0, 4e-3, 2e-2];
         let r = filter_response(&f, 1.0).unwrap();
         assert_eq!(r.causal_order, 3);
-        // -3.01 dB per pass at the cut-off; about -42 dB per pass at 2e-2 1/m (seed 000 §5)
+        // -3.01 dB per pass at the cut-off; about -42 dB per pass at 2e-2 1/m (the design of
+        // Myklebust & Eriksson (2012), §5)
         assert!((r.causal_db[1] + 3.0103).abs() < 1e-3, "{}", r.causal_db[1]);
         assert!((r.zero_phase_db[1] - 2.0 * r.causal_db[1]).abs() < 1e-12);
         assert!(

@@ -1,22 +1,22 @@
-//! Synthetic roads from road-design rules (seed 000 §4, physics.md §2).
+//! Synthetic roads from road-design rules (Myklebust & Eriksson (2012), §4; docs/models/road.md).
 //!
-//! **Geometry.** A road is a sequence of constant grades g₀, g₁, … (tan α) whose grade lines
-//! meet at points of vertical intersection (PVIs). Grade `i` runs from PVI `i−1` to PVI `i`
-//! (`lengths_m[i]` apart; grade 0 starts at x = 0, the last grade runs on to the end of the
-//! road). At each PVI a symmetric parabolic vertical curve of radius R joins the two grades,
-//! seed 000 eq. (34) `z = x²/(2R)`: its slope changes linearly, eq. (35) `tan α = x/R`, at the
-//! rate ±1/R (− on a crest, + on a sag) over the length `R·|g_{i+1} − g_i|`, centred on the PVI.
-//! So the slope is piecewise linear and continuous and |d(slope)/dx| ≤ 1/R_min everywhere — eq.
-//! (36) `α = v t/R` is the same statement in time at speed v. The elevation is the exact
+//! **Geometry.** A road is a sequence of constant grades g₀, g₁, … (tan α) whose grade lines meet
+//! at points of vertical intersection (PVIs). Grade `i` runs from PVI `i−1` to PVI `i`
+//! (`lengths_m[i]` apart; grade 0 starts at x = 0, the last grade runs on to the end of the road).
+//! At each PVI a symmetric parabolic vertical curve of radius R joins the two grades, Myklebust &
+//! Eriksson (2012), eq. (34) `z = x²/(2R)`: its slope changes linearly, eq. (35) `tan α = x/R`, at
+//! the rate ±1/R (− on a crest, + on a sag) over the length `R·|g_{i+1} − g_i|`, centred on the
+//! PVI. So the slope is piecewise linear and continuous and |d(slope)/dx| ≤ 1/R_min everywhere —
+//! eq. (36) `α = v t/R` is the same statement in time at speed v. The elevation is the exact
 //! integral of the slope, z(0) = 0.
 //!
 //! **Random roads** ([`generate`]), "for simplicity uniform distributions for all variables"
-//! (seed 000 §4), drawn in this fixed order from one [`Xoshiro256StarStar`] seeded with the
-//! road's seed: the first grade and its length; then per PVI the next grade
-//! g ~ U(−max_grade, max_grade), its segment length L ~ U(L_min, L_max(g)) with
-//! `L_max(g) = L_min + (L_flat − L_min)·exp(−|g|/g_e)` (flat ground widest), and the curve's
-//! radius R ~ U(R_min, R_min + band) with the crest or sag minimum as the grade falls or rises.
-//! Generation stops once the next PVI would lie at or beyond the road's length.
+//! (Myklebust & Eriksson (2012), §4), drawn in this fixed order from one [`Xoshiro256StarStar`]
+//! seeded with the road's seed: the first grade and its length; then per PVI the next grade g ~
+//! U(−max_grade, max_grade), its segment length L ~ U(L_min, L_max(g)) with
+//! `L_max(g) = L_min + (L_flat − L_min)·exp(−|g|/g_e)` (flat ground widest), and the curve's radius
+//! R ~ U(R_min, R_min + band) with the crest or sag minimum as the grade falls or rises. Generation
+//! stops once the next PVI would lie at or beyond the road's length.
 //!
 //! **Curves that do not fit.** A curve takes half its length from each neighbouring grade
 //! segment; when the two half-curves on a segment (from its start and end PVIs) are together
@@ -29,8 +29,8 @@
 //! **Grid.** Samples at `x_k = k·step_m`, k = 0 … ⌊length_m/step_m⌋ (the last sample may fall
 //! short of `length_m` by less than a step), evaluated analytically on each piece.
 
-use super::rng::Xoshiro256StarStar;
 use super::rules::RoadRules;
+use crate::rng::Xoshiro256StarStar;
 use thiserror::Error;
 
 /// Most grid samples one road may have (a 50 000 km road at 1 m): beyond this the request is

@@ -323,3 +323,46 @@ mod tests {
         assert_eq!(p.slope, vec![0.02, 0.02, -0.01, -0.01, -0.01, 0.0]);
     }
 }
+
+/// What a road-profile input holds, recognised by content (not by the file name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProfileInput {
+    /// A recording for ingest (Parquet or MCAP magic, or anything that is not a VECTO cycle:
+    /// ingest then reports the unknown format).
+    Recording,
+    /// A VECTO distance-based driving cycle (`.vdri` CSV with a `<s>` header).
+    VectoCycle,
+}
+
+/// Looks at the first 4 KiB of `path`: Parquet (`PAR1`) or MCAP magic is a recording; a text
+/// whose first non-comment line has a `<s>` header cell is a VECTO cycle.
+///
+/// # Errors
+/// [`ProfileError::Io`] when the file cannot be read; [`ProfileError::Vdri`] for a time-based
+/// VECTO cycle (`<t>` without `<s>`), which has no distance axis.
+pub fn detect_input(path: &Path) -> Result<ProfileInput, ProfileError> {
+    use std::io::Read as _;
+    let file = path.display().to_string();
+    let mut head = Vec::with_capacity(4096);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .map_err(|source| ProfileError::Io {
+            file: file.clone(),
+            source,
+        })?;
+    if head.starts_with(b"PAR1") || head.starts_with(b"\x89MCAP") {
+        return Ok(ProfileInput::Recording);
+    }
+    match vecto_header(&head) {
+        Some(VectoHeader::Distance) => Ok(ProfileInput::VectoCycle),
+        Some(VectoHeader::Time) => Err(ProfileError::Vdri {
+            file,
+            line: 1,
+            column: "<t>".into(),
+            value: String::new(),
+            message: "a time-based VECTO cycle has no distance axis; a road profile needs <s>"
+                .into(),
+        }),
+        None => Ok(ProfileInput::Recording),
+    }
+}

@@ -1,4 +1,4 @@
-//! The canonical drive-log schema (`schemas/drive-log.toml`, spec `shared/spec/drive-log.md`).
+//! The canonical drive-log schema (`schemas/drive-log.toml`, described in docs/inputs.md).
 
 use super::{Dtype, SchemaError};
 use serde::Deserialize;
@@ -26,11 +26,11 @@ pub enum Stage {
     Ingest,
     /// Distance resampling.
     Resample,
-    /// Road-slope filtering (seed 000 §5).
+    /// Road-slope filtering (docs/models/road.md).
     Slope,
-    /// Driveline shuffle simulation (physics.md §1).
+    /// Driveline shuffle simulation (docs/models/driveline.md).
     Driveline,
-    /// Axle-load simulation (physics.md §3).
+    /// Axle-load simulation (docs/models/axle.md).
     Axle,
 }
 

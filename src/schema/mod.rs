@@ -7,6 +7,7 @@
 
 mod drive_log;
 mod output;
+pub mod reference;
 
 pub use drive_log::{drive_log, ColumnSpec, DriveLogSchema, Interpolation, Stage};
 pub use output::{output_schema, OutputColumn, OutputSchema};

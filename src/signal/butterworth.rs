@@ -19,10 +19,11 @@
 //! division, sequential products) so that rounding matches as closely as is
 //! practical.
 //!
-//! The road-slope filter of seed 000 §5 is `butter(3, 4e-3, 1.0, Lowpass)`
-//! with distance as the independent variable (fs = 1 sample/m, cut-off
-//! 4e-3 1/m): −30 dB is required at 2e-2 1/m and about −42 dB is obtained
-//! (single pass; twice that in dB for the zero-phase forward–backward use).
+//! The road-slope filter of Myklebust & Eriksson (2012), §5
+//! (docs/models/road.md) is `butter(3, 4e-3, 1.0, Lowpass)` with distance as
+//! the independent variable (fs = 1 sample/m, cut-off 4e-3 1/m): −30 dB is
+//! required at 2e-2 1/m and about −42 dB is obtained (single pass; twice that
+//! in dB for the zero-phase forward–backward use).
 
 use std::f64::consts::PI;
 
@@ -203,9 +204,9 @@ pub fn butter(
 ///
 /// With `zero_phase = true` the filter is meant to be run forward and
 /// backward ([`crate::signal::sosfiltfilt`]), whose gain is `|H|²`, i.e.
-/// twice the single-pass attenuation in dB. For the slope filter of seed
-/// 000 §5 (cut-off 4e-3 1/m, −30 dB at 2e-2 1/m, fs = 1/m) this returns 3
-/// single-pass and 2 zero-phase.
+/// twice the single-pass attenuation in dB. For the road-slope filter of
+/// Myklebust & Eriksson (2012), §5 (cut-off 4e-3 1/m, −30 dB at 2e-2 1/m,
+/// fs = 1/m) this returns 3 single-pass and 2 zero-phase.
 ///
 /// Returns 0 if the arguments are invalid (see [`butter`]) or no order up
 /// to [`MAX_SEARCH_ORDER`] meets the requirement; use

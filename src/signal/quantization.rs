@@ -2,7 +2,8 @@
 //!
 //! Production road-slope sensors report whole percent (a step of 0.01 in tan α); J1939 speed has
 //! 1/256 km/h, engine speed 0.125 rpm. Knowing the step tells how much of a signal's
-//! high-frequency content is quantisation (seed 000: a one-percentage-point step excites shuffle).
+//! high-frequency content is quantisation (a one-percentage-point step excites shuffle;
+//! Myklebust & Eriksson (2012), §3).
 //!
 //! Method: sort the distinct finite values, take the smallest gap between neighbours as the
 //! candidate step `q`, and accept it only if (a) at least 99 % of samples lie within 1 % of `q`

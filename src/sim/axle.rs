@@ -1,7 +1,7 @@
-//! The half-truck axle-load model (physics.md §3, seed 002 §3.6): five second-order equations —
-//! chassis bounce `z` and pitch `θ`, front axle `z_f`, rear and tag trailing arms `φ_r`, `φ_t` —
-//! assembled by virtual work from the point Jacobians of docs/axle-model.md, where the sign
-//! convention, the diagram and the derivation are written down.
+//! The half-truck axle-load model (axle-load thesis, §3.6): five second-order equations — chassis
+//! bounce `z` and pitch `θ`, front axle `z_f`, rear and tag trailing arms `φ_r`, `φ_t` — assembled
+//! by virtual work from the point Jacobians of docs/models/axle.md, where the sign convention, the
+//! diagram and the derivation are written down.
 //!
 //! Conventions: q are small deviations from the static equilibrium on a level road (`z` up, `θ`
 //! nose up, `z_f` up, `φ` arm's rear end up); positions `x` rearwards from the front axle,
@@ -18,8 +18,16 @@
 //! test compares it with an independent derivation integrated by scipy (tests/it/axle_reference.rs).
 //!
 //! Extensions ([`AxleExtensions`], [`HalfTruck::with_extensions`]) add physics the nominal model
-//! leaves out — the axle-load effects of the diagnosis catalogue (diagnosis.md). All zero is the
-//! nominal model, bit for bit.
+//! leaves out — the axle-load effects of the diagnosis catalogue (docs/diagnosis/catalogue.md).
+//! All zero is the nominal model, bit for bit.
+//!
+//! # Reference
+//!
+//! The axle-load thesis: a Master's thesis written with Scania on estimating the dynamic axle
+//! loads (normal forces) of a 6x2 electrified truck — front, driven rear and tag axle — with
+//! quarter-car, bounce-pitch and half-truck models, validated against CAN-bus bellow pressures
+//! and scale weights. The copy the model was built from names no author; it is cited in this
+//! crate as "the axle-load thesis" with its section and equation numbers (docs/models/axle.md).
 
 use super::inputs::Piecewise;
 pub use crate::model::axle::AxleExtensions;
@@ -115,7 +123,7 @@ pub struct AxleTrajectory {
     /// Chassis CG vertical displacement, m (+ up).
     pub bounce_m: Vec<f64>,
     /// Largest auxiliary brake torque at the driven wheels keeping the slip ratio under the
-    /// limit, from the simulated driven-axle load (seed 002 eq. 1.1.1), N·m.
+    /// limit, from the simulated driven-axle load (axle-load thesis, eq. 1.1.1), N·m.
     pub aux_brake_limit_wheel_nm: Vec<f64>,
 }
 
@@ -158,7 +166,7 @@ impl<'a> HalfTruck<'a> {
     pub fn new(p: &'a AxleParams) -> Self {
         let st = p.static_state();
         let (xc, hc, rw) = (st.chassis_x_cg_m, p.chassis_cg_height_m, p.wheel_radius_m);
-        // point Jacobians (docs/axle-model.md): rows of ∂δu/∂q and ∂δw/∂q
+        // point Jacobians (docs/models/axle.md): rows of ∂δu/∂q and ∂δw/∂q
         let chassis = |x: f64, h: f64| -> (V5, V5) { (-(h - hc) * e(TH), e(Z) + (xc - x) * e(TH)) };
         let front = |x: f64, h: f64| -> (V5, V5) { (-(h - hc) * e(TH), e(ZF) - x * e(TH)) };
         let arm = |a: Axle, x: f64, h: f64| -> (V5, V5) {
@@ -312,7 +320,7 @@ impl<'a> HalfTruck<'a> {
         std::array::from_fn(|i| std::array::from_fn(|j| self.k[(i, j)]))
     }
 
-    /// Longitudinal forces at time `t` (docs/axle-model.md): with torque inputs, the contact
+    /// Longitudinal forces at time `t` (docs/models/axle.md): with torque inputs, the contact
     /// forces come from them and the service brake, and the remainder acts at the resistance
     /// height; without, the driven axle takes everything the service brake does not.
     pub fn longitudinal(&self, u: &AxleInputs, t: f64) -> Longitudinal {

@@ -1,12 +1,12 @@
-//! End-to-end simulation (issue 4 point 8): the axle-load model driven by the driveline model's
-//! output instead of a recording's longitudinal signals.
+//! End-to-end simulation: the axle-load model driven by the driveline model's output instead of
+//! a recording's longitudinal signals.
 //!
-//! The driven wheels receive the drive-shaft torque `M_d` (physics.md §1; N·m, + driving,
-//! negative in engine braking), which becomes the axle model's drive torque at the wheels; the
-//! acceleration is the centred derivative of the simulated vehicle speed; slope and service
+//! The driven wheels receive the drive-shaft torque `M_d` (docs/models/driveline.md; N·m, +
+//! driving, negative in engine braking), which becomes the axle model's drive torque at the wheels;
+//! the acceleration is the centred derivative of the simulated vehicle speed; slope and service
 //! brake are the driveline scenario's own inputs. Rolling resistance, air drag and the wheels'
 //! inertia, which the driveline model resists the torque with, reach the axle model as the
-//! remainder it closes at `resistance_height_m` (docs/axle-model.md).
+//! remainder it closes at `resistance_height_m` (docs/models/axle.md).
 
 use super::axle::AxleInputs;
 use super::axle_recorded::centred_derivative;

@@ -1,5 +1,5 @@
-//! Recorded drives as inputs of the axle-load model (physics.md §3): the canonical drive log's
-//! speed or IMU acceleration, slope, engine (or motor) torque, gear, clutch, retarder and
+//! Recorded drives as inputs of the axle-load model (docs/models/axle.md): the canonical drive
+//! log's speed or IMU acceleration, slope, engine (or motor) torque, gear, clutch, retarder and
 //! service-brake columns turned into [`AxleInputs`].
 //!
 //! Rules (state, not guess):
@@ -8,15 +8,15 @@
 //!   road (an IMU's specific force would add g·sin α; map such a signal elsewhere) when chosen
 //!   or when present with [`AccelSource::Auto`]; otherwise the derivative of `vehicle_speed`,
 //!   a centred difference over ±`speed_derivative_half_window_s`;
-//! - drive torque at the driven wheels: with the vehicle's driveline parameters, the
-//!   drive-shaft torque `M_d` of physics.md §1 by inverse dynamics (see below); without them
-//!   `T = M_e · i_t(gear) · i_f` while a gear is engaged and the clutch closed
-//!   (`clutch_position` < 0.5, or absent), else 0, driveline inertia and losses not modelled
-//!   (they act as a resistance the model closes at `resistance_height_m`);
+//! - drive torque at the driven wheels: with the vehicle's driveline parameters, the drive-shaft
+//!   torque `M_d` of docs/models/driveline.md by inverse dynamics (see below); without them
+//!   `T = M_e · i_t(gear) · i_f` while a gear is engaged and the clutch closed (`clutch_position` <
+//!   0.5, or absent), else 0, driveline inertia and losses not modelled (they act as a resistance
+//!   the model closes at `resistance_height_m`);
 //! - auxiliary brake torque at the wheels `retarder_torque · i_f` (the column is on the
 //!   propeller shaft, ≥ 0 brakes);
 //! - without `engine_torque` the model takes the whole longitudinal force at the driven axle
-//!   (docs/axle-model.md), and this is reported;
+//!   (docs/models/axle.md), and this is reported;
 //! - slope: the named column (e.g. the filtered slope), else `road_slope`, else a flat road;
 //! - `brake_force` is the force at the ground. At standstill (`vehicle_speed` below
 //!   `standstill_speed_mps`) brakes only hold: a recorded brake force there (a pressure-derived
@@ -32,24 +32,24 @@
 //!   −0.39 kPa with the means and the held wheels; the noise floor's copies carry the same bias
 //!   and cannot see it.
 //!
-//! # Drive torque by inverse dynamics (physics.md §1)
-//! The engine torque is not the torque at the wheels: the engine, clutch disc and gearbox must
-//! be accelerated too, and an open or slipping clutch passes only part of it. With
+//! # Drive torque by inverse dynamics (docs/models/driveline.md)
+//! The engine torque is not the torque at the wheels: the engine, clutch disc and gearbox must be
+//! accelerated too, and an open or slipping clutch passes only part of it. With
 //! `G = i_t(gear)·i_f`, the wheel speed `ω_w = v/r_w` and its rate `ω̇_w = a/r_w` (`a` the
-//! acceleration input), the shaft equations of physics.md §1 with the shafts' torsion rates
-//! neglected (`ω_c = i_t ω_p`, `ω_p = i_f ω_d`, `ω_d = ω_w`: quasi-static shafts) give
-//! - torque into the gearbox `M_c = M_e − J_e ω̇_e − J_c G ω̇_w` — from the engine's own
-//!   balance, so it holds locked (`M_c`), slipping (`M_trans = M_e − J_e ω̇_e`) and open
-//!   (governed engine: `M_c ≈ 0`) alike; `ω̇_e` from the recorded `engine_speed` (without it,
-//!   the locked clutch's `ω̇_e = G ω̇_w`). Where the recorded clutch is fully open (normalised
-//!   `clutch_position ≥ L_u`, no capacity) the friction faces pass nothing, but the clutch
-//!   disc turns with the gearbox input, so `M_c = −J_c G ω̇_w`. In 1st gear of the seed 002
-//!   truck `J_c G²` is 211 kg·m² at the wheels, half the gearbox's 426: a clean proof drive
-//!   rolling away downhill with the clutch open showed +2 … +3.5 kPa of bellow residual on
-//!   every axle for 12 s while this term was taken as 0, and within ±1.2 kPa with it. No
-//!   gear engaged disconnects the gearbox input side altogether. At a standstill the wheels
-//!   are held: `ω_w = ω̇_w = 0` there (the 10 Hz speed's difference over the torque's window
-//!   is noise of σ ≈ 0.2 m/s², times up to 650 kg·m² in 1st gear);
+//! acceleration input), the shaft equations of docs/models/driveline.md with the shafts' torsion
+//! rates neglected (`ω_c = i_t ω_p`, `ω_p = i_f ω_d`, `ω_d = ω_w`: quasi-static shafts) give
+//! - torque into the gearbox `M_c = M_e − J_e ω̇_e − J_c G ω̇_w` — from the engine's own balance,
+//!   so it holds locked (`M_c`), slipping (`M_trans = M_e − J_e ω̇_e`) and open (governed engine:
+//!   `M_c ≈ 0`) alike; `ω̇_e` from the recorded `engine_speed` (without it, the locked clutch's
+//!   `ω̇_e = G ω̇_w`). Where the recorded clutch is fully open (normalised `clutch_position ≥ L_u`,
+//!   no capacity) the friction faces pass nothing, but the clutch disc turns with the gearbox
+//!   input, so `M_c = −J_c G ω̇_w`. In 1st gear of the diesel variant of the axle-load thesis truck
+//!   (`fixtures/vehicles/seed002-6x2-diesel.toml`) `J_c G²` is 211 kg·m² at the wheels, half the
+//!   gearbox's 426: on a clean proof drive rolling away downhill with the clutch open, leaving this
+//!   term out leaves +2 … +3.5 kPa of bellow residual on every axle for 12 s, and with it the
+//!   residual stays within ±1.2 kPa. No gear engaged disconnects the gearbox input side altogether.
+//!   At a standstill the wheels are held: `ω_w = ω̇_w = 0` there (the 10 Hz speed's difference over
+//!   the torque's window is noise of σ ≈ 0.2 m/s², times up to 650 kg·m² in 1st gear);
 //! - drive-shaft torque
 //!   `M_d = G M_c − ((J_t(gear) + J_p) i_f² + J_f + J_d) ω̇_w − (b_t i_f² + b_f) ω_w`
 //!   (gear 0 or below — neutral, or a reverse gear the model lacks — disconnects the gearbox
@@ -213,10 +213,10 @@ pub(crate) fn centred_mean(t: &[f64], v: &[f64], half: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Drive-shaft torque `M_d` at the driven wheels by inverse dynamics of the driveline (module
-/// doc, physics.md §1), N·m (+ driving), per row. `m_e` engine torque (N·m), `w_e` engine speed
-/// (rad/s; `None`: locked clutch assumed), `gear` (rounded; below 1 = no gear engaged; engaged
-/// gears already checked against `ratios`), `clutch` normalised clutch position (`None`:
+/// Drive-shaft torque `M_d` at the driven wheels by inverse dynamics of the driveline (module doc,
+/// docs/models/driveline.md), N·m (+ driving), per row. `m_e` engine torque (N·m), `w_e` engine
+/// speed (rad/s; `None`: locked clutch assumed), `gear` (rounded; below 1 = no gear engaged;
+/// engaged gears already checked against `ratios`), `clutch` normalised clutch position (`None`:
 /// engaged), `v` vehicle speed (m/s) and `a` its centred difference over `half` (m/s²), all on
 /// times `t` (s).
 #[allow(clippy::too_many_arguments)]
@@ -473,11 +473,11 @@ mod tests {
     fn a_parked_truck_is_held_by_the_mean_grade_whatever_the_slope_and_speed_noise() {
         // 10 s parked on 4 % with the clutch open: the slope sensor's noise (±0.4 %, 370 N at
         // 18.7 t) and a rectified speed noise below the standstill speed; the recorded brake is
-        // the holding force's magnitude (as the synthetic CAN logs it). Per sample, the force
-        // asked for was clipped at that magnitude on every steeper sample, and the held force
-        // came out 761 N short on average (measured with the per-sample grade and the speed's
-        // own rate); with the grade's mean over the standstill and the wheels held it is the
-        // holding force on every sample.
+        // the holding force's magnitude (as the synthetic CAN logs it). Taken per sample, the
+        // force asked for is clipped at that magnitude on every steeper sample, and the held
+        // force comes out 761 N short on average (with the per-sample grade and the speed's own
+        // rate); with the grade's mean over the standstill and the wheels held it is the holding
+        // force on every sample.
         let n = 500;
         let (m, g) = (18_700.0, 9.81);
         let slope: Vec<f64> = (0..n)
@@ -543,8 +543,9 @@ mod tests {
 
     #[test]
     fn inverse_dynamics_in_steady_acceleration_is_the_shaft_balance() {
-        // locked clutch, 2nd gear, a = 0.5 m/s² from 3 m/s, M_e = 900 N·m: the shaft equations
-        // of physics.md §1 with every shaft speed rigidly tied to the wheels give M_d directly
+        // locked clutch, 2nd gear, a = 0.5 m/s² from 3 m/s, M_e = 900 N·m: the shaft equations of
+        // docs/models/driveline.md with every shaft speed rigidly tied to the wheels give M_d
+        // directly
         let (p, ratios) = diesel();
         let (gear, a, m_e) = (2usize, 0.5, 900.0);
         let big_g = ratios[gear - 1] * p.final_drive_ratio;

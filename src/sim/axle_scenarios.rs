@@ -1,10 +1,12 @@
-//! Scripted inputs for the half-truck axle-load model (`sim::axle`): the two main scenarios of
-//! seed 002 §4.3 — full acceleration from standstill, and hard auxiliary braking with the
-//! electric motor from constant speed — and a deterministic stop-and-go drive for benchmarks.
+//! Scripted inputs for the half-truck axle-load model (`sim::axle`): the two main scenarios of the
+//! axle-load thesis (docs/models/axle.md), §4.3 — full acceleration from standstill, and hard
+//! auxiliary braking with the electric motor from constant speed — and a deterministic stop-and-go
+//! drive for benchmarks.
 //!
 //! The axle model takes the longitudinal acceleration and the wheel torques as inputs; here they
-//! come from a point-mass vehicle with an electric drive (physics.md §1's vehicle equation with
-//! the rotating inertias left out, `c_r2 = 0` and no standstill smoothing):
+//! come from a point-mass vehicle with an electric drive (the vehicle equation of
+//! docs/models/driveline.md with the rotating inertias left out, `c_r2 = 0` and no standstill
+//! smoothing):
 //!
 //! `m·v̇ = F_d − F_aux − F_b − c_r·m·g·cos α − ½·ρ·c_wA·v² − m·g·sin α`   (1)
 //!
@@ -14,7 +16,7 @@
 //! torques handed to the axle model are `F·r_w` (torques at the driven wheels, N·m), and its
 //! acceleration input is `v̇` of (1) — so the forces the axle model sees at the contact patches
 //! and the vehicle's longitudinal balance agree, and the remainder it puts at
-//! `resistance_height_m` is rolling resistance plus drag at every sample (docs/axle-model.md).
+//! `resistance_height_m` is rolling resistance plus drag at every sample (docs/models/axle.md).
 //!
 //! Torques change over ramps (`torque_ramp_s`, 0.3 s by default), never in steps. Equation (1) is
 //! integrated with classical RK4 on the output grid (`sample_rate_hz`); every input is the
@@ -36,12 +38,12 @@ use std::fmt;
 use std::str::FromStr;
 use thiserror::Error;
 
-/// The scripted scenarios of seed 002 §4.3.
+/// The scripted scenarios of the axle-load thesis, §4.3.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AxleScenario {
-    /// Full acceleration from standstill to the speed limiter (seed fig. 4.2–4.4).
+    /// Full acceleration from standstill to the speed limiter (thesis figs. 4.2–4.4).
     FullAcceleration,
-    /// Hard auxiliary braking with the electric motor from constant speed (seed fig. 4.5–4.7).
+    /// Hard auxiliary braking with the electric motor from constant speed (thesis figs. 4.5–4.7).
     AuxBraking,
 }
 
@@ -96,9 +98,9 @@ pub enum ScenarioError {
     Input(#[from] PiecewiseError),
 }
 
-/// Vehicle and driver figures of the scenarios. Seed 002 publishes none of them (it lumps air
-/// and rolling resistance as 10 % of the longitudinal force and gives no motor data), so the
-/// defaults are typical values for its 18.7 t electrified rigid truck, each stated below.
+/// Vehicle and driver figures of the scenarios. The axle-load thesis publishes none of them (it
+/// lumps air and rolling resistance as 10 % of the longitudinal force and gives no motor data), so
+/// the defaults are typical values for its 18.7 t electrified rigid truck, each stated below.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AxleScenarioConfig {
     /// Output and input sample rate, Hz. Default 100 Hz (10 ms, five times finer than the
@@ -137,12 +139,12 @@ pub struct AxleScenarioConfig {
     pub speed_limiter_gain_per_s: f64,
     /// Full acceleration: the drive torque ramp starts at this time, s. Default 2 s.
     pub acceleration_start_s: f64,
-    /// Full acceleration: end of the scenario, s. Default 35 s (the span of seed fig. 4.4).
+    /// Full acceleration: end of the scenario, s. Default 35 s (the span of thesis fig. 4.4).
     pub acceleration_end_s: f64,
     /// Auxiliary braking: the constant speed before braking, m/s. Default 80 km/h.
     pub braking_speed_mps: f64,
-    /// Auxiliary braking: the brake torque ramp starts at this time, s. Default 5 s (seed
-    /// §5.1: "in the fifth second, we applied braking torque").
+    /// Auxiliary braking: the brake torque ramp starts at this time, s. Default 5 s (axle-load
+    /// thesis, §5.1: "in the fifth second, we applied braking torque").
     pub braking_start_s: f64,
     /// Auxiliary braking: how long full brake torque is held after its ramp, s. Default 10 s.
     pub braking_hold_s: f64,
@@ -446,7 +448,7 @@ fn grid(t_end_s: f64, fs_hz: f64) -> Vec<f64> {
     (0..=n).map(|k| k as f64 / fs_hz).collect()
 }
 
-/// Full acceleration from standstill on a level road (seed 002 §4.3.2): at
+/// Full acceleration from standstill on a level road (axle-load thesis, §4.3.2): at
 /// `acceleration_start_s` the drive torque demand ramps to 100 % over `torque_ramp_s`; the drive
 /// force is `min(T_max/r_w, P_max/v)`, and near `max_speed_mps` the speed limiter takes over;
 /// the scenario runs to `acceleration_end_s`. No brakes.
@@ -470,12 +472,12 @@ pub fn full_acceleration(
     })
 }
 
-/// Hard auxiliary braking from constant speed on a level road (seed 002 §4.3.3, §5.1): the
+/// Hard auxiliary braking from constant speed on a level road (axle-load thesis, §4.3.3, §5.1): the
 /// truck holds `braking_speed_mps` with the drive force balancing the road load; at
 /// `braking_start_s` the drive torque ramps to zero while the motor's full brake torque
-/// (`min(T_aux/r_w, P_regen/v)`) ramps in over `torque_ramp_s`; it is held `braking_hold_s`,
-/// then ramped out while the drive torque returns to hold the new speed, to `braking_end_s`.
-/// No service brake.
+/// (`min(T_aux/r_w, P_regen/v)`) ramps in over `torque_ramp_s`; it is held `braking_hold_s`, then
+/// ramped out while the drive torque returns to hold the new speed, to `braking_end_s`. No service
+/// brake.
 ///
 /// # Errors
 /// [`ScenarioError::Config`] from [`AxleScenarioConfig::check`].

@@ -1,7 +1,7 @@
 //! Peak changes of an axle-load simulation relative to the static state: for each axle the
-//! normal-force change and the bellow-pressure change of largest magnitude, signed, with the
-//! time it occurs (seed 002 §4.3 reads its figures 4.2–4.7 this way: which axle gains, which
-//! loses, how much).
+//! normal-force change and the bellow-pressure change of largest magnitude, signed, with the time
+//! it occurs (the axle-load thesis, §4.3, reads its figures 4.2–4.7 this way: which axle gains,
+//! which loses, how much).
 //!
 //! Conventions: a change is `x(t) − x_static` (+ = more load / more pressure); of several
 //! samples with the same largest magnitude the first counts; NaN samples are skipped. Normal

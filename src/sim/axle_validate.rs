@@ -1,8 +1,8 @@
-//! Validation of the axle-load model against a recording (physics.md §3, issue 4 point 7): the
-//! recorded drive's inputs drive the half-truck model on the recording's time axis, and the
-//! simulated bellow pressures (and suspension travel, where recorded) are compared with the
-//! CAN-bus signals: MAE (seed 002 eq. 3.7.1, which it calls MSE), RMSE and fit % per axle, over
-//! the whole drive and per scenario segment.
+//! Validation of the axle-load model against a recording (docs/models/axle.md): the recorded
+//! drive's inputs drive the half-truck model on the recording's time axis, and the simulated bellow
+//! pressures (and suspension travel, where recorded) are compared with the CAN-bus signals: MAE
+//! (axle-load thesis, eq. 3.7.1, which calls it MSE), RMSE and fit % per axle, over the whole drive
+//! and per scenario segment.
 //!
 //! The model is stable (springs to the static state), so it runs open loop over the whole drive
 //! from the steady state of the first row's inputs; there is no drift to re-initialise.
@@ -35,6 +35,19 @@ impl Default for AxleValidationConfig {
             record: AxleRecordConfig::default(),
             accel_threshold_mps2: 0.3,
         }
+    }
+}
+
+impl AxleValidationConfig {
+    /// Checks the settings: a finite, positive acceleration threshold.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        let a = self.accel_threshold_mps2;
+        crate::settings::require(
+            a.is_finite() && a > 0.0,
+            "accel_threshold_mps2",
+            a,
+            "must be positive",
+        )
     }
 }
 
@@ -92,7 +105,7 @@ pub struct AxleMetric {
     pub segment: Segment,
     /// Samples compared (both values present).
     pub samples: usize,
-    /// Mean absolute error (seed 002 eq. 3.7.1).
+    /// Mean absolute error (axle-load thesis, eq. 3.7.1).
     pub mae: f64,
     /// Root-mean-square error.
     pub rmse: f64,

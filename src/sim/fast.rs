@@ -23,7 +23,7 @@
 //!
 //! # Drive-shaft lash (optional, [`FastDriveline::with_lash`])
 //! With a total play `b > 0` in the drive shaft (the catalogue effect `driveline_backlash`,
-//! diagnosis.md), the shaft torque is a dead-zone spring,
+//! docs/diagnosis/catalogue.md), the shaft torque is a dead-zone spring,
 //! `M_d = k_d (φ_d − s b/2) + c_d (ω_d − ω_w)` in contact (`s = sign φ_d`, `|φ_d| ≥ b/2`) and
 //! `M_d = 0` in the gap (`|φ_d| < b/2`), `φ_d` the total shaft twist including the play. The
 //! contact side is decided from `φ_d` at each step's start (a position-based dead zone); in

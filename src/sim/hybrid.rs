@@ -1,5 +1,7 @@
-//! The hybrid driveline model of physics.md §1 (seed 000 §2), simulated with the accurate
-//! adaptive integrator ([`super::dopri`]) and located mode switches.
+//! The hybrid driveline model of docs/models/driveline.md (A. Myklebust, L. Eriksson, "Road Slope
+//! Analysis and Filtering for Driveline Shuffle Simulation", IFAC E-COSM'12, 2012, §2; cited in
+//! this crate as "Myklebust & Eriksson (2012)"), simulated with the accurate adaptive integrator
+//! ([`super::dopri`]) and located mode switches.
 //!
 //! # State and conventions
 //! `y = (ω_e, ω_c, φ_c, ω_p, φ_p, ω_d, φ_d, ω_w, x_I)`, SI: engine and clutch-disc speeds, clutch
@@ -29,7 +31,8 @@
 //! Inputs are piecewise linear ([`Piecewise`]); the integration restarts at every breakpoint, where
 //! discrete inputs (gear) change. A gear change is an instantaneous change of i_t and J_t with the
 //! state carried over. The engine is an ideal torque source, or the PI controller
-//! `M_e = clamp(K_P(ω_ref − ω_e) + K_I x_I, M_min, M_max(ω_e))` (no anti-windup, as physics.md).
+//! `M_e = clamp(K_P(ω_ref − ω_e) + K_I x_I, M_min, M_max(ω_e))` (no anti-windup, as in
+//! Myklebust & Eriksson (2012), eqs. (31)–(33)).
 
 use super::dopri::{hermite, integrate, DopriError, EventFn, Knot, Stats, Tolerances};
 use super::inputs::{Piece, Piecewise};
@@ -203,7 +206,8 @@ impl<'a> HybridDriveline<'a> {
         })
     }
 
-    /// Kinetic clutch capacity M_k at clutch position x, N·m (physics.md §1 actuator law).
+    /// Kinetic clutch capacity M_k at clutch position x, N·m (docs/models/driveline.md actuator
+    /// law).
     pub fn clutch_capacity(&self, x: f64) -> f64 {
         self.p.clutch_capacity(x)
     }

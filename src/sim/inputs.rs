@@ -14,7 +14,7 @@ use std::sync::Arc;
 /// value per piece for a held one, both ends per piece otherwise. Every piece reads back as the
 /// tuple it was built from, bit for bit, so evaluation is the same arithmetic on the same
 /// numbers whatever the storage (a 10-hour recorded drive: 8 B per row and input instead of
-/// 32 B; docs/memory.md).
+/// 32 B; docs/validation/benchmarks.md).
 #[derive(Debug, Clone)]
 pub struct Piecewise {
     /// Piece boundaries, increasing: piece `k` covers `[knots[k], knots[k + 1])`.

@@ -1,5 +1,5 @@
-//! Simulation: integrators, inputs, the hybrid driveline model (physics.md §1) and the
-//! half-truck axle-load model (§3).
+//! Simulation: integrators, inputs, the hybrid driveline model (docs/models/driveline.md) and
+//! the half-truck axle-load model (docs/models/axle.md).
 
 pub mod axle;
 pub mod axle_coupling;

@@ -7,19 +7,19 @@
 //!   state-like ones (gear, slope sensor) are held — the interpolation kinds of the schema;
 //! - short gaps (NaN; ingest bounds their length) are filled as the column's kind allows;
 //! - gear 0 (neutral) is simulated as the clutch fully open in the last engaged gear — the model
-//!   has no neutral (seed 000 §2.3);
+//!   has no neutral (Myklebust & Eriksson (2012), §2.3);
 //! - absent optional columns: clutch engaged (x = 0), no service brake (F_b = 0);
 //! - the slope comes from the named column (e.g. the filtered slope of the slope stage), else
 //!   `road_slope`; without any slope column the road is flat, and this is reported;
 //! - rolling resistance is unsmoothed and the vehicle's stops are events
 //!   ([`Scenario::standstill_events`]), as in the synthetic drives' truth: a recording stands
 //!   still for minutes at a time, held by its brakes (`brake_force`, a magnitude ≥ 0) and the
-//!   static rolling resistance `c_r1 m g`. The seed's smoothing `f(v) = 1 − exp(−c_sr v²)`
-//!   (physics.md §1, a speed-up for the accurate integrator) removes that resistance at v = 0
-//!   and takes the brake's direction from the sign of a speed that chatters about 0, so the
-//!   standstill rested on the recorded brake force alone; with a brake force of 0 (a log that
-//!   clipped the holding force on an uphill stop) the smoothed model rolled backwards at
-//!   1.4 m/s² (measured: 10 m/s within 7 s on a clean 5 km city-se synthetic drive).
+//!   static rolling resistance `c_r1 m g`. The smoothing `f(v) = 1 − exp(−c_sr v²)`
+//!   (docs/models/driveline.md, a speed-up for the accurate integrator) removes that resistance
+//!   at v = 0 and takes the brake's direction from the sign of a speed that chatters about 0, so
+//!   the standstill would rest on the recorded brake force alone; with a brake force of 0 (a log
+//!   that clipped the holding force on an uphill stop) the smoothed model rolls backwards at
+//!   1.4 m/s² (10 m/s within 7 s on a clean 5 km city-se synthetic drive).
 
 use super::hybrid::{EngineInput, Scenario};
 use super::inputs::{Between, Piecewise};
@@ -111,11 +111,11 @@ pub(crate) fn slope_input<'a>(
     }
 }
 
-/// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says;
-/// runs of equal constant pieces stored as one and the time axis shared
-/// ([`Piecewise::through_samples`]). A 10-hour drive's scenario held ~290 MB as one 32-B tuple
-/// per row and input (docs/memory.md). Only piece boundaries inside a merged stretch
-/// disappear, which matters solely to integrators that restart at breakpoints — recorded
+/// Piecewise signal through samples `(t, v)`: linear between them or held, as `interp` says; runs
+/// of equal constant pieces stored as one and the time axis shared
+/// ([`Piecewise::through_samples`]). A 10-hour drive's scenario would take ~290 MB as one 32-B
+/// tuple per row and input (docs/validation/benchmarks.md). Only piece boundaries inside a merged
+/// stretch disappear, which matters solely to integrators that restart at breakpoints — recorded
 /// scenarios go to the fixed-step exponential integrator, which evaluates values only.
 pub(crate) fn pieces(t: &Arc<[f64]>, v: &[f64], interp: Interpolation) -> Piecewise {
     let between = match interp {

@@ -1,5 +1,5 @@
-//! Validation of the driveline model against a recording (issue 3 item 5): simulate the drive
-//! from its recorded inputs and compare with its recorded vehicle and engine speed.
+//! Validation of the driveline model against a recording: simulate the drive from its recorded
+//! inputs and compare with its recorded vehicle and engine speed.
 //!
 //! **Drift.** An open-loop simulation of a long drive drifts: unmodelled braking, wind and
 //! sensor bias integrate into a growing speed error that would swamp the driveline's own error.
@@ -45,6 +45,37 @@ impl Default for ValidationConfig {
             dt_s: 0.01,
             min_speed_mps: 1.0,
         }
+    }
+}
+
+impl ValidationConfig {
+    /// Canonical text of the settings, the driveline `p`, the gear `ratios` and the slope
+    /// column, for the config hash of a single-drive simulation.
+    pub fn fingerprint(
+        &self,
+        p: &DrivelineParams,
+        ratios: &[f64],
+        slope_column: Option<&str>,
+    ) -> String {
+        format!("shuffle:v1 {p:?} {ratios:?} {self:?} slope={slope_column:?}")
+    }
+
+    /// Checks the settings: both steps positive, the fast-path step shorter than the window.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        use crate::settings::require;
+        require(
+            self.window_s > 0.0,
+            "window_s",
+            self.window_s,
+            "must be positive",
+        )?;
+        require(self.dt_s > 0.0, "dt_s", self.dt_s, "must be positive")?;
+        require(
+            self.dt_s < self.window_s,
+            "dt_s",
+            self.dt_s,
+            "must be shorter than window_s",
+        )
     }
 }
 

@@ -33,7 +33,7 @@
 
 use crate::ingest::{ingest_file, IngestError, IngestOptions, Mapping};
 use crate::io::{config_hash, drive_log_columns, write_table, AtomicFile, OutputError, TableMeta};
-use crate::road::rng::{splitmix64, Xoshiro256StarStar};
+use crate::rng::{splitmix64, Xoshiro256StarStar};
 use crate::schema::{drive_log, Dtype};
 use crate::table::DriveLog;
 use crate::units::{conversion, Conversion, UnitError};
@@ -316,7 +316,7 @@ fn msg(
 }
 
 impl CanBus {
-    /// The J1939 heavy-truck bus of issue 5, with the names of the bundled
+    /// The J1939 heavy-truck bus of the synthetic drives, with the names of the bundled
     /// `schemas/mappings/j1939-json-mcap.toml` mapping (which assumes
     /// `reference_torque_nm = 2600`):
     ///

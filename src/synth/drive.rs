@@ -1,6 +1,6 @@
-//! Closed-loop synthetic drives (issue 5 point 4): a [`Driver`] and an [`Amt`] co-simulated
-//! with the fast driveline model ([`FastDriveline`]) over a synthetic road, the axle model run
-//! on the result, and the truth written as a CAN log ([`super::log_writer::write_drive_log`]).
+//! Closed-loop synthetic drives: a [`Driver`] and an [`Amt`] co-simulated with the fast driveline
+//! model ([`FastDriveline`]) over a synthetic road, the axle model run on the result, and the truth
+//! written as a CAN log ([`super::log_writer::write_drive_log`]).
 //!
 //! # Loop
 //! Control steps of [`DriveConfig::control_dt_s`] (0.1 s): at each step start the driver reads
@@ -53,6 +53,7 @@ use super::export::{fuel_rate_lph, ExportError, Series};
 use super::log_writer::{apply_dropouts, write_drive_log, LogOptions};
 use super::road_source::{read_road_file, DriveRoad, RoadSource, RoadSourceError};
 use super::track::{gnss_message, gnss_track, GnssConfig, TrackError};
+pub use super::trajectory::{DriveTrajectory, ShiftRecord};
 use super::truth_file::{truth_columns, write_truth, TruthMeta};
 use crate::model::driveline::DrivelineParams;
 use crate::model::vehicle::{VehicleError, VehicleFile};
@@ -185,6 +186,31 @@ impl Default for DriveConfig {
     }
 }
 
+impl DriveConfig {
+    /// Checks the driver's settings a user sets: a finite, non-negative stop dwell and a
+    /// retarder, when there is one, with a finite, positive torque.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        use crate::settings::require;
+        let dwell = self.driver.stop_dwell_s;
+        require(
+            dwell.is_finite() && dwell >= 0.0,
+            "stop_dwell_s",
+            dwell,
+            "must be finite and >= 0",
+        )?;
+        if let Some(r) = &self.driver.retarder {
+            let t = r.max_torque_nm;
+            require(
+                t.is_finite() && t > 0.0,
+                "retarder_max_torque_nm",
+                t,
+                "must be finite and >= 0",
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// Road slope on a distance grid, linear in between and held beyond the ends.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RoadSlope {
@@ -208,60 +234,6 @@ impl RoadSlope {
         let f = (x_m - d[k - 1]) / (d[k] - d[k - 1]);
         self.slope[k - 1] + f * (self.slope[k] - self.slope[k - 1])
     }
-}
-
-/// One gear shift of the AMT while driving (torque ramp-down to ramp-up).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ShiftRecord {
-    /// Gear before.
-    pub from: usize,
-    /// Gear after.
-    pub to: usize,
-    /// Start of the torque ramp-down, s.
-    pub t_start_s: f64,
-    /// Time the gear input changed, s.
-    pub t_change_s: f64,
-    /// End of the torque ramp-up, s.
-    pub t_end_s: f64,
-}
-
-/// A simulated drive on the output grid.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct DriveTrajectory {
-    /// Times, s from the start.
-    pub t_s: Vec<f64>,
-    /// Travelled distance, m.
-    pub distance_m: Vec<f64>,
-    /// Vehicle speed r_w ω_w, m/s.
-    pub speed_mps: Vec<f64>,
-    /// Engine speed, rad/s.
-    pub engine_speed_rad_s: Vec<f64>,
-    /// Engine torque, N·m.
-    pub engine_torque_nm: Vec<f64>,
-    /// Drive-shaft torque M_d, N·m.
-    pub drive_torque_nm: Vec<f64>,
-    /// Gear input.
-    pub gear: Vec<f64>,
-    /// Clutch position, 0 = engaged … x_max = open.
-    pub clutch_x: Vec<f64>,
-    /// Clutch position normalised, `clutch_x / x_max`: 0 = engaged … 1 = open.
-    pub clutch_position: Vec<f64>,
-    /// Road slope, tan α.
-    pub slope: Vec<f64>,
-    /// Service-brake force, N.
-    pub brake_n: Vec<f64>,
-    /// Retarder torque at the propeller shaft, N·m (≥ 0 brakes).
-    pub retarder_torque_nm: Vec<f64>,
-    /// The retarder's torque at the driven wheels `T_r i_f`, N·m (≥ 0 brakes).
-    pub aux_brake_wheel_nm: Vec<f64>,
-    /// Target speed of the driver, m/s.
-    pub target_mps: Vec<f64>,
-    /// Shifts while driving.
-    pub shifts: Vec<ShiftRecord>,
-    /// Launch intervals (launch start, clutch locked), s.
-    pub launches: Vec<(f64, f64)>,
-    /// Planned stop positions, m (the last is the road end).
-    pub planned_stops_m: Vec<f64>,
 }
 
 fn check(parameter: &'static str, value: f64, ok: bool) -> Result<(), DriveError> {

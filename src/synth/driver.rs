@@ -67,7 +67,7 @@
 
 use super::retarder::RetarderConfig;
 use crate::model::driveline::DrivelineParams;
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 
 /// Driver settings. SI units.
 #[derive(Debug, Clone, PartialEq)]

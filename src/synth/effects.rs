@@ -28,7 +28,7 @@ pub use crate::model::catalogue::{Domain, DrawRange, Effect, UnknownEffect};
 use crate::model::driveline::DrivelineParams;
 pub use crate::model::extended_vehicle::ParameterError;
 use crate::model::extended_vehicle::{ExtendedVehicle, SensorFaults};
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use thiserror::Error;

@@ -110,6 +110,31 @@ impl Default for LogOptions {
     }
 }
 
+impl LogOptions {
+    /// Checks the dropout process, when there is one: a start probability in [0, 1] and a
+    /// finite, non-negative mean length.
+    pub fn validate(&self) -> Result<(), crate::settings::InvalidSetting> {
+        use crate::settings::require;
+        if let Some(spec) = &self.dropouts {
+            let p = spec.dropouts.start_probability;
+            require(
+                (0.0..=1.0).contains(&p),
+                "dropout_start_probability",
+                p,
+                "must be in [0, 1]",
+            )?;
+            let m = spec.dropouts.mean_length_s;
+            require(
+                m.is_finite() && m >= 0.0,
+                "dropout_mean_length_s",
+                m,
+                "must be finite and >= 0",
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// Sets `spec.dropouts` on every message of `bus` carrying one of `spec.columns`.
 ///
 /// # Errors

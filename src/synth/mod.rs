@@ -4,7 +4,7 @@
 //! rate and phase, each field at its wire resolution and range, with Gaussian noise, optional
 //! delay and dropouts — and writes them as multi-rate MCAP plus the canonical Parquet drive log
 //! that ingest makes of that MCAP. Output bytes are a function of the bus, the truth and the
-//! seed (the project's own PRNG, [`crate::road::rng`]).
+//! seed (the project's own PRNG, [`crate::rng`]).
 //!
 //! [`drive`] makes the truth itself: a [`driver`] and an [`amt`] co-simulated with the fast
 //! driveline model over a synthetic road (or one read by [`road_source`]), the axle model run
@@ -27,6 +27,7 @@ pub mod log_writer;
 pub mod retarder;
 pub mod road_source;
 pub mod track;
+pub mod trajectory;
 pub mod truth_file;
 
 pub use can::{

@@ -46,8 +46,8 @@
 //! 0.3 m white: 2.1 m per horizontal axis and 1.5 m vertical in all.
 
 use super::can::{CanChannel, CanMessage, Dropouts, TorqueReference};
+use crate::rng::Xoshiro256StarStar;
 use crate::road::profile::{WGS84_A_M, WGS84_F};
-use crate::road::rng::Xoshiro256StarStar;
 use std::f64::consts::TAU;
 use thiserror::Error;
 

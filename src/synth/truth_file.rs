@@ -25,8 +25,8 @@
 //! poorly otherwise). Key-value metadata: as every fleetdyn table (`table` = `drive_log`, `drive_id`,
 //! `vehicle_id`, …) plus `truth` (what the table is), `truth_rate_hz`, `seed` and `road`.
 
-use super::drive::DriveTrajectory;
 use super::track::GnssTrack;
+use super::trajectory::DriveTrajectory;
 use crate::io::{
     config_hash, write_table_with, OutColumn, OutData, OutputError, TableEncoding, TableMeta,
 };

@@ -3,9 +3,10 @@
 //! # Friction clutch
 //! Actuator travel `x` (0 = engaged, 1 = open; the CAN `clutch_position`) saturated to the
 //! effective range: `x_eff = clamp(x, L_l, L_u)`; kinetic capacity
-//! `M_k = M_k,max·(L_u − x_eff)/(L_u − L_l)`, static capacity `M_s = k_µ·M_k` (physics.md §1's
-//! actuator law; M_k,max is the plant's own capacity, so a worn clutch has a smaller one than the
-//! AMT believes). Modes (switches are located events of the integrator, never smoothed):
+//! `M_k = M_k,max·(L_u − x_eff)/(L_u − L_l)`, static capacity `M_s = k_µ·M_k` (the actuator law of
+//! docs/models/driveline.md; M_k,max is the plant's own capacity, so a worn clutch has a smaller
+//! one than the AMT believes). Modes (switches are located events of the integrator, never
+//! smoothed):
 //! - **locked**: engine and disc turn together; the friction interface carries
 //!   `M_tr = (M_e·J_c + M_d·J_e)/(J_e + J_c)` (M_d the damper torque); it breaks away when
 //!   `|M_tr| > M_s` (guards `M_s ∓ M_tr`), into slip with direction `sign(M_tr)`;

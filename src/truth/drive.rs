@@ -32,7 +32,7 @@ use super::plant::{EventCounts, GearMode, Inputs, Plant, RoadGrid, STEP_S, V, W_
 use super::resistance::{Wind, WindParams};
 use super::TruthError;
 use crate::model::vehicle::VehicleFile;
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 use crate::road::rules::RoadRules;
 use crate::road::synth::generate;
 use crate::synth::can::{write_can_drive, CanBus, SynthOptions, Truth};

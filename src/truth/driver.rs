@@ -24,7 +24,7 @@
 
 use super::engine::{friction, full_load};
 use super::params::TruckParams;
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 
 /// Comfortable braking deceleration, m/s².
 pub const A_BRAKE: f64 = 0.8;

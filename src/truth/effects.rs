@@ -32,7 +32,7 @@
 
 use super::params::TruckParams;
 use super::TruthError;
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 
 /// The longitudinal catalogue effects this plant can conceal: (id, parameter name, unit).
 pub const CATALOGUE: [(&str, &str, &str); 10] = [

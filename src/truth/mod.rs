@@ -20,7 +20,7 @@
 //! - [`linear`]: numerical linearisation and mode extraction (verification).
 //!
 //! Conventions: SI units; speeds forward-positive; torques positive when driving; see each
-//! module. The equations are collected in `docs/truth-plant.md`.
+//! module. The equations are collected in docs/models/truth-plant.md.
 
 pub mod amt;
 pub mod clutch;

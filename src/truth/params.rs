@@ -8,7 +8,7 @@
 //!
 //! # Draw
 //! Every drive draws its truck around the vehicle file with the project PRNG
-//! ([`crate::road::rng::Xoshiro256StarStar`]): each toleranced value is
+//! ([`crate::rng::Xoshiro256StarStar`]): each toleranced value is
 //! `nominal·(1 + u)`, `u` uniform on `[−tol, tol]` (a tolerance band, not a standard deviation:
 //! production and load spreads are bounded, so a uniform band is the honest model):
 //!
@@ -27,7 +27,7 @@
 
 use super::TruthError;
 use crate::model::driveline::DrivelineParams;
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 
 /// Tolerance bands of the per-drive draw (fractions of nominal; module doc).
 pub mod tol {

@@ -19,7 +19,7 @@
 //! the time scale of gusts seen by a truck at road speed). Sampled exactly on a grid of `dt`:
 //! `w_g[k+1] = a·w_g[k] + σ_g·√(1 − a²)·N(0,1)`, `a = exp(−dt/τ_g)`; held between samples.
 
-use crate::road::rng::Xoshiro256StarStar;
+use crate::rng::Xoshiro256StarStar;
 
 /// Aerodynamic drag at vehicle speed `v` and headwind `w`, N.
 pub fn aero(rho: f64, cwa: f64, v: f64, w: f64) -> f64 {

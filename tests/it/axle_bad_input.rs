@@ -1,6 +1,6 @@
-//! Bad axle-model input (issue 4, "Bad input"): inconsistent geometry, negative levers, bellows
-//! that cannot carry the static load, masses that contradict the scale weights, missing
-//! pressure channels when validation is asked for — each a clear error naming the key.
+//! Bad axle-model input: inconsistent geometry, negative levers, bellows that cannot carry the
+//! static load, masses that contradict the scale weights, missing pressure channels when validation
+//! is asked for — each a clear error naming the key.
 
 use crate::common::fixture;
 use fleetdyn::model::vehicle::VehicleFile;

@@ -1,5 +1,5 @@
-//! End-to-end: the driveline model's drive-shaft torque and speed drive the axle-load model
-//! (issue 4 point 8), on the diesel variant of the seed 002 truck.
+//! End-to-end: the driveline model's drive-shaft torque and speed drive the axle-load model on the
+//! diesel variant of the axle-load thesis truck.
 
 use crate::common::fixture;
 use fleetdyn::model::vehicle::VehicleFile;
@@ -24,11 +24,11 @@ fn driveline_torque_reaches_the_axles_and_the_longitudinal_balance_closes() {
     let mass = m.static_state().mass_kg;
     // The remainder the axle model closes at the resistance height must be exactly what the
     // driveline resisted the drive torque with: rolling resistance, air drag and the wheels'
-    // inertia, R = −(F_r + F_a) − J_w a / r_w² (seed 000 §2 wheel equation; the scenario has no
-    // service brake). The axle model's acceleration is a centred difference over ±10 ms of the
-    // 100 Hz trajectory: exact on smooth stretches (median error measured 0.000 N), off by
-    // h²/6·|a‴|·m during shuffle (99th percentile measured 68 N) and smeared over one sample at
-    // the clutch-lock and gear-change events, where the acceleration jumps (max 2.7 kN).
+    // inertia, R = −(F_r + F_a) − J_w a / r_w² (the wheel equation of Myklebust & Eriksson (2012),
+    // §2; the scenario has no service brake). The axle model's acceleration is a centred difference
+    // over ±10 ms of the 100 Hz trajectory: exact on smooth stretches (median error measured 0.000
+    // N), off by h²/6·|a‴|·m during shuffle (99th percentile measured 68 N) and smeared over one
+    // sample at the clutch-lock and gear-change events, where the acceleration jumps (max 2.7 kN).
     let mut errs = Vec::new();
     for k in 1..tr.t.len() - 1 {
         let t = tr.t[k];

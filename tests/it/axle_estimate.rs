@@ -1,7 +1,7 @@
-//! Parameter estimation of seed 002 §3.3 from a measurement file (`fleetdyn estimate axle`):
-//! the round trip through the vehicle file's own static state, the seed's weighed truck against
-//! a hand computation, the CLI on the example file, and bad input (a clear error naming the
-//! file and key, exit code 2, no snippet left behind).
+//! Parameter estimation of the axle-load thesis, §3.3, from a measurement file
+//! (`fleetdyn estimate axle`): the round trip through the vehicle file's own static state, the
+//! thesis's weighed truck against a hand computation, the CLI on the example file, and bad input (a
+//! clear error naming the file and key, exit code 2, no snippet left behind).
 
 use crate::common::fixture;
 use fleetdyn::model::axle::{Axle, AxleParams};
@@ -18,7 +18,7 @@ fn seed_truck() -> AxleParams {
     VehicleFile::load(&fixture(VEHICLE))
         .unwrap()
         .axles
-        .expect("the seed truck has an [axles] section")
+        .expect("the thesis truck has an [axles] section")
 }
 
 fn rel_err(a: f64, b: f64) -> f64 {
@@ -109,7 +109,7 @@ fn seed_scale_weights_give_the_hand_computed_cg() {
     assert_eq!(
         m.scale_weight_kg,
         [7600.0, 6800.0, 4300.0],
-        "seed table 4.2"
+        "axle-load thesis table 4.2"
     );
     let e = estimate(&m, &p, VEHICLE).unwrap();
     // by hand, rear axle at 4.7 m, tag axle at 6.05 m (the vehicle file):

@@ -1,6 +1,6 @@
-//! The half-truck axle-load model (issue 4, point 4): equilibrium, the sum of normal forces,
-//! free-body balances in steady acceleration computed from the output signals alone, and the
-//! directions seed 002 §5.1 observes. Parameters: the seed's truck (fixtures/vehicles/seed002-6x2.toml).
+//! The half-truck axle-load model: equilibrium, the sum of normal forces, free-body balances in
+//! steady acceleration computed from the output signals alone, and the directions the axle-load
+//! thesis observes (§5.1). Parameters: the thesis truck (fixtures/vehicles/seed002-6x2.toml).
 
 use crate::common::fixture;
 use fleetdyn::model::axle::{Axle, AxleParams};
@@ -12,7 +12,7 @@ pub fn seed_truck() -> AxleParams {
     VehicleFile::load(&fixture("fixtures/vehicles/seed002-6x2.toml"))
         .unwrap()
         .axles
-        .expect("the seed truck has an [axles] section")
+        .expect("the thesis truck has an [axles] section")
 }
 
 fn constant_inputs(t_end: f64, accel: f64, slope: f64, drive_nm: f64, aux_nm: f64) -> AxleInputs {
@@ -118,7 +118,7 @@ fn normal_forces_sum_to_m_g_cos_alpha_at_rest_on_a_grade_and_in_steady_accelerat
 }
 
 /// Free-body balances of every body in a steady state, written from the forces on each body
-/// (docs/axle-model.md diagram), with the bellow forces taken from the pressure outputs.
+/// (docs/models/axle.md diagram), with the bellow forces taken from the pressure outputs.
 fn check_free_bodies(p: &AxleParams, m: &HalfTruck, l: &Longitudinal, n: [f64; 3], b: [f64; 3]) {
     let g = p.gravity_m_per_s2;
     let (ca, sa) = (l.alpha_rad.cos(), l.alpha_rad.sin());
@@ -185,7 +185,7 @@ fn steady_states_satisfy_every_free_body_balance() {
 
 #[test]
 fn traction_loads_the_driven_axle_and_lifts_the_chassis_aux_braking_mirrors_it() {
-    // seed 002 §5.1, §6: under traction the driven-axle normal force rises and the bellow
+    // axle-load thesis §5.1, §6: under traction the driven-axle normal force rises and the bellow
     // pressures fall; under auxiliary braking on the driven axle the driven-axle load falls and
     // the front and tag loads rise
     let p = seed_truck();

@@ -1,7 +1,7 @@
 //! The half-truck axle-load model against an independent derivation
 //! (fixtures/gen/make_axle_reference.py: position vectors and Lagrange's equations with sympy
-//! from docs/axle-model.md, integrated with scipy's DOP853 at rtol 1e-12). Parameters: the seed's
-//! truck (fixtures/vehicles/seed002-6x2.toml).
+//! from docs/models/axle.md, integrated with scipy's DOP853 at rtol 1e-12). Parameters: the
+//! axle-load thesis truck (fixtures/vehicles/seed002-6x2.toml).
 //!
 //! Scenarios (each ~10–15 s, inputs piecewise linear, 50 Hz samples): full traction from the
 //! static state; auxiliary braking on a 2 % downhill from the steady state; release from a
@@ -54,7 +54,7 @@ fn truck() -> fleetdyn::model::axle::AxleParams {
     VehicleFile::load(&fixture("fixtures/vehicles/seed002-6x2.toml"))
         .unwrap()
         .axles
-        .expect("the seed truck has an [axles] section")
+        .expect("the thesis truck has an [axles] section")
 }
 
 fn f64s(v: &Value) -> Vec<f64> {

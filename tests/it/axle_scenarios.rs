@@ -1,5 +1,5 @@
-//! The scripted axle-load scenarios of seed 002 §4.3 on the seed truck
-//! (fixtures/vehicles/seed002-6x2.toml): the directions seed 002 §5.1 observes, the point-mass
+//! The scripted axle-load scenarios of the axle-load thesis, §4.3, on the thesis truck
+//! (fixtures/vehicles/seed002-6x2.toml): the directions the thesis observes (§5.1), the point-mass
 //! inputs, the slip-limited auxiliary brake torque, and the `axle_sim` output (Parquet with the
 //! schema's columns and units, SVG plots, all-or-nothing writes).
 
@@ -23,7 +23,7 @@ fn seed_truck() -> AxleParams {
     VehicleFile::load(&fixture("fixtures/vehicles/seed002-6x2.toml"))
         .unwrap()
         .axles
-        .expect("the seed truck has an [axles] section")
+        .expect("the thesis truck has an [axles] section")
 }
 
 fn simulate(p: &AxleParams, sc: &ScenarioInputs) -> AxleTrajectory {
@@ -58,7 +58,7 @@ fn full_acceleration_loads_the_driven_axle_and_lifts_the_chassis() {
     for i in 0..3 {
         assert!((tr.pressure_pa[i][k0] - st.pressure_pa[i]).abs() < 1e-6);
     }
-    // seed §5.1: "at the onset of acceleration, the pressure decreases in all three axes" —
+    // thesis §5.1: "at the onset of acceleration, the pressure decreases in all three axes" —
     // the first excursion beyond 1 kPa (10 mbar) after the torque starts is a fall, within 1 s
     for (i, a) in Axle::ALL.iter().enumerate() {
         let k = (k0..tr.t_s.len())
@@ -193,7 +193,7 @@ fn aux_braking_unloads_the_driven_axle_and_its_slip_limit() {
     let rep = run_scenario("aux-braking", &p, "SEED002-6X2", dir.path()).unwrap();
     println!("{rep}");
     let [front, rear, tag] = rep.summary.axles;
-    // seed §5.1: the driven axle's normal force falls, front and tag rise
+    // thesis §5.1: the driven axle's normal force falls, front and tag rise
     assert!(rear.normal_change_n < 0.0, "{rear:?}");
     assert!(front.normal_change_n > 0.0, "{front:?}");
     assert!(tag.normal_change_n > 0.0, "{tag:?}");
@@ -232,14 +232,14 @@ fn aux_braking_unloads_the_driven_axle_and_its_slip_limit() {
         sc.speed_mps[k_on], sc.speed_mps[k_off]
     );
 
-    // the slip-limited torque is min(k i_lim, mu) N_rear r_w at every sample (seed eq. 1.1.1)
+    // the slip-limited torque is min(k i_lim, mu) N_rear r_w at every sample (thesis eq. 1.1.1)
     let mu_eff =
         (p.slip_stiffness_normalised * p.slip_ratio_limit).min(p.road_friction_coefficient);
     for (lim, n) in tr.aux_brake_limit_wheel_nm.iter().zip(&tr.normal_n[1]) {
         let want = mu_eff * n.max(0.0) * p.wheel_radius_m;
         assert!((lim - want).abs() <= 1e-9 * want, "{lim} vs {want}");
     }
-    // braking lowers it below its static value (the seed's motivation: the slip-keeping brake
+    // braking lowers it below its static value (the thesis's motivation: the slip-keeping brake
     // force is smaller while braking), and the applied torque stays under it here
     let static_limit = mu_eff * HalfTruck::new(&p).static_state().normal_n[1] * p.wheel_radius_m;
     let during = &tr.aux_brake_limit_wheel_nm[k_on..=k_off];

@@ -1,6 +1,7 @@
-//! Seed 002 table 4.2 reproduced (issue 4 point 5): static axle weights — the scale's, the
-//! seed model's, fleetdyn's model at rest with the parameters the seed implemented, and
-//! fleetdyn's estimate from the recorded static bellow pressures of the fixture drive.
+//! Table 4.2 of the axle-load thesis (docs/models/axle.md) reproduced: static axle weights — the
+//! scale's, the thesis model's, fleetdyn's model at rest with the parameters the thesis
+//! implemented, and fleetdyn's estimate from the recorded static bellow pressures of the fixture
+//! drive.
 //! `cargo test --release --test it axle_static_table -- --nocapture` prints the table.
 
 use crate::axle_model::seed_truck;
@@ -10,8 +11,8 @@ use fleetdyn::model::axle::Axle;
 use fleetdyn::sim::axle::{AxleInputs, HalfTruck, Start};
 use fleetdyn::sim::inputs::Piecewise;
 
-const SCALE_T: [f64; 3] = [7.6, 6.8, 4.3]; // seed 002 table 4.2, measured
-const SEED_MODEL_T: [f64; 3] = [7.116, 6.865, 4.619]; // seed 002 table 4.2, its estimate
+const SCALE_T: [f64; 3] = [7.6, 6.8, 4.3]; // axle-load thesis table 4.2, measured
+const SEED_MODEL_T: [f64; 3] = [7.116, 6.865, 4.619]; // axle-load thesis table 4.2, its estimate
 
 #[test]
 fn static_axle_weights_next_to_the_seed_table() {

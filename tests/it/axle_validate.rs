@@ -1,11 +1,11 @@
-//! `fleetdyn simulate axle --drive` on the fixture recording (issue 4 point 7): the validation
-//! table's layout and units, and its figures against what the fixture's construction predicts.
+//! `fleetdyn simulate axle --drive` on the fixture recording: the validation table's layout and
+//! units, and its figures against what the fixture's construction predicts.
 //!
-//! The fixture (fixtures/gen/make_axle_drive.py) is the independent reference model loaded as
-//! the seed's scale weighed the truck (7600 / 6800 / 4300 kg) while the vehicle file carries the
-//! distribution the seed implemented (7500 / 6900 / 4300 kg); its sensors are quantised, noisy
-//! and at CAN rates. So the static offsets are predictable from the vehicle file alone: front
-//! −100 kg on the front bellows, rear +100 kg through the arm's lever ratio, tag none.
+//! The fixture (fixtures/gen/make_axle_drive.py) is the independent reference model loaded as the
+//! axle-load thesis's scale weighed the truck (7600 / 6800 / 4300 kg) while the vehicle file
+//! carries the distribution the thesis implemented (7500 / 6900 / 4300 kg); its sensors are
+//! quantised, noisy and at CAN rates. So the static offsets are predictable from the vehicle file
+//! alone: front −100 kg on the front bellows, rear +100 kg through the arm's lever ratio, tag none.
 
 use crate::common::fixture;
 use arrow::array::{Array, Float64Array, StringArray};

@@ -1,7 +1,7 @@
-//! The bad-input corpus (issue 9 point 1): every file of `fixtures/bad/` through the real CLI,
-//! with the exit code and message `fixtures/bad/manifest.toml` states for it, no panic, and no
-//! output left behind; then the bad drives inside one `fleetdyn run` batch beside good fixture
-//! drives, which must still complete. The files come from `bad_corpus_gen.rs`.
+//! The bad-input corpus: every file of `fixtures/bad/` through the real CLI, with the exit code and
+//! message `fixtures/bad/manifest.toml` states for it, no panic, and no output left behind; then
+//! the bad drives inside one `fleetdyn run` batch beside good fixture drives, which must still
+//! complete. The files come from `bad_corpus_gen.rs`.
 
 use crate::bad_corpus_gen::generate;
 use crate::batch_pipeline::{nightly_with_default_vehicle, walk};
@@ -78,7 +78,7 @@ fn bad_corpus_matches_its_generator() {
             continue;
         }
         if name.starts_with("fuzz/") {
-            // inputs found by the fuzzers (docs/fuzzing.md), committed as found
+            // inputs found by the fuzzers (docs/validation/robustness.md), committed as found
             assert_eq!(
                 m.case.iter().filter(|k| k.file == name).count(),
                 1,

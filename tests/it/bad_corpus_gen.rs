@@ -1,6 +1,6 @@
-//! The generator of `fixtures/bad/` (issue 9 point 1): every malformed input of the bad-input
-//! corpus, made from small valid drives by one clear edit each, so the corpus is reproducible.
-//! `fixtures/bad/manifest.toml` says what each file must give; `bad_corpus.rs` runs them.
+//! The generator of `fixtures/bad/`: every malformed input of the bad-input corpus, made from small
+//! valid drives by one clear edit each, so the corpus is reproducible. `fixtures/bad/manifest.toml`
+//! says what each file must give; `bad_corpus.rs` runs them.
 //!
 //! Regenerate (after changing this file) with
 //! `FLEETDYN_WRITE_BAD_CORPUS=1 cargo test --release --test it bad_corpus_matches_its_generator`;

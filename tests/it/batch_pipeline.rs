@@ -1,6 +1,6 @@
-//! Batch pipelines (issue 6): plan validation, failure isolation, determinism across thread
-//! counts, sharding into separate processes, resume after `kill -9`, idempotent re-runs and
-//! side-by-side model versions. Every run goes through the real binary.
+//! Batch pipelines: plan validation, failure isolation, determinism across thread counts, sharding
+//! into separate processes, resume after `kill -9`, idempotent re-runs and side-by-side model
+//! versions. Every run goes through the real binary.
 
 use crate::common::*;
 use fleetdyn::pipeline::spec::PipelineSpec;

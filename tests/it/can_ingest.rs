@@ -251,7 +251,8 @@ fn parked_truck_decodes_and_is_refused_for_dynamics() {
         rpm[0],
         rpm[rpm.len() - 1]
     );
-    // the README's "idling at 650 rpm"; the idle governor holds it within a few rpm
+    // the source's "idling at 650 rpm" (fixtures/real/css-j1939-parked/PROVENANCE.md); the
+    // idle governor holds it within a few rpm
     assert!((median - 650.0).abs() < 5.0, "{median}");
     assert!(rpm[0] > 600.0 && rpm[rpm.len() - 1] < 700.0);
     assert!(ing
@@ -348,19 +349,22 @@ fn truck_torque_needs_ec1() {
     assert!(e.to_string().contains("EC1"), "{e}");
 }
 
-/// The whole car session (five files, 2388 s) when the shared originals are beside the repo:
-/// every OBD2 sample of the reference CSV is decoded. The committed excerpts carry the main
-/// assertions above; this one covers the full files where they exist.
+/// The whole car session (five files, 2388 s, about 10 MB, not bundled) when
+/// `FLEETDYN_CSS_SESSION_164` names a folder holding its original MF4 files (source and URL in
+/// fixtures/real/css-car-drive-164/PROVENANCE.md): every OBD2 sample of the reference CSV is
+/// decoded. The committed excerpts carry the main assertions above; this one covers the full
+/// files where a copy is at hand.
 #[test]
 fn whole_car_session_when_the_originals_are_present() {
-    let dir = fixture("../shared/data/real/css-car-drive-164");
-    if !dir.is_dir() {
-        println!(
-            "note: {} absent; the excerpt tests cover the decoding",
-            dir.display()
-        );
+    let Some(dir) = std::env::var_os("FLEETDYN_CSS_SESSION_164").map(PathBuf::from) else {
+        println!("note: FLEETDYN_CSS_SESSION_164 not set; the excerpt tests cover the decoding");
         return;
-    }
+    };
+    assert!(
+        dir.is_dir(),
+        "FLEETDYN_CSS_SESSION_164={} is not a folder",
+        dir.display()
+    );
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())

@@ -1,10 +1,9 @@
-//! `fleetdyn diagnose` end to end (issue 7 point 1): a synthetic drive with a hidden
-//! torque-reaction effect diagnosed through the CLI writes the contract's files — diagnosis.json
-//! with exactly the contract's keys, mismatch.parquet and findings.parquet with `unit` field
-//! metadata, report.md with the residual plots — and names the effect; a recording neither
-//! model can use fails with exit 1, a clear message and nothing written; a missing vehicle is
-//! a usage error (exit 2). `fleetdyn prove --driving` records its choice and rejects an unknown
-//! one.
+//! `fleetdyn diagnose` end to end: a synthetic drive with a hidden torque-reaction effect diagnosed
+//! through the CLI writes the contract's files — diagnosis.json with exactly the contract's keys,
+//! mismatch.parquet and findings.parquet with `unit` field metadata, report.md with the residual
+//! plots — and names the effect; a recording neither model can use fails with exit 1, a clear
+//! message and nothing written; a missing vehicle is a usage error (exit 2).
+//! `fleetdyn prove --driving` records its choice and rejects an unknown one.
 
 use crate::common::fixture;
 use fleetdyn::model::catalogue::Effect;

@@ -1,7 +1,7 @@
-//! Step 3 of the diagnosis, explain (src/diagnose/explain.rs), proven blind on synthetic drives
-//! of the seed 002 diesel 6x2 truck with one hidden catalogue effect each, at mid-range
-//! magnitudes (README "Hidden effects"): the diagnosis sees the drive's log and the nominal
-//! vehicle file only; the truth is read back from the answer file afterwards.
+//! Step 3 of the diagnosis, explain (src/diagnose/explain.rs), proven blind on synthetic drives of
+//! the diesel variant of the axle-load thesis 6x2 truck with one hidden catalogue effect each, at
+//! mid-range magnitudes (docs/validation/proof.md): the diagnosis sees the drive's log and the
+//! nominal vehicle file only; the truth is read back from the answer file afterwards.
 //!
 //! Each effect case asserts: the right effect is accepted first (alone, or — where stated — with
 //! a named ambiguity set containing the truth), its fitted parameter is within 20 % of the
@@ -229,11 +229,11 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
         })
         .unwrap();
     // halved on the recording, or against the generator's noise-free signal (the proof's
-    // "halved noise-free" drives, which the README counts apart). Measured: the highway
-    // rolling-resistance drive (whole-percent slope sensor) halves only the second way since
-    // the models read the held slope half a period ahead (`diagnose::extended::corrected_log`):
-    // 0.1007 → 0.0504 m/s on the recording (0.103 → 0.0493 before), 0.1001 → 0.0490 against
-    // the noise-free speed — a margin of 2 %
+    // "halved noise-free" drives, which docs/validation/proof.md counts apart). Measured: the
+    // highway rolling-resistance drive (whole-percent slope sensor), with the models reading the
+    // held slope half a period ahead (`diagnose::extended::corrected_log`), halves only the
+    // second way: 0.1007 → 0.0504 m/s on the recording, 0.1001 → 0.0490 against the noise-free
+    // speed — a margin of 2 %
     let nf = &r.noise_free.as_ref().expect("a finding was accepted")[name];
     eprintln!(
         "{}: held-out {name} RMSE {} -> {} (noise-free {} -> {})",
@@ -310,7 +310,7 @@ fn rolling_resistance_is_named_and_fitted_on_a_highway() {
     // +35 %: a constant-plus-v force, close to a slope-sensor mounting angle (both act as a
     // force ∝ m·g on a drive without large speed changes); the held-out fits separate them.
     // Its 95 % interval on this 15-minute drive is about ±18 % wide, so its lower end meets
-    // the vehicle file's ±10 % rolling-resistance tolerance: the rule (docs/diagnosis.md,
+    // the vehicle file's ±10 % rolling-resistance tolerance: the rule (docs/diagnosis/method.md,
     // rule 4) may name it or report it as an estimate consistent with the file, but must not
     // name anything else.
     let dir = tempfile::tempdir().unwrap();
@@ -439,7 +439,7 @@ fn results_do_not_depend_on_the_thread_count() {
     let x = explain(&p, &cfg).unwrap();
     assert_eq!(x.findings[0].effect, "cg_position");
     assert_eq!(one, three);
-    // the output contract's keys (diagnosis.md)
+    // the output contract's keys (docs/diagnosis/contract.md)
     let v: serde_json::Value = serde_json::from_str(&one).unwrap();
     let f = &v["findings"][0];
     assert_eq!(f["effect"], "cg_position", "{one}");
@@ -545,8 +545,8 @@ fn bad_inputs_are_typed_errors() {
 /// reads the pressures.
 #[test]
 fn the_clutch_actuation_view_is_weighted_per_row_and_serves_its_own_effects() {
-    use fleetdyn::diagnose::compare::ACTUATION_CHANNEL;
     use fleetdyn::diagnose::problem::{Part, ViewKind};
+    use fleetdyn::diagnose::rows::ACTUATION_CHANNEL;
     let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
     let cfg = LongitudinalConfig::default();
     let plain = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None).unwrap();

@@ -151,7 +151,7 @@ fn each_effect_at_its_truth_value_restores_the_fit() {
     ];
     // slope_quantization is not in the list: its fingerprint is shuffle-band oscillation after
     // slope steps, and on this truck a whole-percent step excites too little of it to separate
-    // from the raw slope's own errors (measured in the test below); issue 7 reports it as such.
+    // from the raw slope's own errors (measured in the test below); the proof reports it as such.
     let mut failures = Vec::new();
     for (e, v) in cases {
         let d = drive(&dir.path().join(e.id()), Some((e, v)), false);
@@ -244,7 +244,7 @@ fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
 
 /// A worn clutch that cannot carry the engine's full torque (kinetic capacity 2438 N·m, static
 /// 3048 N·m: it breaks loose in a transient and keeps slipping at full load, as on the proof's
-/// case 53 — the same road, seed and magnitude, without the proof's CAN dropouts): the
+/// worn-clutch drive — the same road, seed and magnitude, without the proof's CAN dropouts): the
 /// recording's engine speed runs above the gearbox's for tens of seconds with the clutch
 /// closed. The windows start slipping where the measured engine speed is more than 150 rpm
 /// above the locked driveline's (`SLIP_START_MIN_RAD_S`), so the model at the true capacity
@@ -366,8 +366,8 @@ fn proof_drive(seed: u64, case: usize) -> (VehicleFile, fleetdyn::table::DriveLo
     (vf, log)
 }
 
-/// Windows started with the clutch closed in the low gears of the proof drive where the fault
-/// was traced (`fleetdyn prove --seed 1001`, case 29: a 3.2 km highway drive with a drawn
+/// Windows started with the clutch closed in the low gears of a proof drive whose launches ring
+/// (`fleetdyn prove --seed 1001`, case 29: a 3.2 km highway drive with a drawn
 /// driver, its stiffness hidden — the model runs nominal here, so only the start state differs):
 /// the first 2 s of those windows (launches and the shifts after them, where the first gears'
 /// shuffle swings the wheel speed) reproduce the engine speed far better from the measured

@@ -1,7 +1,7 @@
 //! Step 2 of the diagnosis, locate, and the noise floor it needs (src/diagnose/locate.rs,
-//! src/diagnose/noise.rs; diagnosis.md). On synthetic arrays whose answer is known (white noise
-//! and quantisation alone, a bump in a known stretch, a residual ∝ v², a delayed input) and on
-//! synthetic drives with and without a hidden effect. Measured figures are printed
+//! src/diagnose/noise.rs; docs/diagnosis/method.md). On synthetic arrays whose answer is known
+//! (white noise and quantisation alone, a bump in a known stretch, a residual ∝ v², a delayed
+//! input) and on synthetic drives with and without a hidden effect. Measured figures are printed
 //! (`--nocapture`).
 
 use crate::common::fixture;
@@ -17,7 +17,7 @@ use fleetdyn::diagnose::noise::{
 use fleetdyn::model::catalogue::Effect;
 use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
-use fleetdyn::road::rng::Xoshiro256StarStar;
+use fleetdyn::rng::Xoshiro256StarStar;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::EffectChoice;
 use std::path::Path;
@@ -432,8 +432,8 @@ fn clean_drive_floor_explains_the_longitudinal_residual() {
             _ => {
                 // bellow pressures: the floor explains the steady driving, not the launches and
                 // stops, where the recording path's drive-torque and acceleration reconstruction
-                // differs from the truth even with exact inputs (measured 1.6–2.1× overall; see
-                // the report of issue 7). Pinned so that a change shows.
+                // differs from the truth even with exact inputs (measured 1.6–2.1× overall).
+                // Pinned so that a change shows.
                 assert!(ratio < 2.5, "{}: {ratio}", s.signal);
                 let steady = s
                     .windows

@@ -1,11 +1,11 @@
-//! The reduced proof (issue 7 point 6): the first cycle of the README's fixed-driving proof —
-//! `fleetdyn prove --seed 1 --driving fixed`, drives 0–21: every catalogue effect once at a random magnitude, four drives
-//! without effect and two with rolling resistance raised on one stretch only — generated,
-//! diagnosed blind (the diagnosis reads the drive file and the nominal vehicle file; the
-//! answers are written apart and only the scorer reads them) and scored.
+//! The reduced proof: the first cycle of the fixed-driving proof (docs/validation/proof.md) —
+//! `fleetdyn prove --seed 1 --driving fixed`, drives 0–21: every catalogue effect once at a random
+//! magnitude, four drives without effect and two with rolling resistance raised on one stretch only
+//! — generated, diagnosed blind (the diagnosis reads the drive file and the nominal vehicle file;
+//! the answers are written apart and only the scorer reads them) and scored.
 //!
 //! Asserted, case by case:
-//! - the effects the full proof identifies in every cycle (README "Diagnosis proof":
+//! - the effects the full proof identifies in every cycle (docs/validation/proof.md:
 //!   rolling_resistance, vehicle_mass, grade_offset, engine_torque_offset,
 //!   bogie_torque_reaction, load_transfer_height, air_spring_nonlinearity, cg_position,
 //!   tyre_stiffness, grade_load_transfer, driveline_compliance through the shuffle
@@ -29,7 +29,7 @@
 //!   drives, lengths, driving) that regenerates any case, one contract folder per case.
 //!
 //! The same cycle under the drawn driving (`fleetdyn prove --seed 1`, the default: a driver
-//! drawn per drive) is pinned apart, with what it measured (README "Diagnosis proof").
+//! drawn per drive) is pinned apart, with what it measures (docs/validation/proof.md).
 //! The mechanism pins below run their cases as the fixed-driving plan made them.
 
 use crate::common::fixture;
@@ -55,7 +55,8 @@ const IDENTIFIED: [&str; 13] = [
 /// Effects whose truth does not pass the acceptance rule's data tests on these drives.
 const NOT_VISIBLE: [&str; 1] = ["slope_quantization"];
 
-/// Runs the proof `cfg` with the seed 002 truck on 2 jobs into a temporary folder.
+/// Runs the proof `cfg` with the diesel variant of the axle-load thesis truck on 2 jobs into a
+/// temporary folder.
 fn proof(cfg: &ProofConfig) -> (tempfile::TempDir, ProofRun) {
     let dir = tempfile::tempdir().unwrap();
     let run = run_proof(
@@ -186,18 +187,18 @@ fn identified_drawn(hidden: &str) -> bool {
     hidden == "signal_delay" || (IDENTIFIED.contains(&hidden) && !UNNAMED.contains(&hidden))
 }
 
-/// The first cycle under the drawn driving (`fleetdyn prove --seed 1`, drives 0–21: the same
-/// roads, effects and magnitudes as the fixed-driving cycle above, each drive with its own
-/// driver — acceleration, braking, speed holding, torque tips, lift-offs, stop time).
-/// Measured on this code (README "Diagnosis proof", drawn driving): eleven effects named
-/// first, aero drag named as `grade_offset` with itself in the ambiguity set, no clean or
-/// out-of-catalogue drive with a finding. What the drawn driving costs is pinned as a ratchet
-/// (these assertions hold while it stays, and still hold when it is mended): the slope
-/// quantisation of case 4 (invisible to the rule at its truth: oracle gain 0.23) is read as a
-/// `grade_offset` — the one wrong name of the cycle; case 9's worn clutch (−37 %) is visible
-/// at its truth (oracle gain 0.93) but no rung of the screen's ladder removes 10 % of the train
-/// error, so it ends without a finding; the lash of case 6 and the stiffness of case 7 do not
-/// pass the rule even at their truth on these drives' driving.
+/// The first cycle under the drawn driving (`fleetdyn prove --seed 1`, drives 0–21: the same roads,
+/// effects and magnitudes as the fixed-driving cycle above, each drive with its own driver —
+/// acceleration, braking, speed holding, torque tips, lift-offs, stop time). Measured
+/// (docs/validation/proof.md, drawn driving): eleven effects named first, aero drag named as
+/// `grade_offset` with itself in the ambiguity set, no clean or out-of-catalogue drive with a
+/// finding. What the drawn driving costs is pinned as a ratchet (these assertions hold while it
+/// stays, and still hold when it is mended): the slope quantisation of case 4 (invisible to the
+/// rule at its truth: oracle gain 0.23) is read as a `grade_offset` — the one wrong name of the
+/// cycle; case 9's worn clutch (−37 %) is visible at its truth (oracle gain 0.93) but no rung of
+/// the screen's ladder removes 10 % of the train error, so it ends without a finding; the lash of
+/// case 6 and the stiffness of case 7 do not pass the rule even at their truth on these drives'
+/// driving.
 #[test]
 fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_drives() {
     let (dir, run) = proof(&ProofConfig {
@@ -272,15 +273,16 @@ fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_dr
 /// Four drives of the proof's later cycles, run exactly as in the whole plan
 /// (`--cases 27,48,49,60`): case 27 hides a torque-signal delay whose four torque reversals all
 /// fall in training blocks, so that only the engine speed while the clutch is actuated shows
-/// it on held-out data (`diagnose::problem::Problem::with_actuation`); case 49 a delay that
-/// rule 2 had rejected even at its truth while its non-white measure rose when the delay's
-/// fast error was removed (`diagnose::explain`, rule 2); and case 60 is a clean city drive
-/// whose slope noise the floor had estimated 10 % low off the sensor's lattice
-/// (`diagnose::noise`), so a window of ordinary noise had tested as a mismatch (README
-/// "Diagnosis proof"); case 48 hides a 1.47 % slope sensor on a city road, named since the
-/// cure keeps what the sensor's noise says about where in its cell the grade lies
-/// (`signal::dequantise`: no median, cells widened by the noise; the earlier cure left the
-/// slope further from the road than the recording and made the held-out error worse).
+/// it on held-out data (`diagnose::problem::Problem::with_actuation`); case 49 a delay whose
+/// fit removes a fast error and leaves the sensors' slow drift, which a normalised whiteness
+/// measure reads as worse even at the truth (`diagnose::explain`, rule 2); case 60 is a clean
+/// city drive whose slope noise a plain median of the sensor's lattice steps puts 10 % low,
+/// enough for a window of ordinary noise to test as a mismatch (`diagnose::noise` reads the
+/// steps as grouped data); case 48 hides a 1.47 % slope sensor on a city road, named because
+/// the cure keeps what the sensor's noise says about where in its cell the grade lies
+/// (`signal::dequantise`: no median, cells widened by the noise; a cure that takes a median
+/// first leaves the slope further from the road than the recording and the held-out error
+/// worse).
 #[test]
 fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mismatch() {
     let (_dir, run) = proof(&ProofConfig {
@@ -330,9 +332,9 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
 }
 
 /// A large torque-signal delay (`fleetdyn prove --seed 1001 --cases 27`: 0.356 s hidden) is
-/// fitted in its own basin: the cost in the delay has side basins about 0.05 s wide, and the
-/// fit started from no delay had stopped in one at 0.27 s (23 % of the delay off); it now
-/// starts from the best point of a 25 ms grid (`model::catalogue::DELAY_GRID_S`).
+/// fitted in its own basin: the cost in the delay has side basins about 0.05 s wide, and a fit
+/// started from no delay stops in one at 0.27 s (23 % of the delay off); the fit starts from
+/// the best point of a 25 ms grid (`model::catalogue::DELAY_GRID_S`).
 #[test]
 fn a_large_delay_is_fitted_in_its_own_basin() {
     let (_dir, run) = proof(&ProofConfig {
@@ -345,16 +347,16 @@ fn a_large_delay_is_fitted_in_its_own_basin() {
     let delay = &run.scores[0];
     assert_eq!(delay.hidden, "signal_delay");
     assert!(delay.correct, "{:?}", delay.findings);
-    // 1.0 % measured; the side basin gave 23 %, the truth's own is about ±7 % wide
+    // 1.0 % measured; the side basin gives 23 %, the truth's own is about ±7 % wide
     assert!(delay.parameter_error.unwrap() <= 0.05, "{delay:?}");
     assert!(delay.heldout_ratio.unwrap() < 0.5, "{delay:?}");
 }
 
 /// A worn clutch and a delayed torque signal whose responses the screen's one middle step
-/// misread (`fleetdyn prove --seed 5001 --cases 53,49`: clutch capacity 2165 N·m for 3500,
+/// misreads (`fleetdyn prove --seed 5001 --cases 53,49`: clutch capacity 2165 N·m for 3500,
 /// 0.147 s of delay): at −30 % the clutch barely slips where the truth's −38 % slips at
-/// every launch (the probe's sensitivity removed 8 % of the train SSE, under the screen's
-/// 10 %), and 0.2 s of delay explained 9.5 %. The screen now also probes ½ and 1½ times the
+/// every launch (the probe's sensitivity removes 8 % of the train SSE, under the screen's
+/// 10 %), and 0.2 s of delay explains 9.5 %. The screen also probes ½ and 1½ times the
 /// step of these threshold and shift effects and judges them by the best rung
 /// (`model::catalogue::SCREEN_LADDER`: 66 % and 22 % at −45 % and 0.3 s); both are named, fitted
 /// within 20 % and `explained`.
@@ -379,17 +381,17 @@ fn the_screen_probes_threshold_effects_across_their_range() {
     assert_eq!(run.scores.len(), 2);
 }
 
-/// Two worn clutches whose fits stopped in a side basin (`fleetdyn prove --seed 1 --cases 31`
-/// and `--seed 1001 --cases 31`, drawn driving: 2660 and 2629 N·m for 3500). The cost in the
+/// Two worn clutches with side basins in their cost (`fleetdyn prove --seed 1 --cases 31` and
+/// `--seed 1001 --cases 31`, drawn driving: 2660 and 2629 N·m for 3500). The cost in the
 /// capacity is a staircase of basins about 3 % of it wide, and the secant from the screen's
-/// probe had ended at 3017 and 3092 N·m, both rejected by the rule. The fit now starts from the
-/// best point of a grid of 50 … 100 % of the nominal capacity in 1.5 % steps
+/// probe ends at 3017 and 3092 N·m, both rejected by the rule. The fit starts from the best
+/// point of a grid of 50 … 100 % of the nominal capacity in 1.5 % steps
 /// (`model::catalogue::CLUTCH_GRID`); both drives are named.
 #[test]
 fn a_worn_clutch_is_fitted_in_its_own_basin() {
     for seed in [1, 1001] {
         // measured 1.6 % (seed 1: 2673 N·m) and 1.9 % (seed 1001: 2613 N·m) of the hidden
-        // change; the side basins were 42 % and 53 % off. 10 % of these changes (85 N·m) is
+        // change; the side basins lie 42 % and 53 % off. 10 % of these changes (85 N·m) is
         // less than one basin's width, so the bound holds only in the truth's own basin.
         named_worn_clutch(
             &ProofConfig {
@@ -419,17 +421,17 @@ fn named_worn_clutch(cfg: &ProofConfig, max_heldout_ratio: f64) -> CaseScore {
     s
 }
 
-/// The two worn clutches the 3–6 km proof sees at their truth and misses (`fleetdyn prove
-/// --seed 2` and `--seed 9001`, case 9, drawn driving: fits of 2210 and 2275 N·m for 2131
-/// and 2365 hidden, each on the wrong side of a held-out event's slip threshold), on the
-/// drives the same plans give at 10–20 km (`--min-km 10 --max-km 20`: 16.6 and 15.1 km).
-/// There the diagnosis, unchanged, names both (README, "Diagnosis proof": at 10–20 km every
-/// worn clutch visible at its truth is named, 20 of 20).
+/// The two worn clutches the 3–6 km proof sees at their truth and misses (`fleetdyn prove --seed 2`
+/// and `--seed 9001`, case 9, drawn driving: fits of 2210 and 2275 N·m for 2131 and 2365 hidden,
+/// each on the wrong side of a held-out event's slip threshold), on the drives the same plans give
+/// at 10–20 km (`--min-km 10 --max-km 20`: 16.6 and 15.1 km). There the diagnosis names both
+/// (docs/validation/proof.md: at 10–20 km every worn clutch visible at its truth is named, 20 of
+/// 20).
 #[test]
 fn worn_clutches_missed_on_short_drives_are_named_on_longer_ones() {
     for seed in [2, 9001] {
         // measured 1.0 % (seed 2) and 0.17 % (seed 9001) of the hidden change; the held-out
-        // bound is the issue's target, RMSE at least halved (measured 0.038 and 0.027)
+        // bound is the proof's target, RMSE at least halved (measured 0.038 and 0.027)
         let s = named_worn_clutch(
             &ProofConfig {
                 seed,
@@ -516,12 +518,12 @@ fn a_switch_is_scored_on_every_row_of_the_views_it_moves() {
 /// A slope sensor's rounding whose reconstruction the train blocks barely see
 /// (`fleetdyn prove --seed 5001 --cases 26 --driving fixed`): the cure (a switch, nothing
 /// fitted) lowers the held-out weighted RMSE of the speeds by more than half and the held-out
-/// whiteness, but its likelihood-ratio statistic on the train part alone was 0.72 against
+/// whiteness, but its likelihood-ratio statistic on the train part alone is 0.72 against
 /// the 3.84 of rule 3. With nothing fitted, rule 3 tests the switch on both parts
 /// (`diagnose::explain`, rule 3): the drive is named, and the statistic that decides it is
 /// mostly the held-out part's. The screen takes a switch on every row too, with no threshold
-/// (`diagnose::fit`): on the train part alone the cure removed 9.5 % of the SSE, under the
-/// screen's 10 % for a fitted parameter, and was never tested.
+/// (`diagnose::fit`): on the train part alone the cure removes 9.5 % of the SSE, under the
+/// screen's 10 % for a fitted parameter, so a threshold would leave it untested.
 #[test]
 fn a_switch_is_tested_on_every_row() {
     let (s, detail) = named_slope_case(5001, 26, Driving::Fixed);

@@ -1,28 +1,28 @@
 //! Reference pages generated from the code stay equal to it: the effect catalogue table in
-//! docs/diagnosis.md is `model::catalogue::catalogue_markdown()`. Run with
-//! `FLEETDYN_WRITE_DOCS=1` to rewrite the page's table from the code.
+//! docs/diagnosis/catalogue.md is `model::catalogue::catalogue_markdown()`, between the markers
+//! of section `catalogue` (`fleetdyn::schema::reference`). Run with `FLEETDYN_WRITE_DOCS=1` to
+//! rewrite the page's table from the code.
 
 use fleetdyn::model::catalogue::catalogue_markdown;
+use fleetdyn::schema::reference::{section, splice};
 
-const BEGIN: &str = "<!-- catalogue:begin (generated from the code: a test checks it) -->\n";
-const END: &str = "<!-- catalogue:end -->";
+const PAGE: &str = "docs/diagnosis/catalogue.md";
 
 #[test]
 fn the_catalogue_table_in_the_docs_is_the_codes() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/diagnosis.md");
-    let page = std::fs::read_to_string(path).unwrap();
-    let a = page.find(BEGIN).expect("begin marker") + BEGIN.len();
-    let b = page.find(END).expect("end marker");
+    let path = format!("{}/{PAGE}", env!("CARGO_MANIFEST_DIR"));
+    let page = std::fs::read_to_string(&path).unwrap();
     let table = catalogue_markdown();
+    let old = section(&page, "catalogue").expect("one pair of catalogue markers");
     if std::env::var_os("FLEETDYN_WRITE_DOCS").is_some() {
-        let new = format!("{}{}{}", &page[..a], table, &page[b..]);
-        std::fs::write(path, new).unwrap();
+        if old != table {
+            std::fs::write(&path, splice(&page, "catalogue", &table).unwrap()).unwrap();
+        }
         return;
     }
     assert_eq!(
-        &page[a..b],
-        table,
-        "docs/diagnosis.md's catalogue table differs from the code; rewrite it with \
+        old, table,
+        "{PAGE}'s catalogue table differs from the code; rewrite it with \
          FLEETDYN_WRITE_DOCS=1 cargo test --release --test it docs_reference"
     );
     // every catalogue id appears once in the table

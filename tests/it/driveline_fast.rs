@@ -165,9 +165,9 @@ fn fast_and_accurate_agree_on_a_mixed_gear_drive() {
     }
     // Measured on this 720 s drive: max 0.32 m/s, rms 0.017 m/s. The differences come from mode
     // switches and PI-clamp transitions resolved to the 10 ms step instead of located; the PI has
-    // no anti-windup (physics.md), and during the saturated stretches of the 12th-gear climb and
-    // the engine-braked downshifts its wound-up integrator amplifies them transiently before the
-    // two runs re-converge once the controller leaves saturation.
+    // no anti-windup (docs/models/driveline.md), and during the saturated stretches of the
+    // 12th-gear climb and the engine-braked downshifts its wound-up integrator amplifies them
+    // transiently before the two runs re-converge once the controller leaves saturation.
     // Bounds: 0.5 m/s max, 0.03 m/s rms, and agreement again at the end of the drive.
     assert!(dv < 0.5 && rms < 0.03, "max {dv} rms {rms}");
     let end = (va.last().unwrap() - vf.last().unwrap()).abs();
@@ -274,8 +274,8 @@ fn fast_and_accurate_on_the_same_drive_with_100_hz_sampled_inputs() {
     // finds each clutch lock up to one 10 ms step late: the 1-2 upshift's lock is 9.1 ms late
     // here (6.4 ms with the scripted inputs) and the engine speed after it differs by 0.8 rad/s;
     // the PI without anti-windup carries such differences through the later saturated shifts.
-    // Regression bounds: max 2 m/s, rms 0.3 m/s; locating the lock inside the step is listed
-    // under the README's known limits.
+    // Regression bounds: max 2 m/s, rms 0.3 m/s; locating the lock inside the step is a known
+    // limit of the fast path.
     assert!(dv < 2.0 && rms < 0.3, "max {dv} rms {rms}");
 }
 
@@ -415,7 +415,7 @@ fn lash_tip_out_is_the_same_in_the_generators_spans_and_in_one_run() {
     assert!(d_spans < 1e-9, "spans vs one run {d_spans} rad/s");
     // The 1 ms step finds the impacts at step ends (module doc of sim::fast); measured 1.7 rpm
     // against the 10 µs run. Bound: 5 % of the dip, below the ~10 rpm the study leaves between
-    // the recording and the model at the true lash (docs/events.md).
+    // the recording and the model at the true lash (docs/diagnosis/events.md).
     assert!(
         d_ref < 0.05 * dip,
         "1 ms vs 10 µs {d_ref} rad/s, dip {dip} rad/s"

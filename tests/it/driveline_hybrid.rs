@@ -141,9 +141,9 @@ fn accurate_integrator_matches_solve_ivp_radau() {
     );
 }
 
-/// Seed 000 §2.7 reproduced: smoothing the rolling resistance near standstill
-/// (f(v) = 1 − exp(−c_sr v²), c_sr = 16 s²/m²) cuts the integrator's work on a start–stop run
-/// (seed: up to 85 % of the simulation time) without changing the speed above 0.5 km/h. The run:
+/// Myklebust & Eriksson (2012), §2.7, reproduced: smoothing the rolling resistance near standstill
+/// (f(v) = 1 − exp(−c_sr v²), c_sr = 16 s²/m²) cuts the integrator's work on a start–stop run (the
+/// paper: up to 85 % of the simulation time) without changing the speed above 0.5 km/h. The run:
 /// the start–stop scenario of the reference set (brake to standstill, hold, restart), simulated
 /// with the accurate integrator at rtol 1e-8 with and without smoothing (without it, sign(v)
 /// switches the 40 kN brake force and the rolling resistance at v = 0, which the adaptive
@@ -231,7 +231,7 @@ fn rolling_resistance_smoothing_cuts_integrator_work() {
     // they differ by up to 0.12 m/s (measured): the smoothed truck never truly stops — with
     // f(v) → 0 nothing holds it, so it creeps at 0.047 m/s while the brake ramps out — and moves
     // off earlier than the unsmoothed one, which brake and full rolling resistance hold until
-    // breakaway. Bound 0.2 m/s, and reported in the README.
+    // breakaway. Bound 0.2 m/s, and reported in docs/models/driveline.md.
     assert!(dv_before98 < 1e-3, "{dv_before98}");
     assert!(dv_before < 0.02, "{dv_before}");
     assert!(dv < 0.2, "{dv}");

@@ -1,5 +1,6 @@
-//! Linear driveline analysis (physics.md §1, seed 000 §3): the seed's qualitative findings on the
-//! shipped 40 t parameter set, and physical sanity of the model.
+//! Linear driveline analysis (docs/models/driveline.md; Myklebust & Eriksson (2012), §3): the
+//! paper's qualitative findings on the shipped 40 t parameter set, and physical sanity of the
+//! model.
 
 use crate::common::*;
 use fleetdyn::model::linear::linearize;
@@ -22,14 +23,14 @@ fn open_loop_resonance_fades_with_gear_and_disappears() {
         .map(|r| r.fdr_open.peak_over_rigid_db)
         .collect();
     println!("F_dr -> v open-loop peak heights per gear [dB]: {heights:?}");
-    // a clear resonance in 1st gear (seed 000 Fig. 5)
+    // a clear resonance in 1st gear (Myklebust & Eriksson (2012), fig. 7)
     assert!(heights[0].unwrap() > 10.0);
     // fades monotonically while it exists ...
     let present: Vec<f64> = heights.iter().map_while(|h| *h).collect();
     assert!(present.windows(2).all(|w| w[1] < w[0]), "{present:?}");
-    // ... and is gone in every higher gear (seed: by 8th; this parameter set: from 7th)
+    // ... and is gone in every higher gear (the paper: by 8th; this parameter set: from 7th)
     assert_eq!(t.open_loop_peak_gone_from(), Some(7));
-    // the shuffle band: 1-5 Hz in the low gears (physics.md §1)
+    // the shuffle band: 1-5 Hz in the low gears (docs/models/driveline.md)
     for r in &t.rows[..6] {
         let f = r.fdr_open.peak_hz.unwrap();
         assert!((1.0..5.0).contains(&f), "gear {}: {f} Hz", r.fdr_open.gear);

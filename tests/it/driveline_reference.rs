@@ -1,6 +1,6 @@
 //! The linear driveline model against an independent python-control implementation
-//! (fixtures/gen/make_driveline_reference.py, control 0.10.2, built from physics.md §1 and the
-//! same vehicle file): matrices, eigenvalues, frequency responses and DC gains.
+//! (fixtures/gen/make_driveline_reference.py, control 0.10.2, built from docs/models/driveline.md
+//! and the same vehicle file): matrices, eigenvalues, frequency responses and DC gains.
 
 use crate::common::*;
 use fleetdyn::model::linear::{linearize, StateSpace};

@@ -1,4 +1,4 @@
-//! Validation of the driveline model against the fixture recordings (issue 3 item 5).
+//! Validation of the driveline model against the fixture recordings.
 
 use crate::common::*;
 use fleetdyn::ingest::{ingest_file, IngestOptions};

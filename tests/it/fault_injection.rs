@@ -1,7 +1,7 @@
-//! Faults around a batch run (issue 9 point 3): `kill -9` in the middle of a drive's commit and
-//! again later, then a re-run that gives a clean run's bytes with no temporary file visible at
-//! any time; a read-only output folder refused before any drive is read; a full disk failing
-//! the drives that hit it, naming the file, leaving nothing half-written.
+//! Faults around a batch run: `kill -9` in the middle of a drive's commit and again later, then a
+//! re-run that gives a clean run's bytes with no temporary file visible at any time; a read-only
+//! output folder refused before any drive is read; a full disk failing the drives that hit it,
+//! naming the file, leaving nothing half-written.
 //!
 //! The full disk is simulated without root: the child runs under `RLIMIT_FSIZE` (`ulimit -f`)
 //! with `SIGXFSZ` ignored, so a write past the limit returns `EFBIG` ("File too large") where a
@@ -159,7 +159,7 @@ fn a_read_only_output_folder_is_refused_before_any_drive_naming_it() {
         cmd.args(["run", pipeline.to_str().unwrap(), "--out"])
             .arg(&ro)
             .args(["--input", "fixtures/bad/good-small.parquet"]),
-        2,
+        3,
     );
     assert!(
         t.contains(&format!("output folder {} is not writable", ro.display()))
@@ -170,7 +170,7 @@ fn a_read_only_output_folder_is_refused_before_any_drive_naming_it() {
     assert!(!t.contains("good-small at"), "{t}");
     assert_eq!(walk(&ro).len(), 0);
 
-    // a single-file command names the file it could not write, exit 1, nothing left
+    // a single-file command names the file it could not write, exit 3 (io), nothing left
     let single = dir.path().join("single");
     std::fs::create_dir(&single).unwrap();
     let (ro2, mut cmd) = read_only_folder(&single);
@@ -178,7 +178,7 @@ fn a_read_only_output_folder_is_refused_before_any_drive_naming_it() {
     let t = run_expecting(
         cmd.args(["ingest", "fixtures/bad/good-small.parquet", "-o"])
             .arg(&target),
-        1,
+        3,
     );
     assert!(
         t.contains(&target.display().to_string()) && t.contains("Permission denied"),
@@ -203,7 +203,7 @@ fn a_device_as_output_file_is_refused_not_replaced() {
             "-o",
             "/dev/full",
         ]),
-        1,
+        3,
     );
     assert!(
         t.contains("/dev/full") && t.contains("not a regular file"),

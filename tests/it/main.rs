@@ -19,6 +19,7 @@ mod diagnose_extended;
 mod diagnose_locate;
 mod diagnose_proof;
 mod docs_reference;
+mod docs_schema_reference;
 mod driveline_fast;
 mod driveline_hybrid;
 mod driveline_linear;

@@ -4,7 +4,7 @@
 //! answer is kept apart, the truck is drawn within its tolerances, the summary says which truth
 //! it ran on — and a reduced proof whose verdicts and names are pinned: three clean drives
 //! with no finding, a worn clutch and a softer drive shaft named with their values. How well
-//! the diagnosis does over whole plans is measured in docs/diagnosis.md.
+//! the diagnosis does over whole plans is measured in docs/validation/proof.md.
 
 use crate::common::fixture;
 use fleetdyn::diagnose::contract::Verdict;

@@ -1,7 +1,7 @@
-//! Road profiles from real tracks (issue 5.3): a synthetic GNSS track with a known hill, the
-//! VECTO Long Haul cycle, the measured car drive against its OBD speed and IMU pitch, the slope
-//! spectra against `fixtures/reference/road_profile.json` (fixtures/gen/make_road_profile_reference.py),
-//! and bad input through the CLI.
+//! Road profiles from real tracks: a synthetic GNSS track with a known hill, the VECTO Long Haul
+//! cycle, the measured car drive against its OBD speed and IMU pitch, the slope spectra against
+//! `fixtures/reference/road_profile.json` (fixtures/gen/make_road_profile_reference.py), and bad
+//! input through the CLI.
 
 use crate::common::*;
 use fleetdyn::ingest::{ingest_file, IngestOptions};
@@ -40,8 +40,9 @@ fn power_below(sp: &spectrum::Spectrum, f0: f64) -> f64 {
     sp.cumulative[k - 1] + w * (sp.cumulative[k] - sp.cumulative[k - 1])
 }
 
-/// Checks the knees and the shares of power below the seed's 3e-4 and 1e-3 1/m against the
-/// reference entry, to `rel` (knees) and `abs` (shares); prints them.
+/// Checks the knees and the shares of power below 3e-4 and 1e-3 1/m (the highway and city knees of
+/// Myklebust & Eriksson (2012), §4) against the reference entry, to `rel` (knees) and `abs`
+/// (shares); prints them.
 fn check_spectrum(label: &str, sp: &spectrum::Spectrum, r: &serde_json::Value, rel: f64, abs: f64) {
     let (b3, b1) = (power_below(sp, 3e-4), power_below(sp, 1e-3));
     println!(
@@ -314,7 +315,7 @@ fn metadata(path: &Path) -> std::collections::HashMap<String, String> {
     b.schema().metadata().clone().into()
 }
 
-/// The README's command sequence: profile, then the spectrum of its slope.
+/// The command sequence of a road study from a track: profile, then the spectrum of its slope.
 #[test]
 fn cli_profile_then_spectrum_from_profile() {
     let dir = tempfile::tempdir().unwrap();
@@ -491,7 +492,8 @@ fn write_gnss(path: &Path, fixes: &[Option<(f64, f64, f64)>]) {
     );
 }
 
-/// Runs `road profile` on `input`; asserts exit 2, no file left, and the message parts.
+/// Runs `road profile` on `input`; asserts exit 1 (an input it cannot use), no file left, and
+/// the message parts.
 fn assert_refused(input: &Path, parts: &[&str]) {
     let dir = input.parent().unwrap().join("out");
     std::fs::create_dir_all(&dir).unwrap();
@@ -503,7 +505,7 @@ fn assert_refused(input: &Path, parts: &[&str]) {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
     for p in parts {
         assert!(stderr.contains(p), "{p:?} not in {stderr}");
     }

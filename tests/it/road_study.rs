@@ -1,5 +1,5 @@
-//! Spatial spectra of road slope and studies over many roads (issue 5 point 2; seed 000 §4–§5):
-//! thread-count independence, knees of analytic cases, the seed's qualitative claim (city roads
+//! Spatial spectra of road slope and studies over many roads (Myklebust & Eriksson (2012), §4–§5):
+//! thread-count independence, knees of analytic cases, the paper's qualitative claim (city roads
 //! reach higher spatial frequencies than highways), the CLI outputs and bad input.
 
 use arrow::array::{AsArray, Float64Array};
@@ -163,8 +163,9 @@ fn road_study_sinusoidal_slope_has_its_knees_at_its_frequency() {
 
 #[test]
 fn road_study_city_roads_reach_higher_frequencies_than_highways() {
-    // Seed 000 §4: the city rules (steeper grades, R >= 300 m) give "a road with higher
-    // frequency content" than the highway rules (R >= 1250 m). Fixed seeds, so deterministic.
+    // Myklebust & Eriksson (2012), §4: the city rules (steeper grades, R >= 300 m) give "a road
+    // with higher frequency content" than the highway rules (R >= 1250 m). Fixed seeds, so
+    // deterministic.
     let hw = on_threads(2, &study_config("highway-se", 16, 30_000.0));
     let city = on_threads(2, &study_config("city-se", 16, 30_000.0));
     assert!(city.knee_50.p50 > 1.5 * hw.knee_50.p50);
@@ -281,7 +282,8 @@ fn road_study_bad_input_is_a_clear_error_and_leaves_nothing() {
             "rule file nowhere/x.toml",
         ),
         (vec!["--length-km", "-1"], "road length -1000 m"),
-        (vec!["--threads", "0"], "--threads must be at least 1"),
+        (vec!["--jobs", "0"], "--jobs must be at least 1"),
+        (vec!["--threads", "0"], "--jobs must be at least 1"),
     ] {
         // defaults for the options this case does not set
         let mut all = vec!["road", "study", "-o", &o_str];
@@ -312,9 +314,9 @@ fn road_study_bad_input_is_a_clear_error_and_leaves_nothing() {
 #[test]
 fn road_study_spectrum_reads_a_recorded_slope_on_its_distance_grid() {
     // `road spectrum` also takes slope_distance.parquet of `fleetdyn slope`. The fixture drive's
-    // sensor is quantised in 1 % steps (seed 000 §3): each step is a discontinuity whose f⁻²
-    // tail runs to the Nyquist frequency, so the 99 % knee lies far above the filter's
-    // f_lo = 2e-2 1/m while half of the power stays below its cut-off 4e-3 1/m.
+    // sensor is quantised in 1 % steps (Myklebust & Eriksson (2012), §3): each step is a
+    // discontinuity whose f⁻² tail runs to the Nyquist frequency, so the 99 % knee lies far above
+    // the filter's f_lo = 2e-2 1/m while half of the power stays below its cut-off 4e-3 1/m.
     let dir = tempfile::tempdir().unwrap();
     let slope_dir = dir.path().join("slope");
     let drive = crate::common::fixture("fixtures/drives/truck-0001.mcap");

@@ -1,6 +1,6 @@
-//! Synthetic roads (issue 5 point 1; seed 000 §4 eqs. (34)–(36), physics.md §2): determinism,
-//! rule compliance on long roads, elevation as the integral of slope, the analytic parabola of a
-//! single grade change, curves that do not fit, and bad input through the CLI.
+//! Synthetic roads (Myklebust & Eriksson (2012), §4, eqs. (34)–(36); docs/models/road.md):
+//! determinism, rule compliance on long roads, elevation as the integral of slope, the analytic
+//! parabola of a single grade change, curves that do not fit, and bad input through the CLI.
 
 use fleetdyn::road::rules::{bundled_names, RoadRules, RulesError};
 use fleetdyn::road::synth::{generate, half_length, Alignment, SynthError};

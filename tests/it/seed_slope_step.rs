@@ -1,5 +1,5 @@
-//! Seed 000 §3/§5 reproduced: a one-percentage-point slope step in 1st gear excites driveline
-//! shuffle; the same step after the spatial 4e-3 1/m low-pass does not.
+//! Myklebust & Eriksson (2012), §3 and §5, reproduced: a one-percentage-point slope step in 1st
+//! gear excites driveline shuffle; the same step after the spatial 4e-3 1/m low-pass does not.
 //!
 //! Set-up: 40 t truck (fixtures/vehicles/truck-40t.toml), 1st gear, clutch locked, engine-speed
 //! PI holding 1220 rpm (5 km/h), steady state on a flat road; the road climbs to 1 % at 200 m.
@@ -77,7 +77,7 @@ fn slope_step_excites_shuffle_and_the_spatial_filter_removes_it() {
     let v_filt = run(slope_filtered);
     let (e_raw, e_filt) = (shuffle_energy(&v_raw, fs), shuffle_energy(&v_filt, fs));
     let att_db = 10.0 * (e_filt / e_raw).log10();
-    // peak-to-peak of the band-passed speed after the step, for the README
+    // peak-to-peak of the band-passed speed after the step, for docs/models/road.md
     println!(
         "1 % slope step in 1st gear at {:.2} km/h: shuffle-band energy raw {e_raw:.3e}, filtered {e_filt:.3e} (m/s)^2 -> {att_db:.1} dB",
         v0 * 3.6

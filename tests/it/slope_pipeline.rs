@@ -1,4 +1,5 @@
-//! The slope stage on the fixture drives (seed 000 §5 figures, zero phase, the truth recovered).
+//! The slope stage on the fixture drives (the filter of Myklebust & Eriksson (2012), §5, zero
+//! phase, the truth recovered).
 //! The pipeline runner's tests (isolated failures, exit codes, atomic and deterministic outputs)
 //! are in `batch_pipeline.rs`.
 
@@ -33,7 +34,8 @@ fn seed_000_filter_figures() {
         &SlopeFilterConfig::default(),
     );
     // scipy.signal.sosfreqz of butter(3, 4e-3, fs=1) at 2e-2 1/m: -41.97 dB (fixtures/reference/
-    // slope_response.json); the seed quotes "about -42 dB" against a -30 dB requirement.
+    // slope_response.json); Myklebust & Eriksson (2012), §5, require -30 dB there and quote
+    // -40 dB for the 3rd order.
     assert!(
         (f.design_gain_at_stop_db - (-41.97)).abs() < 0.01,
         "{}",

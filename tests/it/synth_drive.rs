@@ -1,6 +1,6 @@
-//! Closed-loop synthetic drives (issue 5 point 4): driver + AMT + fast driveline + axle model,
-//! written as a CAN log. One 3 km city drive (city-se rules, 50 km/h design speed, a stop every
-//! 1 km and at the end) of the seed 002 diesel 6x2 truck.
+//! Closed-loop synthetic drives: driver + AMT + fast driveline + axle model, written as a CAN log.
+//! One 3 km city drive (city-se rules, 50 km/h design speed, a stop every 1 km and at the end) of
+//! the diesel variant of the axle-load thesis 6x2 truck.
 
 use crate::common::fixture;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, SynthDrive};

@@ -1,9 +1,8 @@
-//! Concealed effects in synthetic drives (issue 5 point 5): every catalogue effect is injected
-//! into the truth of the same 2 km city drive (seed 3) with a set magnitude and compared with
-//! the drive without it. Each test checks the effect's physics in what it changed — the
-//! sensors' signals, the truth trajectories or the energy balance — and that nothing leaks: the
-//! vehicle file written is the nominal one, the drive's files do not name the effect, and the
-//! answer file alone holds it.
+//! Concealed effects in synthetic drives: every catalogue effect is injected into the truth of the
+//! same 2 km city drive (seed 3) with a set magnitude and compared with the drive without it. Each
+//! test checks the effect's physics in what it changed — the sensors' signals, the truth
+//! trajectories or the energy balance — and that nothing leaks: the vehicle file written is the
+//! nominal one, the drive's files do not name the effect, and the answer file alone holds it.
 
 use crate::common::fixture;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};

@@ -1,7 +1,7 @@
-//! Synthetic drive logs for the bundled fixtures (issue 5 point 6): the wide fleet-portal and
-//! long J1939 exports, MCAP with LZ4 chunks, logger jitter, dropouts on chosen signals, the truth
-//! table, vehicles without axles, the road's own speed limits, and ids and start times of one's
-//! own. Drives of 1–3.5 km.
+//! Synthetic drive logs for the bundled fixtures: the wide fleet-portal and long J1939 exports,
+//! MCAP with LZ4 chunks, logger jitter, dropouts on chosen signals, the truth table, vehicles
+//! without axles, the road's own speed limits, and ids and start times of one's own. Drives of
+//! 1–3.5 km.
 
 use crate::common::fixture;
 use arrow::array::{Array, AsArray};

@@ -1,6 +1,6 @@
-//! Synthetic drives, issue 5 point 4 extras: engine brake and retarder before the service
-//! brake, the AMT clutch position channel, GNSS along the road, and roads read from files (a
-//! Parquet profile, the VECTO Long Haul cycle). Drives of 1–4 km of the seed 002 diesel 6x2.
+//! Synthetic drives, extras: engine brake and retarder before the service brake, the AMT clutch
+//! position channel, GNSS along the road, and roads read from files (a Parquet profile, the VECTO
+//! Long Haul cycle). Drives of 1–4 km of the diesel variant of the axle-load thesis 6x2.
 
 use crate::common::{f64s, fixture, write_parquet};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
@@ -707,7 +707,7 @@ fn bad_road_files_and_requests_are_typed_errors() {
     );
     assert_eq!(cli(&["--road-file", v, "--length-km", "1"]), Some(2));
     assert_eq!(cli(&["--rules", "city-se"]), Some(2));
-    // an unreadable file is an I/O failure (exit 1), not a usage error
+    // an unreadable road file is an input that cannot be used (exit 1), not a usage error
     let missing = dir.path().join("missing.parquet");
     assert_eq!(
         cli(&[

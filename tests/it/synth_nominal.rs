@@ -1,10 +1,10 @@
-//! Nominal reproduction of clean synthetic drives (diagnosis.md step 1): a drive the truth model
-//! makes without any injected effect, logged through the J1939 bus of `synth drive`, must be
-//! reproduced by fleetdyn's nominal simulations of the recording — the driveline
+//! Nominal reproduction of clean synthetic drives (docs/diagnosis/method.md, step 1): a drive the
+//! truth model makes without any injected effect, logged through the J1939 bus of `synth drive`,
+//! must be reproduced by fleetdyn's nominal simulations of the recording — the driveline
 //! (`validate_shuffle`, 30 s windows re-initialised from the measured state) and the axle model
-//! (`validate_axle`, recorded inputs, drive torque by the driveline's inverse dynamics) — to
-//! within what the bus's noise, quantisation and rates explain. Otherwise every clean drive of
-//! the diagnosis benchmark would show a spurious mismatch.
+//! (`validate_axle`, recorded inputs, drive torque by the driveline's inverse dynamics) — to within
+//! what the bus's noise, quantisation and rates explain. Otherwise every clean drive of the
+//! diagnosis benchmark would show a spurious mismatch.
 //!
 //! # Thresholds: an error budget from the bus, not from measured errors
 //! Every sensor figure is read from [`CanBus::j1939_truck`] (rate f, resolution q, noise σ,
@@ -39,12 +39,12 @@
 //! summed in quadrature (independent sources). The "what the window cannot resolve" terms are
 //! computed from the truth alone, never from the simulation under test.
 //!
-//! The slope input is the sensor as recorded (`road_slope`), not the seed 000 zero-phase spatial
+//! The slope input is the sensor as recorded (`road_slope`), not the road-slope zero-phase spatial
 //! filter: on the synthetic city roads (12 % grades joined by 300 m vertical curves) the filter's
-//! 250 m cut-off removes real grade changes — measured on a 5 km city-se drive (seed 0), slope
-//! RMSE 0.016 filtered against 0.0037 raw, and the driveline fit falls from 97 % to 88 %
-//! (vehicle speed) and from 94 % to 27 % (engine speed). That is the `slope_quantization`
-//! trade-off of the effect catalogue, not a nominal-model error.
+//! 250 m cut-off removes real grade changes — measured on a 5 km city-se drive (seed 0), slope RMSE
+//! 0.016 filtered against 0.0037 raw, and the driveline fit falls from 97 % to 88 % (vehicle speed)
+//! and from 94 % to 27 % (engine speed). That is the `slope_quantization` trade-off of the effect
+//! catalogue, not a nominal-model error.
 
 use crate::common::fixture;
 use fleetdyn::model::axle::{Axle, AxleParams};

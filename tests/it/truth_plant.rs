@@ -7,7 +7,7 @@
 
 use super::common::fixture;
 use fleetdyn::model::vehicle::VehicleFile;
-use fleetdyn::road::rng::Xoshiro256StarStar;
+use fleetdyn::rng::Xoshiro256StarStar;
 use fleetdyn::truth::clutch::ClutchMode;
 use fleetdyn::truth::effects::{apply, SensorSetup, CATALOGUE};
 use fleetdyn::truth::engine::{command, friction};
@@ -204,7 +204,7 @@ fn truth_plant_shuffle_mode_matches_its_linearisation() {
             "gear {}: linearised {fl:.4} Hz ζ {zl:.4}; simulated step {fs:.4} Hz ζ {zs:.4}",
             g + 1
         );
-        // the shuffle of a heavy truck in low gears lies in 1–5 Hz (physics.md §1)
+        // the shuffle of a heavy truck in low gears lies in 1–5 Hz (docs/models/driveline.md)
         assert!((0.5..6.0).contains(&fl), "frequency {fl}");
         // frequency within 1 %, damping ratio within 0.01 absolute: around a steady operating
         // point a 5 N·m step (0.2 % of full load) leaves second-order terms of the
@@ -239,8 +239,8 @@ fn plant_shuffle_at(g: usize, v: f64) -> (Option<(f64, f64)>, f64) {
     (m, lh)
 }
 
-/// The nominal model's shuffle (physics.md §1's 7-state open loop, `model::linear::linearize`:
-/// the lowest complex pair) in gear `gear` (1-based) at `v`.
+/// The nominal model's shuffle (the 7-state open loop of docs/models/driveline.md,
+/// `model::linear::linearize`: the lowest complex pair) in gear `gear` (1-based) at `v`.
 fn nominal_shuffle_at(gear: usize, v: f64) -> (f64, f64) {
     let vf = truck();
     let d = vf.driveline.as_ref().unwrap();
@@ -976,7 +976,8 @@ fn truth_plant_worn_clutch_city_drive_reaches_the_road_end() {
         d.events
     );
     let steepest = launches.iter().fold(0.0f64, |m, &s| m.max(s));
-    // several launches, one of them up a steep grade (the one that used to hold the truck)
+    // several launches, one of them up a steep grade (where a clutch of too little capacity
+    // holds the truck unless the AMT learns the capacity)
     assert!(launches.len() >= 3 && steepest > 0.08, "{launches:?}");
     // the driver's last stop point is the road end − 5 m; within 10 m, as for a nominal drive
     assert!((x_end - (4900.0 - 5.0)).abs() < 10.0, "ended at {x_end} m");

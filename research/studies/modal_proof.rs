@@ -1,0 +1,236 @@
+//! Measures the modal comparison ([`fleetdyn::diagnose::modal`]) on the drives of a proof run
+//! (`fleetdyn prove`), read as the proof reads them (`drive.parquet`, the canonical log): per
+//! case the hidden effect (from `answers/`, read only to label the table), the per-gear
+//! measured and simulated shuffle frequencies, `Δf`, `Δσ`, the linearised
+//! locked-clutch mode of the gear, and the drive-level test.
+//!
+//! ```text
+//! cargo run --release --manifest-path research/Cargo.toml --bin modal_proof -- DIR [--fit-kd] [case-0007 …]
+//! ```
+//!
+//! `--fit-kd`: also fits the drive-shaft stiffness `k_d` (`driveline_compliance`) so that the
+//! simulated shuffle frequencies match the measured ones (the mean relative shift of the
+//! engagements is brought to zero by a secant search on `ln k_d`, each step one simulation of
+//! the extended model) and prints it next to the hidden value.
+
+use fleetdyn::diagnose::extended::Theta;
+use fleetdyn::diagnose::modal::{
+    compare_modes, fit_shaft_stiffness, summarise, ModalComparison, ModalConfig, Reference,
+};
+use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::model::catalogue::Effect;
+use std::path::PathBuf;
+
+#[path = "common/proof_dir.rs"]
+#[allow(dead_code)] // the studies share it; this one uses a part
+mod proof_dir;
+
+fn shift(c: &ModalComparison) -> Option<(f64, usize)> {
+    c.test.map(|t| (t.mean_shift, t.n))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let dir = PathBuf::from(
+        args.next()
+            .ok_or("usage: modal_proof DIR [--fit-kd] [case…]")?,
+    );
+    let mut fit_kd = false;
+    let mut cases: Vec<String> = Vec::new();
+    for a in args {
+        if a == "--fit-kd" {
+            fit_kd = true;
+        } else {
+            cases.push(a);
+        }
+    }
+    let cases = proof_dir::cases(&dir, cases)?;
+    let cfg = ModalConfig::default();
+    let mut table = Vec::new();
+    for case in &cases {
+        let answer = proof_dir::answer(&dir, case);
+        let label = answer.label;
+        let (vf, log) = proof_dir::load(&dir, case)?;
+        let setup = Setup::new(&log, &vf)?;
+        let Some(model) = setup.longitudinal_model(&log)? else {
+            println!("{case} [{label}]: no longitudinal model");
+            continue;
+        };
+        let sim = model.simulate(&setup.nominal)?;
+        let dl = &setup.nominal_truth.driveline;
+        let t_modal = std::time::Instant::now();
+        let by_sim = compare_modes(
+            &log,
+            model.measured_engine_speed(),
+            &sim.engine_speed,
+            Some((dl, &setup.ratios, 0.0)),
+            Reference::Simulated,
+            &cfg,
+        );
+        let by_lin = summarise(by_sim.engagements.clone(), Reference::Linearised, &cfg);
+        let modal_s = t_modal.elapsed().as_secs_f64();
+        let n_eng = by_sim.engagements.len();
+        let n_meas = by_sim
+            .engagements
+            .iter()
+            .filter(|e| e.measured.is_ok())
+            .count();
+        let n_sim = by_sim
+            .engagements
+            .iter()
+            .filter(|e| e.simulated.is_ok())
+            .count();
+        // engagements whose analysis window holds a re-initialisation of the windowed
+        // simulation (the simulated ringing restarts there)
+        let starts = fleetdyn::diagnose::extended::window_starts(&log, 20.0);
+        let n_restart = by_sim
+            .engagements
+            .iter()
+            .filter(|e| {
+                let a = e.engagement.t_close_s + cfg.window_start_s;
+                let b = e.engagement.t_close_s + cfg.window_end_s;
+                starts.iter().any(|&s| s > a && s < b)
+            })
+            .count();
+        println!(
+            "{case} [{label}]: engagements {n_eng}, measured accepted {n_meas}, simulated accepted {n_sim}, simulation restarted inside the window {n_restart}, modal step {modal_s:.3} s over {:.0} s of drive", log.duration_s()
+        );
+        let fmt_test = |c: &ModalComparison| {
+            c.test.map_or("no test".to_string(), |t| {
+                format!(
+                    "mean r {:+.2}% ± {:.2}% (n {}), t {:+.1}, p {:.1e}, flagged {}",
+                    100.0 * t.mean_shift,
+                    100.0 * t.shift_se,
+                    t.n,
+                    t.t,
+                    t.p_value,
+                    t.flagged
+                )
+            })
+        };
+        for c in [&by_sim, &by_lin] {
+            println!("  vs {:?}: {}", c.reference, fmt_test(c));
+            for g in &c.gears {
+                println!(
+                    "    gear {:2} n {}: f meas {:.2} ref {:.2} Hz, Δf {:+.3} (sd {:.3}) Hz, Δσ {:+.2} (sd {:.2}) 1/s, p_holm {:.1e}",
+                    g.gear,
+                    g.n,
+                    g.measured_hz,
+                    g.reference_hz,
+                    g.delta_f_hz,
+                    g.delta_f_sd_hz,
+                    g.delta_decay_per_s,
+                    g.delta_decay_sd_per_s,
+                    g.p_holm
+                );
+            }
+        }
+        let list: Vec<String> = by_sim
+            .engagements
+            .iter()
+            .map(|e| format!("{:.1} s g{}", e.engagement.t_close_s, e.engagement.gear))
+            .collect();
+        println!("    engagements: {}", list.join(", "));
+        for e in &by_sim.engagements {
+            if let Err(m) = &e.measured {
+                println!(
+                    "    measured rejected: t {:.1} s gear {}: {m:?}",
+                    e.engagement.t_close_s, e.engagement.gear
+                );
+            }
+        }
+        let k0 = setup.nominal.get(Effect::DrivelineCompliance);
+        let hidden = answer
+            .effect
+            .filter(|(e, _)| *e == Effect::DrivelineCompliance)
+            .map(|(_, t)| t);
+        let kfit = fit_shaft_stiffness(&by_sim.engagements, dl, &setup.ratios, &cfg);
+        if let Some(k) = kfit {
+            println!(
+                "  k_d (linearised modes): {:.0} N·m/rad ({:+.1} % of nominal {k0:.0}), 95 % CI {:.0}–{:.0}, n {}, rms ln residual {:.3}{}",
+                k.k_d_nm_per_rad,
+                100.0 * (k.k_d_nm_per_rad / k0 - 1.0),
+                k.ci95_nm_per_rad.0,
+                k.ci95_nm_per_rad.1,
+                k.n,
+                k.rms_log_residual,
+                hidden.map_or(String::new(), |t| format!(
+                    "; hidden {t:.0} ({:+.1} %), error {:+.1} % of the hidden change",
+                    100.0 * (t / k0 - 1.0),
+                    100.0 * (k.k_d_nm_per_rad - t) / (t - k0)
+                ))
+            );
+        }
+        let mut k_sim = None;
+        if fit_kd {
+            let at = |k: f64| -> Result<Option<(f64, usize)>, Box<dyn std::error::Error>> {
+                let mut th: Theta = setup.nominal;
+                th.set(Effect::DrivelineCompliance, k);
+                let s = model.simulate(&th)?;
+                Ok(shift(&compare_modes(
+                    &log,
+                    model.measured_engine_speed(),
+                    &s.engine_speed,
+                    None,
+                    Reference::Simulated,
+                    &cfg,
+                )))
+            };
+            // secant on x = ln(k/k0) for g(x) = mean relative shift = 0
+            if let Some((g_nom, _)) = shift(&by_sim) {
+                let (mut x0, mut g0) = (0.0, g_nom);
+                let mut x1 = 2.0 * g0; // f ∝ √k_d at most: a first step of twice the shift
+                let mut g1 = at(k0 * x1.exp())?.map_or(f64::NAN, |s| s.0);
+                let mut steps = 1;
+                while steps < 8 && g1.is_finite() && g1.abs() > 1e-3 && (g1 - g0).abs() > 1e-12 {
+                    let x2 = x1 - g1 * (x1 - x0) / (g1 - g0);
+                    x0 = x1;
+                    g0 = g1;
+                    x1 = x2.clamp(-1.5, 1.5);
+                    g1 = at(k0 * x1.exp())?.map_or(f64::NAN, |s| s.0);
+                    steps += 1;
+                }
+                let k = k0 * x1.exp();
+                k_sim = Some(k);
+                println!(
+                    "  k_d (simulated modes): {k:.0} N·m/rad ({:+.1} %), remaining shift {:+.2} %, {steps} simulations{}",
+                    100.0 * (k / k0 - 1.0),
+                    100.0 * g1,
+                    hidden.map_or(String::new(), |t| format!(
+                        "; error {:+.1} % of the hidden change",
+                        100.0 * (k - t) / (t - k0)
+                    ))
+                );
+            }
+        }
+        let cell = |c: &ModalComparison| {
+            c.test.map_or("-".to_string(), |t| {
+                format!(
+                    "{:+.1}% p {:.0e}{}",
+                    100.0 * t.mean_shift,
+                    t.p_value,
+                    if t.flagged { " FLAG" } else { "" }
+                )
+            })
+        };
+        table.push(format!(
+            "| {case} | {label} | {n_eng}/{n_meas} | {} | {} | {} | {} |",
+            cell(&by_sim),
+            cell(&by_lin),
+            kfit.map_or("-".into(), |k| format!(
+                "{:+.1}% [{:+.0}, {:+.0}]",
+                100.0 * (k.k_d_nm_per_rad / k0 - 1.0),
+                100.0 * (k.ci95_nm_per_rad.0 / k0 - 1.0),
+                100.0 * (k.ci95_nm_per_rad.1 / k0 - 1.0)
+            )),
+            k_sim.map_or("-".into(), |k| format!("{:+.1}%", 100.0 * (k / k0 - 1.0)))
+        ));
+    }
+    println!();
+    println!("| case | hidden | engagements/accepted | vs simulated: mean Δf/f, p | vs linearised: mean Δf/f, p | k_d (linearised) [95 % CI] | k_d (simulated) |");
+    println!("|---|---|---|---|---|---|---|");
+    for r in table {
+        println!("{r}");
+    }
+    Ok(())
+}

@@ -1,0 +1,149 @@
+//! Argument groups and value enums shared by several commands, and their resolution into
+//! library settings.
+
+use crate::commands::failure::{usage, usage_msg, Failure};
+use clap::{Args, ValueEnum};
+use fleetdyn::ingest::{IngestOptions, TimeRepair};
+use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::pipeline::ingest_stage::IngestConfig;
+use fleetdyn::schema::Stage;
+use fleetdyn::signal::distance::{DistanceSource, ResampleConfig, ReversePolicy};
+use std::path::{Path, PathBuf};
+
+/// How a recording is read into the canonical drive log.
+#[derive(Args, Debug)]
+pub struct IngestArgs {
+    /// Mapping file (schemas/mappings/*.toml); chosen automatically when absent.
+    #[arg(long)]
+    pub mapping: Option<PathBuf>,
+    /// Stages the drive must be usable for (their required columns are checked), comma
+    /// separated: ingest, resample, slope, driveline, axle.
+    #[arg(long, value_delimiter = ',', default_value = "ingest")]
+    pub stages: Vec<String>,
+    /// Time base for multi-rate sources, Hz (default: the fastest channel's rate).
+    #[arg(long)]
+    pub time_base_hz: Option<f64>,
+    /// Longest accepted run of missing values in a required column, s.
+    #[arg(long, default_value_t = 2.0)]
+    pub max_nan_run_s: f64,
+    /// What to do when time goes backwards.
+    #[arg(long, value_enum, default_value = "error")]
+    pub time_repair: TimeRepairArg,
+}
+
+impl IngestArgs {
+    /// The ingest settings and the options they give for `extra_stages` beside `--stages`,
+    /// with the vehicle file (when given) bounding the gear column.
+    pub fn resolve(
+        &self,
+        extra_stages: &[Stage],
+        vehicle: Option<&VehicleFile>,
+    ) -> Result<(IngestConfig, IngestOptions), Failure> {
+        let mut stages = Vec::new();
+        for s in &self.stages {
+            stages.push(Stage::parse(s).ok_or_else(|| {
+                usage_msg(format_args!(
+                    "unknown stage {s:?} (ingest, resample, slope, driveline, axle)"
+                ))
+            })?);
+        }
+        stages.extend_from_slice(extra_stages);
+        let cfg = IngestConfig {
+            mapping: self.mapping.clone(),
+            time_base_hz: self.time_base_hz,
+            max_nan_run_s: self.max_nan_run_s,
+            time_repair: match self.time_repair {
+                TimeRepairArg::Error => TimeRepair::Error,
+                TimeRepairArg::Sort => TimeRepair::Sort,
+            },
+        };
+        let opts = cfg.options(&stages, vehicle).map_err(usage)?;
+        Ok((cfg, opts))
+    }
+}
+
+/// What to do when time goes backwards.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum TimeRepairArg {
+    /// Fail the drive.
+    Error,
+    /// Sort the samples by time.
+    Sort,
+}
+
+/// The distance grid.
+#[derive(Args, Debug)]
+pub struct ResampleArgs {
+    /// Distance grid step, m.
+    #[arg(long, default_value_t = 1.0)]
+    pub step_m: f64,
+    /// Distance source: auto (odometer if fine enough, else the speed integral), odometer,
+    /// speed.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub distance_source: DistanceSourceArg,
+    /// Reverse motion: error (fail the drive) or exclude (no distance, collapsed).
+    #[arg(long, value_enum, default_value = "error")]
+    pub reverse: ReverseArg,
+}
+
+impl ResampleArgs {
+    /// The resampling settings.
+    pub fn config(&self) -> ResampleConfig {
+        ResampleConfig {
+            step_m: self.step_m,
+            distance_source: match self.distance_source {
+                DistanceSourceArg::Auto => DistanceSource::Auto,
+                DistanceSourceArg::Odometer => DistanceSource::Odometer,
+                DistanceSourceArg::Speed => DistanceSource::Speed,
+            },
+            reverse: match self.reverse {
+                ReverseArg::Error => ReversePolicy::Error,
+                ReverseArg::Exclude => ReversePolicy::Exclude,
+            },
+            ..Default::default()
+        }
+    }
+}
+
+/// Where the travelled distance comes from.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum DistanceSourceArg {
+    /// The odometer when it is fine enough, else the speed integral.
+    Auto,
+    /// The odometer.
+    Odometer,
+    /// The integral of the vehicle speed.
+    Speed,
+}
+
+/// What to do with reverse motion.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ReverseArg {
+    /// Fail the drive.
+    Error,
+    /// Exclude it: no distance, the samples collapsed.
+    Exclude,
+}
+
+/// The road-slope input of a simulation.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum SlopeInputArg {
+    /// The sensor as recorded.
+    Raw,
+    /// Zero-phase filtered in distance (Myklebust & Eriksson 2012, §5).
+    Filtered,
+}
+
+/// Loads a vehicle file; a file that cannot be read or parsed is a configuration error.
+pub fn load_vehicle(path: &Path) -> Result<VehicleFile, Failure> {
+    VehicleFile::load(path).map_err(usage)
+}
+
+/// Worker threads: `--jobs N` (at least 1), or all cores.
+pub fn jobs(jobs: Option<usize>) -> Result<usize, Failure> {
+    match jobs {
+        Some(0) => Err(usage_msg("--jobs must be at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
