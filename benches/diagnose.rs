@@ -16,9 +16,10 @@
 #[path = "common/hour_drive.rs"]
 mod hour_drive;
 
-use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
+use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::report::diagnosis_files::write_outputs;
 use hour_drive::{hour_drive, HOUR_DRIVE_KM};
 use std::time::Instant;
 

@@ -12,9 +12,10 @@
 //! `report.md`, residual plots, `detail.json`) into `out/examples/diagnose/<drive_id>/`, and
 //! reads `diagnosis.json` back as any other program would.
 
-use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
+use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
+use fleetdyn::report::diagnosis_files::write_outputs;
 use fleetdyn::schema::{drive_log, Stage};
 use std::error::Error;
 use std::path::{Path, PathBuf};

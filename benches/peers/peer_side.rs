@@ -52,10 +52,11 @@ mod hour_drive;
 mod pipeline_io;
 
 use arrow::record_batch::RecordBatch;
-use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
+use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage;
+use fleetdyn::report::diagnosis_files::write_outputs;
 use fleetdyn::signal::{butter, sosfiltfilt, welch, BandType, EdgeMode, WelchConfig};
 use fleetdyn::sim::fast::FastDriveline;
 use fleetdyn::sim::hybrid::{

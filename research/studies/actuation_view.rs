@@ -10,7 +10,8 @@
 //! ```text
 //! cargo run --release --manifest-path research/Cargo.toml --bin actuation_view -- DIR case-0009 case-0016 …
 //! ```
-use fleetdyn::diagnose::compare::{self, Compared};
+use fleetdyn::diagnose::compare::Compared;
+use fleetdyn::diagnose::rows;
 use fleetdyn::diagnose::extended::Theta;
 use fleetdyn::diagnose::noise::{noise_floors_with, NoiseConfig, NoiseError};
 use fleetdyn::diagnose::setup::Setup;

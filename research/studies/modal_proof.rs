@@ -14,9 +14,8 @@
 //! the extended model) and prints it next to the hidden value.
 
 use fleetdyn::diagnose::extended::Theta;
-use fleetdyn::diagnose::modal::{
-    compare_modes, fit_shaft_stiffness, summarise, ModalComparison, ModalConfig, Reference,
-};
+use fleetdyn::diagnose::modal::{compare_modes, summarise, ModalComparison, ModalConfig, Reference};
+use fleetdyn::diagnose::shaft_stiffness::fit_shaft_stiffness;
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::model::catalogue::Effect;
 use std::path::PathBuf;

@@ -7,7 +7,7 @@
 //! ```text
 //! cargo run --release --manifest-path research/Cargo.toml --bin slope_cure -- DIR case-0004 case-0026 case-0048
 //! ```
-use fleetdyn::diagnose::compare;
+use fleetdyn::diagnose::rows;
 use fleetdyn::diagnose::extended::{LongitudinalConfig, LongitudinalModel, SlopeGrid};
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::signal::dequantise::DequantiseConfig;

@@ -26,7 +26,7 @@
 //! cargo run --release --manifest-path research/Cargo.toml --bin truth_residual -- DIR case-0060 100 130
 //! cargo run --release --manifest-path research/Cargo.toml --bin truth_residual -- DIR case-0018 0 8 axle
 //! ```
-use fleetdyn::diagnose::compare;
+use fleetdyn::diagnose::rows;
 use fleetdyn::diagnose::extended::{AxleModel, LongitudinalConfig, LongitudinalModel};
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::table::DriveLog;

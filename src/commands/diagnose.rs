@@ -2,10 +2,11 @@
 
 use super::failure::{input, io, model, Failure};
 use super::progress::Progress;
-use fleetdyn::diagnose::run::{diagnose, write_outputs, DiagnoseConfig, DiagnoseError};
+use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError};
 use fleetdyn::ingest::IngestOptions;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
+use fleetdyn::report::diagnosis_files::write_outputs;
 use std::path::PathBuf;
 
 /// A resolved `diagnose`.
@@ -27,11 +28,10 @@ pub struct Job {
 }
 
 /// A recording the models cannot be bound to is an input error; a failed noise floor, locate
-/// or fit a model error; a failed write an io error.
+/// or fit a model error.
 fn category(e: DiagnoseError) -> Failure {
     match e {
         DiagnoseError::Setup(_) => input(e),
-        DiagnoseError::Output(_) | DiagnoseError::Plot(_) | DiagnoseError::Io { .. } => io(e),
         _ => model(e),
     }
 }
@@ -53,7 +53,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
         job.vehicle_file.display(),
         job.diagnose.max_findings
     );
-    let w = write_outputs(&job.output, &d, &ing.log, &fp).map_err(category)?;
+    let w = write_outputs(&job.output, &d, &ing.log, &fp).map_err(io)?;
     let dg = &d.diagnosis;
     say!(
         "{}: {:.0} s of drive diagnosed in {:.1} s: {}",

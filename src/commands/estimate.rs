@@ -3,7 +3,8 @@
 
 use super::failure::{io, usage, Failure};
 use fleetdyn::io::AtomicFile;
-use fleetdyn::model::axle_measurement::{estimate, Measurements};
+use fleetdyn::model::axle_estimate::estimate;
+use fleetdyn::model::axle_measurement::Measurements;
 use fleetdyn::model::vehicle::{VehicleError, VehicleFile};
 use std::path::PathBuf;
 

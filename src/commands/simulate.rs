@@ -2,6 +2,7 @@
 //! validated against the recording.
 
 use super::failure::{input, io, model, Failure};
+use super::progress::Progress;
 use fleetdyn::ingest::IngestOptions;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::axle_stage::{self, AxleStageConfig, AxleStageError, LongitudinalSource};
@@ -119,8 +120,10 @@ fn shuffle(j: ShuffleJob) -> Result<(), Failure> {
     let p = v.driveline(&j.vehicle_file).map_err(input)?;
     let mut ing = ingest_stage::run(&j.drive, &j.opts).map_err(input)?;
     let slope = slope_column(&mut ing.log, j.filtered_slope)?;
+    let spinner = Progress::spinner("simulating the driveline");
     let val = validate_shuffle(&ing.log, p, &v.gearbox.ratios, slope, &j.validation)
         .map_err(validation_failure)?;
+    drop(spinner);
     let fp = format!(
         "{}\n{}",
         j.cfg.fingerprint(&j.opts),
@@ -152,6 +155,7 @@ fn axle(j: AxleJob) -> Result<(), Failure> {
         longitudinal: j.longitudinal,
         slope_column: slope.map(String::from),
     };
+    let spinner = Progress::spinner("simulating the axle loads");
     let val = axle_stage::run(&ing.log, v, &j.vehicle_file, &scfg).map_err(|e| match e {
         // a vehicle file without the section the mode needs is a configuration error
         AxleStageError::Vehicle(_) => super::failure::usage(e),
@@ -159,6 +163,7 @@ fn axle(j: AxleJob) -> Result<(), Failure> {
         AxleStageError::Coupling { .. } => model(e),
         AxleStageError::Validation(_) => input(e),
     })?;
+    drop(spinner);
     let fp = format!("{}\n{}", j.cfg.fingerprint(&j.opts), scfg.fingerprint(p));
     axle_stage::write(&j.output, &ing.log, &val, p.gravity_m_per_s2, &fp).map_err(io)?;
     say!(

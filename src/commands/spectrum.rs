@@ -5,7 +5,7 @@ use fleetdyn::ingest::IngestOptions;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
 use fleetdyn::pipeline::resample_stage;
 use fleetdyn::report::spectrum;
-use fleetdyn::road::profile::read_profile_column;
+use fleetdyn::road::profile_table::read_profile_column;
 use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig};
 use std::path::PathBuf;
 

@@ -279,7 +279,7 @@ pub fn fit_tyre_share(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64
 mod tests {
     use super::*;
 
-    use crate::diagnose::modal::tests::vehicle;
+    use crate::diagnose::linearised_mode::tests::vehicle;
 
     #[test]
     fn the_simulated_channel_follows_stiffness_and_mass_on_its_rows_only() {

@@ -155,7 +155,7 @@ pub fn feature(t: &[f64], w: &[f64], v: &[f64], t0: f64, direction: f64, g: f64)
 }
 
 /// Rms error of the recorded column `name` (noise and quantisation, the sensor estimate of
-/// step 2's noise floor: [`crate::signal::sensor_noise::estimate_sensor_noise`]'s `sigma_raw`); 0 when it
+/// step 2's noise floor: [`crate::signal::sensor_noise_estimate::estimate_sensor_noise`]'s `sigma_raw`); 0 when it
 /// cannot be estimated (the floor then carries the weight alone).
 fn sensor_rms(log: &DriveLog, name: &str) -> f64 {
     let (Some(s), Ok(dt)) = (
@@ -164,7 +164,7 @@ fn sensor_rms(log: &DriveLog, name: &str) -> f64 {
     ) else {
         return 0.0;
     };
-    crate::signal::sensor_noise::estimate_sensor_noise(
+    crate::signal::sensor_noise_estimate::estimate_sensor_noise(
         &s.name,
         &s.unit,
         &s.values,
@@ -292,7 +292,7 @@ pub fn simulate(samples: &[ReversalSample], t: &[f64], w: &[f64], v: &[f64]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::modal::tests::vehicle;
+    use crate::diagnose::linearised_mode::tests::vehicle;
     use crate::table::Signal;
 
     const DT: f64 = 0.02;

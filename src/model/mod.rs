@@ -1,6 +1,8 @@
 //! Vehicle models and their parameter files.
 
 pub mod axle;
+pub mod axle_estimate;
+pub mod axle_estimate_output;
 pub mod axle_estimation;
 pub mod axle_measurement;
 pub mod catalogue;

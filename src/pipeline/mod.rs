@@ -5,6 +5,9 @@
 
 pub mod axle_stage;
 pub mod dataset;
+pub mod drive_job;
+pub mod drive_stages;
+pub mod drive_tables;
 pub mod ingest_stage;
 pub mod inputs;
 pub mod record;
@@ -13,4 +16,6 @@ pub mod run;
 pub mod run_report;
 pub mod slope_stage;
 pub mod spec;
+pub mod spec_check;
+pub mod spec_sections;
 pub mod vehicles;

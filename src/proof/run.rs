@@ -70,7 +70,8 @@ enum CaseOutcome {
 /// Generates, diagnoses blind and scores one case; the diagnosis is written to
 /// `out/diagnoses/case-NNNN/`.
 fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> CaseOutcome {
-    use crate::diagnose::run::{diagnose, write_outputs, DiagnoseConfig};
+    use crate::diagnose::run::{diagnose, DiagnoseConfig};
+    use crate::report::diagnosis_files::write_outputs;
     let fail = |stage, error: String| {
         CaseOutcome::Failed(FailedCase {
             index: case.index,

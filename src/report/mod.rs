@@ -7,6 +7,7 @@ pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
 pub mod diagnosis;
+pub mod diagnosis_files;
 mod ingest_summary;
 pub mod road_plot;
 pub mod road_spectra;

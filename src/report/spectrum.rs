@@ -152,7 +152,7 @@ pub fn of_distance_log(
 }
 
 /// Spectrum of a signal already on a uniform distance grid of `step_m` (frequency in 1/m), e.g.
-/// a column of a road profile ([`crate::road::profile::read_profile_column`]). The signal must
+/// a column of a road profile ([`crate::road::profile_table::read_profile_column`]). The signal must
 /// be gap-free.
 ///
 /// # Errors

@@ -13,12 +13,17 @@
 //! - [`synth`]: the generator — constant grades joined by parabolic vertical curves.
 //! - [`road_table`]: road profiles as Parquet, and reading a slope column on a distance grid.
 //! - [`study`]: Welch spectra of slope, knees, and studies over many random roads.
-//! - [`profile`], [`vdri`]: road profiles from real tracks (GNSS fixes, VECTO driving cycles).
+//! - [`profile`], [`gnss_profile`], [`vdri`]: road profiles from real tracks (GNSS fixes, VECTO
+//!   driving cycles); [`wgs84`]: the distance between GNSS fixes; [`profile_table`]: those
+//!   profiles as Parquet.
 
+pub mod gnss_profile;
 pub mod profile;
+pub mod profile_table;
 pub mod road_table;
 pub mod rules;
 pub mod slope_filter;
 pub mod study;
 pub mod synth;
 pub mod vdri;
+pub mod wgs84;

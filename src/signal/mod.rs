@@ -23,6 +23,7 @@ mod filtfilt;
 mod interp;
 pub mod quantization;
 pub mod sensor_noise;
+pub mod sensor_noise_estimate;
 mod sos;
 mod spectrum;
 pub mod stats;

@@ -19,7 +19,14 @@
 
 pub mod amt;
 pub mod can;
+pub mod can_bus;
+pub mod can_error;
+pub mod can_mcap;
+pub mod can_sample;
 pub mod drive;
+pub mod drive_axles;
+pub mod drive_error;
+pub mod drive_loop;
 pub mod driver;
 pub mod effects;
 pub mod export;

@@ -31,7 +31,7 @@
 //!
 //! # Receiver
 //! A receiver's error is correlated over tens of seconds (atmosphere, multipath; measured on
-//! the car drive, see [`crate::road::profile`]) and comes with a little white noise. Its
+//! the car drive, see [`crate::road::gnss_profile`]) and comes with a little white noise. Its
 //! readings are the true position plus three independent first-order Gauss–Markov errors in
 //! time — north and east with σ [`GnssConfig::horizontal_error_sigma_m`], up with σ
 //! [`GnssConfig::vertical_error_sigma_m`], all with time constant
@@ -47,7 +47,7 @@
 
 use super::can::{CanChannel, CanMessage, Dropouts, TorqueReference};
 use crate::rng::Xoshiro256StarStar;
-use crate::road::profile::{WGS84_A_M, WGS84_F};
+use crate::road::wgs84::{WGS84_A_M, WGS84_F};
 use std::f64::consts::TAU;
 use thiserror::Error;
 
@@ -452,7 +452,7 @@ pub fn gnss_message(cfg: &GnssConfig) -> CanMessage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::road::profile::chord_distance_m;
+    use crate::road::wgs84::chord_distance_m;
 
     #[test]
     fn curves_never_tighter_than_the_minimum_radius_and_steps_keep_their_length() {

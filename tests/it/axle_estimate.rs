@@ -5,8 +5,9 @@
 
 use crate::common::fixture;
 use fleetdyn::model::axle::{Axle, AxleParams};
+use fleetdyn::model::axle_estimate::estimate;
 use fleetdyn::model::axle_estimation::EstimationError;
-use fleetdyn::model::axle_measurement::{estimate, MeasurementError, Measurements};
+use fleetdyn::model::axle_measurement::{MeasurementError, Measurements};
 use fleetdyn::model::vehicle::VehicleFile;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -6,11 +6,11 @@
 use crate::common::*;
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::report::spectrum;
-use fleetdyn::road::profile::{
-    gnss_profile, gnss_profile_of, read_profile_column, GnssProfileConfig, ProfileError,
-    ProfileSource, RoadProfile, WGS84_A_M, WGS84_F,
-};
+use fleetdyn::road::gnss_profile::{gnss_profile, gnss_profile_of};
+use fleetdyn::road::profile::{GnssProfileConfig, ProfileError, ProfileSource, RoadProfile};
+use fleetdyn::road::profile_table::read_profile_column;
 use fleetdyn::road::vdri::{cycle_profile, read_vdri};
+use fleetdyn::road::wgs84::{WGS84_A_M, WGS84_F};
 use fleetdyn::table::{DriveLog, DriveMeta, Signal};
 use std::path::Path;
 use std::process::Command;

@@ -4,7 +4,8 @@
 
 use crate::common::{f64s, fixture, write_parquet};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
-use fleetdyn::road::profile::{pearson_r, read_profile_column};
+use fleetdyn::road::gnss_profile::pearson_r;
+use fleetdyn::road::profile_table::read_profile_column;
 use fleetdyn::synth::drive::{
     simulate_axles, synth_drive, synth_drive_on, DriveConfig, DriveError, SynthDrive,
     DRIVE_START_NS,

@@ -22,6 +22,9 @@ pub mod j1939;
 pub mod mapping;
 pub mod mcap_frames;
 pub mod mdf4;
+mod mdf4_blocks;
+mod mdf4_groups;
+mod mdf4_records;
 pub mod mdf4_write;
 pub mod session;
 

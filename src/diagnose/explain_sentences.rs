@@ -1,0 +1,228 @@
+//! The plain sentences of step 3 of the diagnosis, explain (docs/diagnosis/method.md): a
+//! finding's sentence (what is wrong by how much, its fingerprint, and the held-out error of the
+//! signal it improves most) and the sentence of an estimate consistent with the vehicle file.
+//!
+//! Numbers are written with three significant figures; parameters in the catalogue's SI units
+//! (angles in degrees and grades in % where the text says so).
+
+use super::explanation::ParameterEstimate;
+use super::signal_fits::SignalMetrics;
+use crate::model::catalogue::{Domain, Effect};
+use std::collections::BTreeMap;
+
+fn signal_words(name: &str) -> &str {
+    match name {
+        "vehicle_speed" => "speed",
+        "engine_speed" => "engine speed",
+        "shuffle_frequency" => "shuffle frequency (after clutch engagements)",
+        "reversal_relative_speed" => "engine-against-wheel speed at torque reversals",
+        "bellow_pressure_front" => "front bellow pressure",
+        "bellow_pressure_rear" => "rear bellow pressure",
+        "bellow_pressure_tag" => "tag bellow pressure",
+        other => other,
+    }
+}
+
+/// `x` with three significant figures (no exponent between 1e-4 and 1e6).
+fn num(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{x:.2e}");
+    }
+    let decimals = (2 - mag).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+/// The plain sentence of an estimate within the vehicle file's tolerance: "mass_kg = 40800 kg
+/// (95 % CI 40500 to 41100 kg), within the vehicle file's 40000 kg ± 3 %".
+pub(super) fn consistent_sentence(
+    e: Effect,
+    nominal: f64,
+    est: &ParameterEstimate,
+    tol: crate::model::catalogue::Tolerance,
+) -> String {
+    use crate::model::catalogue::Tolerance;
+    let unit = if e.unit() == "1" {
+        String::new()
+    } else {
+        format!(" {}", e.unit())
+    };
+    let band = match tol {
+        Tolerance::Relative(r) => format!("{}{unit} ± {} %", num(nominal), num(100.0 * r)),
+        Tolerance::Absolute(a) => format!("{}{unit} ± {}{unit}", num(nominal), num(a)),
+        Tolerance::None => format!("{}{unit}", num(nominal)),
+    };
+    format!(
+        "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}: consistent \
+         with the file, not named",
+        e.parameter(),
+        num(est.value),
+        num(est.ci_low),
+        num(est.ci_high)
+    )
+}
+
+/// The plain sentence of a finding: what is wrong by how much, its fingerprint, and the
+/// held-out RMSE of the signal it improves most.
+pub(super) fn sentence(
+    e: Effect,
+    nominal: f64,
+    est: &ParameterEstimate,
+    met: &BTreeMap<String, SignalMetrics>,
+    ambiguous: &[&'static str],
+) -> String {
+    use Effect::*;
+    let v = est.value;
+    let unit = if e.unit() == "1" {
+        String::new()
+    } else {
+        format!(" {}", e.unit())
+    };
+    let ci = format!(
+        "{} = {}{unit} (95 % CI {} to {}{unit})",
+        e.parameter(),
+        num(v),
+        num(est.ci_low),
+        num(est.ci_high)
+    );
+    let pct = if nominal != 0.0 {
+        100.0 * (v / nominal - 1.0)
+    } else {
+        0.0
+    };
+    let more = |hi: &'static str, lo: &'static str| if pct >= 0.0 { hi } else { lo };
+    let head = match e {
+        AeroDrag => format!(
+            "aerodynamic drag is {:.0} % {} than the vehicle file says, {ci}: residual force grows with v²",
+            pct.abs(),
+            more("higher", "lower")
+        ),
+        RollingResistance => format!(
+            "rolling resistance is {:.0} % {} than the vehicle file says, {ci}: residual force is constant plus ∝ v, with load",
+            pct.abs(),
+            more("higher", "lower")
+        ),
+        VehicleMass => format!(
+            "the vehicle is {:.0} kg ({:.0} %) {} than the vehicle file says, {ci}: residual force ∝ a + g·sin α",
+            (v - nominal).abs(),
+            pct.abs(),
+            more("heavier", "lighter")
+        ),
+        GradeOffset => format!(
+            "the slope sensor reads {:.2}° too {} (mounting angle), {ci}: residual force ∝ m·g, constant along the road",
+            v.abs().to_degrees(),
+            if v >= 0.0 { "nose-up" } else { "nose-down" }
+        ),
+        SlopeQuantization => format!(
+            "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: fed the sensor's steps the model sees grade the road does not have (and shuffle the steps excite); the slope reconstructed within the sensor's cells, widened by its noise, fits better",
+            100.0 * v,
+            100.0 * nominal
+        ),
+        SignalDelay => format!(
+            "the engine-torque channel lags the driveline by {:.2} s, {ci}: input–residual cross-correlation peaks at a non-zero lag",
+            v
+        ),
+        DrivelineBacklash => format!(
+            "the driveline has {:.1}° of lash, {ci}: mismatch concentrated at torque sign changes",
+            v.to_degrees()
+        ),
+        DrivelineCompliance => format!(
+            "the drive shaft is {:.0} % {} than the vehicle file says, {ci}: the shuffle rings {} after clutch engagements than the nominal driveline's mode",
+            pct.abs(),
+            more("stiffer", "softer"),
+            more("faster", "slower")
+        ),
+        EngineTorqueOffset => format!(
+            "the reported engine torque is {:.0} N·m {} the delivered torque, {ci}: residual force ∝ gear ratio, constant in torque",
+            v.abs(),
+            if v >= 0.0 { "above" } else { "below" }
+        ),
+        ClutchSlip => format!(
+            "the clutch transmits at most {:.0} N·m, {:.0} % {} than the vehicle file says, {ci}: the engine speed runs away from the gearbox's where the clutch slips (engagements, full load)",
+            v,
+            pct.abs(),
+            more("more", "less")
+        ),
+        BogieTorqueReaction => format!(
+            "a fraction {:.2} of the driven axle's torque reacts through the trailing arms, {ci}: driven-axle pressure residual ∝ axle torque, mirrored in braking",
+            v
+        ),
+        LoadTransferHeight => format!(
+            "the centre of gravity is {:.2} m {} than the vehicle file says, {ci}: pressure residual ∝ longitudinal acceleration",
+            (v - nominal).abs(),
+            if v >= nominal { "higher" } else { "lower" }
+        ),
+        AirSpringNonlinearity => format!(
+            "the air springs are progressive, {ci}: pressure residual ∝ travel², asymmetric"
+        ),
+        CgPosition => format!(
+            "the static centre of gravity sits {:.2} m {} of where the vehicle file puts it, {ci}: constant pressure offset front vs rear and tag, opposite signs",
+            v.abs(),
+            if v >= 0.0 { "rearwards" } else { "forwards" }
+        ),
+        TyreStiffness => format!(
+            "the tyres are {:.0} % {} than the vehicle file says, {ci}: axle-hop band phase and amplitude mismatch",
+            pct.abs(),
+            more("stiffer", "softer")
+        ),
+        GradeLoadTransfer => format!(
+            "the gravity component on grades acts {:.2} m {} the centre of gravity, {ci}: pressure residual ∝ sin α",
+            v.abs(),
+            if v >= 0.0 { "above" } else { "below" }
+        ),
+    };
+    // the signal of the effect's own model improved most (relative held-out RMSE)
+    let own = |name: &str| (e.domain() == Domain::Axle) == name.starts_with("bellow_pressure");
+    let best = met
+        .iter()
+        .filter(|(name, m)| own(name) && m.rmse.heldout_before > 0.0)
+        .max_by(|a, b| {
+            let ga = 1.0 - a.1.rmse.heldout_after / a.1.rmse.heldout_before;
+            let gb = 1.0 - b.1.rmse.heldout_after / b.1.rmse.heldout_before;
+            ga.total_cmp(&gb)
+        });
+    let mut s = head;
+    if let Some((name, m)) = best {
+        if m.unit == "1" {
+            // a relative error (the shuffle frequency's ln f residual), in per cent
+            s.push_str(&format!(
+                "; held-out {} RMS error {:.1} % → {:.1} %",
+                signal_words(name),
+                100.0 * m.rmse.heldout_before,
+                100.0 * m.rmse.heldout_after,
+            ));
+        } else {
+            s.push_str(&format!(
+                "; held-out {} RMSE {} → {} {}",
+                signal_words(name),
+                num(m.rmse.heldout_before),
+                num(m.rmse.heldout_after),
+                m.unit
+            ));
+        }
+    }
+    if !ambiguous.is_empty() {
+        s.push_str(&format!(
+            " (not isolable from {} with the recorded signals)",
+            ambiguous.join(", ")
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_have_three_significant_figures() {
+        assert_eq!(num(0.007548), "0.00755");
+        assert_eq!(num(21737.52), "21738");
+        assert_eq!(num(-94.47), "-94.5");
+        assert_eq!(num(1.5777), "1.58");
+        assert_eq!(num(2.5e-6), "2.50e-6");
+    }
+}

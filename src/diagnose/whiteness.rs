@@ -1,0 +1,335 @@
+//! Residual statistics of step 3 of the diagnosis, explain (docs/diagnosis/method.md): the
+//! whiteness of a residual ([`whiteness`], [`event_whiteness`]), which rule 2 of the acceptance
+//! rule compares, and the effective number of independent samples of a residual
+//! ([`effective_samples`]), which sets the fit's interval.
+//!
+//! Lags in s (of events for an events channel); residuals standardised by each row's own weight
+//! ([`Channel::weight`]); the non-white power in the units of the weighted mean square
+//! (dimensionless).
+
+use super::channel::Channel;
+use super::split::Part;
+use crate::signal::stats::index_runs;
+use realfft::RealFftPlanner;
+use serde::Serialize;
+
+/// Lags (s) of the whiteness statistic: 0.1 s to 2 s in 0.1 s steps — from the driveline's
+/// shuffle band (a few Hz) to the seconds over which a missing force drifts the speed.
+pub const WHITENESS_LAG_STEP_S: f64 = 0.1;
+/// Number of lags of the whiteness statistic.
+pub const WHITENESS_LAGS: usize = 20;
+
+/// Whiteness of a residual (see [`whiteness`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Whiteness {
+    /// Mean over channels of the Ljung–Box statistic per sample, `Q/n`: the mean squared
+    /// non-centred autocorrelation at the lags; 0 for white noise, 1 for a constant.
+    pub q_per_n: f64,
+    /// Non-white (autocorrelated) power: mean over channels of `√(Q/n)` times the channel's
+    /// weighted mean square `MS_c / σ_c²` — the RMS of the weighted autocovariance at the
+    /// lags. White noise of any level scores 0 (up to the autocorrelation's sampling noise).
+    pub nonwhite_power: f64,
+}
+
+/// Whiteness of `outputs`' residual on `part` over the channels `chans` (weights `sigmas`).
+///
+/// For each channel, the squared *non-centred* autocorrelation `ρ(k) = Σ r_i r_{i+k} / Σ r_i²`
+/// (pairs within contiguous valid runs) at the lags `k·0.1 s`, k = 1…20 — from the driveline's
+/// shuffle band (a few Hz) to the seconds over which a missing force drifts the speed — is
+/// averaged: the Ljung–Box statistic per sample `Q/n` on a 10 Hz lag grid; a bias counts as
+/// non-white (the model's residual should be zero-mean noise). The acceptance rule compares the
+/// non-white power, `√(Q/n)` scaled by the residual's weighted mean square (the RMS of the
+/// autocovariance at the lags): the normalised `Q/n` alone rises whenever a fit removes a fast
+/// structured error and leaves a smaller but slower one (the whole-percent slope sensor's
+/// drift), although less of the residual is structure, and `Q/n` scaled by the mean square
+/// still rises when the error removed is white at the lags (`super::explain`, rule 2).
+///
+/// An events channel ([`Channel::events`]; engagements tens of seconds apart, no time lags
+/// between them) is scored on its standardised residuals `z_i = r_i √w_i` in event order, at
+/// the lags of 1 … min(20, n − 1) events ([`event_whiteness`]): a shift common to the events
+/// (a wrong shaft stiffness moves every engagement's frequency) is non-white as a bias is.
+pub fn whiteness(
+    channels: &[Channel],
+    chans: &[usize],
+    sigmas: &[f64],
+    outputs: &[Vec<f64>],
+    part: Part,
+    dt_s: f64,
+) -> Whiteness {
+    let step = ((WHITENESS_LAG_STEP_S / dt_s.max(1e-9)).round() as usize).max(1);
+    let (mut qn, mut pw) = (0.0, 0.0);
+    for ((&c, y), sg) in chans.iter().zip(outputs).zip(sigmas) {
+        let ch = &channels[c];
+        let rows = ch.rows(part);
+        if ch.events.is_some() {
+            let z: Vec<f64> = rows
+                .iter()
+                .map(|&i| (ch.measured[i] - y[i]) * ch.weight(i).sqrt())
+                .collect();
+            let q = event_whiteness(&z);
+            let ms = z.iter().map(|x| x * x).sum::<f64>() / z.len().max(1) as f64;
+            qn += q;
+            pw += q.sqrt() * ms / (sg * sg);
+            continue;
+        }
+        // standardised by the row's own weight (1 but for a row-weighted channel)
+        let r: Vec<f64> = rows
+            .iter()
+            .map(|&i| (ch.measured[i] - y[i]) * ch.weight(i).sqrt())
+            .collect();
+        let e0: f64 = r.iter().map(|x| x * x).sum();
+        if e0 <= 0.0 {
+            continue;
+        }
+        // positions of the runs in `r`
+        let mut bounds = Vec::new();
+        let mut pos = 0;
+        for run in index_runs(rows) {
+            bounds.push((pos, pos + run.len()));
+            pos += run.len();
+        }
+        let mut q = 0.0;
+        for k in 1..=WHITENESS_LAGS {
+            let lag = k * step;
+            let mut s = 0.0;
+            for &(a, b) in &bounds {
+                if b - a > lag {
+                    s += r[a..b - lag]
+                        .iter()
+                        .zip(&r[a + lag..b])
+                        .map(|(x, y)| x * y)
+                        .sum::<f64>();
+                }
+            }
+            q += (s / e0).powi(2);
+        }
+        let q = q / WHITENESS_LAGS as f64;
+        qn += q;
+        pw += q.sqrt() * e0 / (r.len() as f64 * sg * sg);
+    }
+    let n = chans.len().max(1) as f64;
+    Whiteness {
+        q_per_n: qn / n,
+        nonwhite_power: pw / n,
+    }
+}
+
+/// `Q/n` of a sequence of event residuals `z` ([`whiteness`] for an events channel): the mean
+/// over the lags `k` = 1 … min([`WHITENESS_LAGS`], n − 1) of the squared non-centred
+/// autocorrelation `(Σ z_i z_{i+k} / Σ z_i²)²`; 0 for fewer than 2 events or a zero residual.
+pub fn event_whiteness(z: &[f64]) -> f64 {
+    let e0: f64 = z.iter().map(|x| x * x).sum();
+    let lags = WHITENESS_LAGS.min(z.len().saturating_sub(1));
+    if e0 <= 0.0 || lags == 0 {
+        return 0.0;
+    }
+    let q: f64 = (1..=lags)
+        .map(|k| {
+            let s: f64 = z[..z.len() - k]
+                .iter()
+                .zip(&z[k..])
+                .map(|(a, b)| a * b)
+                .sum();
+            (s / e0).powi(2)
+        })
+        .sum();
+    q / lags as f64
+}
+
+/// Effective number of independent samples of the residual of one channel on `part`:
+/// `N / τ` with `τ = 1 + 2 Σ_{k=1}^{M} ρ(k)` the integrated autocorrelation time of the
+/// (centred) residual, `ρ` pooled over the contiguous valid runs (computed by FFT), and `M`
+/// Sokal's automatic window (the smallest `M ≥ 5 τ(M)`), `τ ≥ 1`. The samples of an events
+/// channel ([`Channel::events`]: engagements tens of seconds apart, each from its own fit)
+/// count as independent: `N`.
+pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
+    let rows = ch.rows(part);
+    let n = rows.len();
+    if n < 2 || ch.events.is_some() {
+        return n as f64;
+    }
+    let r: Vec<f64> = rows
+        .iter()
+        .map(|&i| (ch.measured[i] - sim[i]) * ch.weight(i).sqrt())
+        .collect();
+    let mean = r.iter().sum::<f64>() / n as f64;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let mut acov: Vec<f64> = Vec::new();
+    let mut pos = 0;
+    for run in index_runs(rows) {
+        let len = run.len();
+        let x: Vec<f64> = r[pos..pos + len].iter().map(|v| v - mean).collect();
+        pos += len;
+        let m = (2 * len).next_power_of_two();
+        let fwd = planner.plan_fft_forward(m);
+        let inv = planner.plan_fft_inverse(m);
+        let mut buf = vec![0.0; m];
+        buf[..len].copy_from_slice(&x);
+        let mut spec = fwd.make_output_vec();
+        if fwd.process(&mut buf, &mut spec).is_err() {
+            continue;
+        }
+        for c in spec.iter_mut() {
+            *c = num_complex::Complex::new(c.norm_sqr(), 0.0);
+        }
+        let mut out = inv.make_output_vec();
+        if inv.process(&mut spec, &mut out).is_err() {
+            continue;
+        }
+        if acov.len() < len {
+            acov.resize(len, 0.0);
+        }
+        for k in 0..len {
+            acov[k] += out[k] / m as f64;
+        }
+    }
+    if acov.is_empty() || acov[0] <= 0.0 {
+        return n as f64;
+    }
+    let mut tau = 1.0;
+    for (m, a) in acov.iter().enumerate().skip(1) {
+        tau += 2.0 * a / acov[0];
+        if m as f64 >= 5.0 * tau {
+            break;
+        }
+    }
+    n as f64 / tau.max(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::channel::{weighted_ms, EventWeights};
+    use crate::model::catalogue::Domain;
+    use crate::rng::Xoshiro256StarStar;
+
+    fn channel(measured: Vec<f64>) -> Channel {
+        let n = measured.len();
+        Channel {
+            events: None,
+            row_weights: None,
+            name: "x".into(),
+            unit: "1",
+            domain: Domain::Longitudinal,
+            measured,
+            valid: vec![true; n],
+            train_idx: (0..n).collect(),
+            held_idx: Vec::new(),
+        }
+    }
+
+    fn gauss(rng: &mut Xoshiro256StarStar) -> f64 {
+        // Box–Muller
+        let (u, v) = (rng.next_f64().max(1e-300), rng.next_f64());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+
+    #[test]
+    fn whiteness_is_zero_for_noise_and_one_for_a_bias() {
+        let mut rng = Xoshiro256StarStar::seed_from_u64(1);
+        let noise: Vec<f64> = (0..20_000).map(|_| gauss(&mut rng)).collect();
+        let zero = vec![vec![0.0; noise.len()]];
+        let w = whiteness(&[channel(noise)], &[0], &[1.0], &zero, Part::Train, 0.02);
+        assert!(w.q_per_n < 1e-3, "{w:?}");
+        let w = whiteness(
+            &[channel(vec![0.5; 20_000])],
+            &[0],
+            &[1.0],
+            &[vec![0.0; 20_000]],
+            Part::Train,
+            0.02,
+        );
+        assert!((w.q_per_n - 1.0).abs() < 0.05 && (w.nonwhite_power - 0.25).abs() < 0.02);
+    }
+
+    #[test]
+    fn white_error_on_top_of_slow_structure_leaves_the_non_white_power_alone() {
+        // a fit that removes a fast error leaves the sensors' slow drift: slow structure (a
+        // 0.05 Hz sine, power 0.125) with and without white noise of power 1. The non-white
+        // power is the autocovariance at the lags, which the white part does not change; the
+        // other form, (Q/n)·MS = mean c_k² / c_0, rises about 9-fold when it is removed
+        let n = 50_000;
+        let mut rng = Xoshiro256StarStar::seed_from_u64(3);
+        let slow: Vec<f64> = (0..n)
+            .map(|i| 0.5 * (std::f64::consts::TAU * 0.05 * i as f64 * 0.02).sin())
+            .collect();
+        let mixed: Vec<f64> = slow.iter().map(|s| s + gauss(&mut rng)).collect();
+        let zero = vec![vec![0.0; n]];
+        let w = |r: Vec<f64>| whiteness(&[channel(r)], &[0], &[1.0], &zero, Part::Train, 0.02);
+        let ms = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64;
+        let (ms_mixed, ms_slow) = (ms(&mixed), ms(&slow));
+        let (with, without) = (w(mixed), w(slow));
+        let ratio = without.nonwhite_power / with.nonwhite_power;
+        // the lag sums' sampling noise with the white part: a few per cent at 50 000 rows
+        assert!((ratio - 1.0).abs() < 0.08, "{with:?} -> {without:?}");
+        let old = (without.q_per_n * ms_slow) / (with.q_per_n * ms_mixed);
+        assert!(old > 5.0, "(Q/n)·MS rose only {old}×");
+    }
+
+    #[test]
+    fn effective_samples_of_ar1_noise() {
+        // AR(1), φ = 0.9: τ = (1 + φ)/(1 − φ) = 19
+        let mut rng = Xoshiro256StarStar::seed_from_u64(2);
+        let mut x = 0.0;
+        let v: Vec<f64> = (0..200_000)
+            .map(|_| {
+                x = 0.9 * x + gauss(&mut rng);
+                x
+            })
+            .collect();
+        let n = v.len() as f64;
+        let ne = effective_samples(&channel(v), &vec![0.0; n as usize], Part::Train);
+        assert!((n / ne / 19.0 - 1.0).abs() < 0.2, "τ = {}", n / ne);
+    }
+
+    #[test]
+    fn an_events_channel_is_weighted_per_sample_and_its_whiteness_is_over_events() {
+        // 6 events on rows 0, 10, …, 50 of 60; weights 1/s² with s = 0.01 and 0.02
+        let n = 60;
+        let mut measured = vec![0.0; n];
+        let mut valid = vec![false; n];
+        let mut w = vec![0.0; n];
+        for k in 0..6 {
+            let i = 10 * k;
+            measured[i] = 0.05; // a common shift of 5 %
+            valid[i] = true;
+            w[i] = if k % 2 == 0 { 1e4 } else { 2.5e3 };
+        }
+        let mut ch = channel(measured);
+        ch.valid = valid;
+        ch.train_idx = (0..6).map(|k| 10 * k).collect();
+        ch.events = Some(EventWeights(w));
+        let zero = vec![vec![0.0; n]];
+        // mean of w r²: (3·1e4 + 3·2.5e3)·0.0025 / 6 = 15.625
+        let ms = weighted_ms(std::slice::from_ref(&ch), &[0], &[1.0], &zero, Part::Train);
+        assert!((ms - 15.625).abs() < 1e-9, "{ms}");
+        // a common shift is non-white: lag-k autocorrelation of z = (5, 2.5, 5, 2.5, 5, 2.5)
+        let z = [5.0, 2.5, 5.0, 2.5, 5.0, 2.5];
+        let e0: f64 = z.iter().map(|x| x * x).sum();
+        let expect: f64 = (1..=5)
+            .map(|k| {
+                let s: f64 = z[..6 - k].iter().zip(&z[k..]).map(|(a, b)| a * b).sum();
+                (s / e0).powi(2)
+            })
+            .sum::<f64>()
+            / 5.0;
+        let wh = whiteness(
+            std::slice::from_ref(&ch),
+            &[0],
+            &[1.0],
+            &zero,
+            Part::Train,
+            0.02,
+        );
+        assert!(
+            (wh.q_per_n - expect).abs() < 1e-12 && wh.q_per_n > 0.2,
+            "{wh:?}"
+        );
+        assert!((wh.nonwhite_power - expect.sqrt() * 15.625).abs() < 1e-9);
+        // a single event has no lag at all, a zero residual no structure
+        assert_eq!(event_whiteness(&[3.0]), 0.0);
+        assert_eq!(event_whiteness(&[0.0, 0.0]), 0.0);
+        // events are independent samples
+        assert_eq!(effective_samples(&ch, &zero[0], Part::Train), 6.0);
+    }
+}
