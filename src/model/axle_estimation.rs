@@ -26,7 +26,7 @@ pub enum EstimationError {
     },
     /// Scale weights that leave no chassis load on an axle's bellows (axle-load thesis, eq. 3.3.8:
     /// `m_i = N_i/g − m_ai` must be positive).
-    #[error("scale weight {scale_weight_kg} kg does not exceed the axle mass {axle_mass_kg} kg: no load is left on the bellows (seed 002 eq. 3.3.8)")]
+    #[error("scale weight {scale_weight_kg} kg does not exceed the axle mass {axle_mass_kg} kg: no load is left on the bellows (axle-load thesis, eq. 3.3.8)")]
     NoBellowLoad {
         /// The axle's scale weight, kg.
         scale_weight_kg: f64,

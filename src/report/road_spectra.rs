@@ -187,7 +187,7 @@ pub fn write_road_spectrum(
 
 fn filter_text(causal_order: usize, fc: &crate::road::slope_filter::SlopeFilterConfig) -> String {
     format!(
-        "Butterworth low-pass, cut-off {} 1/m; zero-phase order {} (|H|^2), causal order {} (|H|); -{} dB required at {} 1/m (seed 000 §5)",
+        "Butterworth low-pass, cut-off {} 1/m; zero-phase order {} (|H|^2), causal order {} (|H|); -{} dB required at {} 1/m (Myklebust & Eriksson 2012, §5)",
         fc.cutoff_per_m, fc.order, causal_order, fc.required_attenuation_db, fc.stop_per_m
     )
 }

@@ -86,22 +86,9 @@ fn cell(text: &str) -> String {
     out
 }
 
-/// Citations in schema meanings that name documents outside the book, and what the book calls
-/// them: the axle-load thesis by its equation numbers, the effect catalogue by its page. Applied
-/// to every meaning before it is rendered, so the pages cite only what the book's references
-/// list; a schema that already uses the book's names passes unchanged.
-const CITATIONS: &[(&str, &str)] = &[
-    ("seed 002 eq. ", "axle-load thesis, eq. "),
-    (" (diagnosis.md)", " (see the effect catalogue)"),
-];
-
-/// A schema meaning for a table cell: citations restated ([`CITATIONS`]), then escaped.
+/// A schema meaning for a table cell, escaped.
 fn meaning(text: &str) -> String {
-    let mut t = text.to_string();
-    for (from, to) in CITATIONS {
-        t = t.replace(from, to);
-    }
-    cell(&t)
+    cell(text)
 }
 
 /// A code span for a table cell (`|` escaped, as GitHub and mdBook tables need it).

@@ -48,7 +48,7 @@ fn static_axle_weights_next_to_the_seed_table() {
         rows.iter().map(|&k| v[k]).sum::<f64>() / rows.len() as f64
     });
     let from_p = p.axle_loads_from_pressures(mean_p).map(|kg| kg / 1000.0);
-    println!("axle  | scale [t] | seed model [t] (err) | fleetdyn model at rest [t] (err) | fleetdyn from recorded pressures [t] (err)");
+    println!("axle  | scale [t] | thesis model [t] (err) | fleetdyn model at rest [t] (err) | fleetdyn from recorded pressures [t] (err)");
     for (i, a) in Axle::ALL.iter().enumerate() {
         println!(
             "{:<5} | {:>9.3} | {:>8.3} ({:+.3}) | {:>16.3} ({:+.3}) | {:>18.3} ({:+.3})",
