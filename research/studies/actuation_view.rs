@@ -4,7 +4,7 @@
 //! variance from the noise floor's copies (which jitter the 10 Hz clutch's sampling phase).
 //! Per case of a proof folder: rows per part of the diagnosis' split, and the weighted mean
 //! square of each part at the nominal parameters and with the hidden effect at its truth
-//! (what `Problem::with_actuation` scores; docs/events.md). `ACTUATION_MIN_SPEED_MPS=x` takes
+//! (what `Problem::with_actuation` scores; docs/diagnosis/events.md). `ACTUATION_MIN_SPEED_MPS=x` takes
 //! the rows from `x` m/s instead of 1 m/s (the launches from standstill).
 //!
 //! ```text

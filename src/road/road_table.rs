@@ -17,7 +17,7 @@ use thiserror::Error;
 
 /// Version tag of the generator, part of every road's metadata and configuration hash: bump it
 /// whenever the same rules and seed would give a different road.
-pub const GENERATOR: &str = "fleetdyn road synth v1 (seed 000 §4; xoshiro256** seeded by SplitMix64; lengthen segments that cannot hold their curves)";
+pub const GENERATOR: &str = "fleetdyn road synth v1 (Myklebust & Eriksson 2012, §4; xoshiro256** seeded by SplitMix64; lengthen segments that cannot hold their curves)";
 
 /// Writes a synthetic road as Parquet (schema `road_profile`), atomically. `rules_origin` says
 /// where the rules came from (a bundled name or a file path) for the metadata.
