@@ -27,7 +27,7 @@
 //! The other views of the residual: [`super::locate_frequency`] (by band, input coherence and
 //! lags), [`super::locate_conditions`] (by operating condition),
 //! [`super::locate_statements`] (plain statements); the settings in [`super::locate_config`],
-//! the records in [`super::location`], the statistics in [`super::locate_stats`].
+//! the records in [`super::location`], the statistics in [`crate::signal::stats`].
 //!
 //! All quantities SI (s, m, m/s, the signal's unit); grades as tan α (text in %); frequencies in
 //! Hz. Deterministic. Bad input (lengths that differ, bad settings) is a [`LocateError`]; empty
@@ -39,19 +39,19 @@ use super::locate_frequency::{
     band_power, band_powers, bands, coherence, lag, native_nyquist, psd_over,
 };
 use super::locate_statements::statements;
-use super::locate_stats::f_sf;
 use super::noise::{NoiseFloor, NoiseFloors};
+use crate::signal::stats::f_sf;
 use crate::signal::stats::runs;
 use std::collections::BTreeMap;
 
 pub use super::locate_config::{
     inputs_from_log, shuffle_band_hz, LocateConfig, LocateError, NamedSeries, WindowAxis,
 };
-pub use super::locate_stats::holm;
 pub use super::location::{
     BandCoherence, BandPower, ConditionCell, InputCoherence, InputLag, Location, Mismatch,
     SignalLocation, Statement, TorqueSign, WindowTest,
 };
+pub use crate::signal::stats::holm;
 
 /// Everything about one signal that needs no cross-signal information.
 struct Pending {

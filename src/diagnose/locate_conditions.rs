@@ -12,9 +12,9 @@
 
 use super::compare::Conditions;
 use super::locate_config::{LocateConfig, LocateError};
-use super::locate_stats::{f_sf, holm};
 use super::location::{ConditionCell, TorqueSign};
 use super::noise::NoiseFloor;
+use crate::signal::stats::{f_sf, holm};
 use std::collections::BTreeMap;
 
 /// A condition column: `None` when empty (not recorded), else checked for length.

@@ -20,10 +20,10 @@
 //! above it is not observable. Powers in the signal's unit², frequencies in Hz, lags in s.
 
 use super::locate_config::{LocateConfig, NamedSeries};
-use super::locate_stats::{f_sf, xcorr_sums, z_quantile};
 use super::location::{BandCoherence, BandPower, InputCoherence, InputLag};
 use super::noise::{segment_mean_square, NoiseFloor};
 use crate::signal::stats::runs;
+use crate::signal::stats::{f_sf, xcorr_sums, z_quantile};
 use crate::signal::{csd_pieces, WelchConfig};
 
 /// A frequency band of the analysis.

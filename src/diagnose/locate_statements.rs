@@ -20,9 +20,9 @@
 
 use super::locate_conditions::Cond;
 use super::locate_config::LocateConfig;
-use super::locate_stats::f_sf;
 use super::location::Statement;
 use super::noise::NoiseFloor;
+use crate::signal::stats::f_sf;
 
 /// Rows within ±`hw` rows of an event that `at(i)` marks between rows i−1 and i.
 fn event_mask(n: usize, hw: usize, events: &[(usize, usize)]) -> Vec<bool> {

@@ -25,7 +25,6 @@ pub mod locate_conditions;
 pub mod locate_config;
 pub mod locate_frequency;
 pub mod locate_statements;
-pub mod locate_stats;
 pub mod location;
 pub mod longitudinal_model;
 pub mod modal;
