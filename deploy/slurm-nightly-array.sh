@@ -2,7 +2,7 @@
 # Nightly fleetdyn run as a Slurm job array: array task i processes shard i/N.
 #
 #   sbatch deploy/slurm-nightly-array.sh                # N = the array size below
-#   sbatch --dependency=afterany:<jobid> --wrap 'fleetdyn run pipelines/nightly.toml --out /scratch/fleet'
+#   sbatch --dependency=afterany:<jobid> --wrap 'fleetdyn run pipelines/nightly.toml --output /scratch/fleet'
 #                                                       # reduce: writes the fleet report
 #
 # Shards split the inputs by a hash of their path (every task lists the same inputs, takes a
@@ -19,6 +19,6 @@ set -euo pipefail
 : "${SLURM_ARRAY_TASK_ID:?run through sbatch}"
 SHARDS=${SLURM_ARRAY_TASK_COUNT:-8}
 exec fleetdyn run pipelines/nightly.toml \
-  --out /scratch/fleet \
+  --output /scratch/fleet \
   --shard "${SLURM_ARRAY_TASK_ID}/${SHARDS}" \
   --jobs "${SLURM_CPUS_PER_TASK:-2}"
