@@ -62,6 +62,28 @@ impl IngestArgs {
     }
 }
 
+/// A recording read on its own: the ingest settings and an optional vehicle file.
+#[derive(Args, Debug)]
+pub struct RecordingArgs {
+    /// Vehicle file (its gearbox bounds the gear column; its id is recorded).
+    #[arg(long)]
+    pub vehicle: Option<PathBuf>,
+    #[command(flatten)]
+    pub ingest: IngestArgs,
+}
+
+impl RecordingArgs {
+    /// The ingest settings and their options for `extra_stages`, with the vehicle file loaded
+    /// when one is given.
+    pub fn resolve(
+        &self,
+        extra_stages: &[Stage],
+    ) -> Result<(IngestConfig, IngestOptions), Failure> {
+        let vehicle = self.vehicle.as_deref().map(load_vehicle).transpose()?;
+        self.ingest.resolve(extra_stages, vehicle.as_ref())
+    }
+}
+
 /// What to do when time goes backwards.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TimeRepairArg {

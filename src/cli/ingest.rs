@@ -1,6 +1,6 @@
 //! `fleetdyn ingest`.
 
-use super::common::{load_vehicle, IngestArgs, ResampleArgs};
+use super::common::{RecordingArgs, ResampleArgs};
 use crate::commands::failure::{usage_msg, Failure};
 use crate::commands::{ingest, resample};
 use clap::Args;
@@ -21,18 +21,14 @@ pub struct IngestCmd {
     /// Output Parquet file (canonical drive log). Without it only the summary is printed.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Vehicle file (its gearbox bounds the gear column; its id is recorded).
-    #[arg(long)]
-    vehicle: Option<PathBuf>,
     #[command(flatten)]
-    ingest: IngestArgs,
+    recording: RecordingArgs,
 }
 
 impl IngestCmd {
     /// The job: inputs, DBC files, ingest settings.
     pub fn resolve(self) -> Result<ingest::Job, Failure> {
-        let vehicle = self.vehicle.as_deref().map(load_vehicle).transpose()?;
-        let (cfg, opts) = self.ingest.resolve(&[], vehicle.as_ref())?;
+        let (cfg, opts) = self.recording.resolve(&[])?;
         if self.dbc.is_empty() && self.inputs.len() != 1 {
             return Err(usage_msg(format_args!(
                 "{} inputs: several files are one raw CAN session and need --dbc",
@@ -57,11 +53,8 @@ pub struct ResampleCmd {
     /// Output Parquet file (distance log).
     #[arg(short, long)]
     output: PathBuf,
-    /// Vehicle file (its gearbox bounds the gear column; its id is recorded).
-    #[arg(long)]
-    vehicle: Option<PathBuf>,
     #[command(flatten)]
-    ingest: IngestArgs,
+    recording: RecordingArgs,
     #[command(flatten)]
     resample: ResampleArgs,
 }
@@ -69,8 +62,7 @@ pub struct ResampleCmd {
 impl ResampleCmd {
     /// The job: input, ingest and resampling settings.
     pub fn resolve(self) -> Result<resample::Job, Failure> {
-        let vehicle = self.vehicle.as_deref().map(load_vehicle).transpose()?;
-        let (cfg, opts) = self.ingest.resolve(&[Stage::Resample], vehicle.as_ref())?;
+        let (cfg, opts) = self.recording.resolve(&[Stage::Resample])?;
         Ok(resample::Job {
             input: self.input,
             output: self.output,

@@ -1,6 +1,6 @@
 //! `fleetdyn slope` and `fleetdyn spectrum`.
 
-use super::common::{load_vehicle, IngestArgs, ResampleArgs};
+use super::common::{RecordingArgs, ResampleArgs};
 use crate::commands::failure::{usage_msg, Failure};
 use crate::commands::{slope, spectrum};
 use clap::{Args, ValueEnum};
@@ -17,11 +17,8 @@ pub struct SlopeCmd {
     /// Output folder: slope_distance.parquet and slope_time.parquet are written there.
     #[arg(short, long)]
     output: PathBuf,
-    /// Vehicle file (its gearbox bounds the gear column; its id is recorded).
-    #[arg(long)]
-    vehicle: Option<PathBuf>,
     #[command(flatten)]
-    ingest: IngestArgs,
+    recording: RecordingArgs,
     #[command(flatten)]
     resample: ResampleArgs,
     /// Cut-off spatial frequency, 1/m.
@@ -47,10 +44,7 @@ enum EdgeArg {
 impl SlopeCmd {
     /// The job: input, ingest, resampling and filter settings.
     pub fn resolve(self) -> Result<slope::Job, Failure> {
-        let vehicle = self.vehicle.as_deref().map(load_vehicle).transpose()?;
-        let (cfg, opts) = self
-            .ingest
-            .resolve(&[Stage::Resample, Stage::Slope], vehicle.as_ref())?;
+        let (cfg, opts) = self.recording.resolve(&[Stage::Resample, Stage::Slope])?;
         Ok(slope::Job {
             input: self.input,
             output: self.output,
@@ -94,11 +88,8 @@ pub struct SpectrumCmd {
     /// Confidence level of the PSD bounds.
     #[arg(long, default_value_t = 0.95)]
     confidence: f64,
-    /// Vehicle file (its gearbox bounds the gear column; its id is recorded).
-    #[arg(long)]
-    vehicle: Option<PathBuf>,
     #[command(flatten)]
-    ingest: IngestArgs,
+    recording: RecordingArgs,
     #[command(flatten)]
     resample: ResampleArgs,
 }
@@ -125,8 +116,7 @@ impl SpectrumCmd {
                 column: self.column.unwrap_or_else(|| "slope".into()),
             }
         } else {
-            let vehicle = self.vehicle.as_deref().map(load_vehicle).transpose()?;
-            let (cfg, opts) = self.ingest.resolve(&[Stage::Resample], vehicle.as_ref())?;
+            let (cfg, opts) = self.recording.resolve(&[Stage::Resample])?;
             spectrum::Source::Recording {
                 column: self.column.unwrap_or_else(|| "road_slope".into()),
                 cfg,

@@ -129,10 +129,11 @@ pub fn weighted_ms(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn channel(measured: Vec<f64>) -> Channel {
+    /// A longitudinal test channel `x` of `measured`, every row valid and in the training part.
+    pub(in crate::diagnose) fn channel(measured: Vec<f64>) -> Channel {
         let n = measured.len();
         Channel {
             events: None,

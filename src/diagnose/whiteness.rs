@@ -199,24 +199,9 @@ pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::channel::tests::channel;
     use crate::diagnose::channel::{weighted_ms, EventWeights};
-    use crate::model::catalogue::Domain;
     use crate::rng::Xoshiro256StarStar;
-
-    fn channel(measured: Vec<f64>) -> Channel {
-        let n = measured.len();
-        Channel {
-            events: None,
-            row_weights: None,
-            name: "x".into(),
-            unit: "1",
-            domain: Domain::Longitudinal,
-            measured,
-            valid: vec![true; n],
-            train_idx: (0..n).collect(),
-            held_idx: Vec::new(),
-        }
-    }
 
     fn gauss(rng: &mut Xoshiro256StarStar) -> f64 {
         // Box–Muller

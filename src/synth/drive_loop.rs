@@ -93,7 +93,7 @@ impl DriveConfig {
                 t.is_finite() && t > 0.0,
                 "retarder_max_torque_nm",
                 t,
-                "must be finite and >= 0",
+                "must be finite and > 0 (0: no retarder)",
             )?;
         }
         Ok(())
