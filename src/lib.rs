@@ -14,6 +14,7 @@ pub mod diagnose;
 pub mod ingest;
 pub mod io;
 pub mod model;
+pub mod optim;
 pub mod pipeline;
 pub mod proof;
 pub mod report;

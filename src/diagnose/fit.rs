@@ -31,6 +31,7 @@
 
 use super::problem::Part;
 use crate::model::catalogue::Effect;
+use crate::optim::{minimise, Damping, LeastSquares, NormalEquations, Scaling, Settings, Silent};
 
 pub use super::deviance::{deviance_threshold, events_deviance, CHI2_1_95};
 pub use super::evaluator::{Active, Eval, Evaluator, ModelView, MATERIAL_CHANGE_MS};
@@ -152,53 +153,33 @@ pub fn fit_effect(
             }
         }
     }
-    let tol = 1e-3 * spec.step.abs();
-    let mut lambda = 0.0_f64;
-    let mut curvature = 0.0;
-    while evaluations < MAX_FIT_EVALUATIONS {
-        let dp = cur.value - other.value;
-        if dp == 0.0 {
-            break;
-        }
-        let (h, g) = {
-            let a =
-                |m: usize, k: usize, i: usize| (cur.outputs[m][k][i] - other.outputs[m][k][i]) / dp;
-            let r = ev.resid(&cur);
-            (ev.inner(active, a, a), ev.inner(active, a, r))
-        };
-        curvature = h;
-        if h <= 0.0 || !h.is_finite() {
-            break;
-        }
-        let delta = g / (h * (1.0 + lambda));
-        let p = (cur.value + delta).clamp(spec.lo, spec.hi);
-        if (p - cur.value).abs() < tol {
-            break;
-        }
-        evaluations += 1;
-        match ev.eval(base, active, e, p) {
-            Ok(t) if cost(&t).is_finite() => {
-                if cost(&t) < cost(&cur) {
-                    let gain = (cost(&cur) - cost(&t)) / cost(&cur).max(1e-300);
-                    other = std::mem::replace(&mut cur, t);
-                    lambda = if lambda < 1e-3 { 0.0 } else { lambda / 4.0 };
-                    if gain < 1e-6 {
-                        break;
-                    }
-                } else {
-                    other = t;
-                    lambda = (4.0 * lambda).max(0.5);
-                }
-            }
-            _ => {
-                // outside what the model accepts (e.g. a CG shift unloading an axle)
-                lambda = (4.0 * lambda).max(0.5);
-                if lambda > 1e6 {
-                    break;
-                }
-            }
-        }
-    }
+    let settings = Settings {
+        bounds: vec![(spec.lo, spec.hi)],
+        step_tolerance: 1e-3 * spec.step.abs(),
+        gain_tolerance: 1e-6,
+        max_evaluations: MAX_FIT_EVALUATIONS.saturating_sub(evaluations),
+        ..Settings::new(Damping::GAUSS_NEWTON_FIRST, Scaling::Marquardt, usize::MAX)
+    };
+    let start_cost = cost(&cur);
+    let start = [cur.value];
+    let mut secant = SecantFit {
+        ev,
+        base,
+        active,
+        effect: e,
+        cur,
+        other,
+        trial: None,
+        curvature: 0.0,
+    };
+    let report = minimise(&mut secant, &start, start_cost, &settings, &mut Silent);
+    evaluations += report.evaluations;
+    let SecantFit {
+        cur,
+        other,
+        curvature,
+        ..
+    } = secant;
     // the cluster-robust sample count with the last secant
     let dp = cur.value - other.value;
     let cluster = if dp != 0.0 {
@@ -212,5 +193,62 @@ pub fn fit_effect(
         evaluations: evaluations + grid_evaluations,
         curvature,
         cluster,
+    }
+}
+
+/// The one-parameter fit as a least-squares problem: the Jacobian is the secant through the
+/// current point and the last other simulated one (a trial that does not lower the cost
+/// replaces the other end, so the next secant is shorter), the cost the weighted train mean
+/// square.
+struct SecantFit<'a, 'p, 'b> {
+    ev: &'a Evaluator<'p, 'b>,
+    base: &'a Eval,
+    active: &'a [bool],
+    effect: Effect,
+    cur: Eval,
+    other: Eval,
+    trial: Option<Eval>,
+    /// `⟨a, a⟩` of the last secant.
+    curvature: f64,
+}
+
+impl LeastSquares for SecantFit<'_, '_, '_> {
+    fn normal_equations(&mut self, _: &[f64]) -> Option<NormalEquations> {
+        let (cur, other) = (&self.cur, &self.other);
+        let dp = cur.value - other.value;
+        if dp == 0.0 {
+            return None;
+        }
+        let a = |m: usize, k: usize, i: usize| (cur.outputs[m][k][i] - other.outputs[m][k][i]) / dp;
+        let r = self.ev.resid(cur);
+        let (h, g) = (
+            self.ev.inner(self.active, a, a),
+            self.ev.inner(self.active, a, r),
+        );
+        self.curvature = h;
+        Some(NormalEquations::scalar(h, g))
+    }
+
+    fn trial(&mut self, p: &[f64]) -> Option<f64> {
+        self.trial = None;
+        let t = self
+            .ev
+            .eval(self.base, self.active, self.effect, p[0])
+            .ok()?;
+        let c = self.ev.cost(&t, self.active, Part::Train);
+        self.trial = Some(t);
+        Some(c)
+    }
+
+    fn accept(&mut self) {
+        if let Some(t) = self.trial.take() {
+            self.other = std::mem::replace(&mut self.cur, t);
+        }
+    }
+
+    fn reject(&mut self) {
+        if let Some(t) = self.trial.take() {
+            self.other = t;
+        }
     }
 }

@@ -53,6 +53,7 @@
 
 use super::modal::{engagements, fit_damped_sinusoid, locked_mode, tyre_mode, ModalConfig};
 use crate::model::driveline::DrivelineParams;
+use crate::optim::{golden_section, minimise, Damping, ScalarResiduals, Scaling, Settings, Silent};
 use crate::table::DriveLog;
 
 /// Name of the channel.
@@ -185,7 +186,7 @@ pub const MAX_TYRE_SHARE: f64 = 0.95;
 /// the traction force (the tyres soften under it), the speed (they relax) and the gear (the
 /// driven wheels' inertia weighs more against a small engine-side inertia), the stiffness on
 /// every mode alike, so a drive's engagements separate the two. Search: the best `x`
-/// (Gauss–Newton, central differences, 8 steps) on each share of the grid `0, 0.05, …,`
+/// (Levenberg–Marquardt, [`crate::optim::minimise`], central differences, 8 steps) on each share of the grid `0, 0.05, …,`
 /// [`MAX_TYRE_SHARE`], then golden-section refinement of the share within ±0.05 of the grid's
 /// best (the best `x` again at each).
 ///
@@ -208,36 +209,18 @@ pub fn fit_tyre_share(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64
             })
             .collect()
     };
-    let ss = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     // the best x at a share, and its sum of squares
+    let settings = Settings {
+        bounds: vec![(-2.0, 2.0)],
+        step_tolerance: 1e-7,
+        ..Settings::new(Damping::GAUSS_NEWTON_FIRST, Scaling::Marquardt, 8)
+    };
     let profile = |share: f64| -> f64 {
-        let h = 1e-3;
-        let mut x = 0.0_f64;
-        for _ in 0..8 {
-            let (Some(rp), Some(rm), Some(r)) = (
-                residuals(x + h, share),
-                residuals(x - h, share),
-                residuals(x, share),
-            ) else {
-                return f64::INFINITY;
-            };
-            let (mut a, mut g) = (0.0, 0.0);
-            for i in 0..r.len() {
-                let j = (rp[i] - rm[i]) / (2.0 * h);
-                a += j * j;
-                g += j * r[i];
-            }
-            if a <= 0.0 {
-                break;
-            }
-            let x1 = (x - g / a).clamp(-2.0, 2.0);
-            let done = (x1 - x).abs() < 1e-7;
-            x = x1;
-            if done {
-                break;
-            }
+        let mut problem = ScalarResiduals::new(|x: f64| residuals(x, share), 1e-3);
+        match problem.start(0.0) {
+            Some(c0) => minimise(&mut problem, &[0.0], c0, &settings, &mut Silent).cost,
+            None => f64::INFINITY,
         }
-        residuals(x, share).map_or(f64::INFINITY, |r| ss(&r))
     };
     let steps = (MAX_TYRE_SHARE / 0.05).round() as usize;
     let (mut best, mut best_ss) = (0.0, f64::INFINITY);
@@ -252,22 +235,8 @@ pub fn fit_tyre_share(samples: &[ModeSample], p: &DrivelineParams, ratios: &[f64
         return 0.0;
     }
     // golden section on [best − 0.05, best + 0.05] ∩ [0, MAX]
-    let (mut a, mut b) = ((best - 0.05).max(0.0), (best + 0.05).min(MAX_TYRE_SHARE));
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-    let (mut fc, mut fd) = (profile(c), profile(d));
-    for _ in 0..12 {
-        if fc < fd {
-            (b, d, fd) = (d, c, fc);
-            c = b - g * (b - a);
-            fc = profile(c);
-        } else {
-            (a, c, fc) = (c, d, fd);
-            d = a + g * (b - a);
-            fd = profile(d);
-        }
-    }
-    let (m, fm) = if fc < fd { (c, fc) } else { (d, fd) };
+    let (a, b) = ((best - 0.05).max(0.0), (best + 0.05).min(MAX_TYRE_SHARE));
+    let (m, fm) = golden_section(profile, a, b, 12);
     if fm < best_ss {
         m
     } else {

@@ -18,6 +18,7 @@
 //! Marquardt, J. SIAM 11 (1963) — the damped Gauss–Newton step (`λ·diag(JᵀJ)` scaling).
 
 use super::modal_config::ModalConfig;
+use crate::optim::{minimise, Damping, LeastSquares, NormalEquations, Scaling, Settings, Silent};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -64,6 +65,62 @@ fn model(p: &[f64; 7], tau: f64) -> f64 {
     let e = (-p[6] * tau).exp();
     let (s, c) = (p[5] * tau).sin_cos();
     p[0] + p[1] * tau + p[2] * tau * tau + e * (p[3] * s + p[4] * c)
+}
+
+/// `∂y/∂p` of [`model`] at the times `tau` (n × 7).
+fn jacobian(tau: &[f64], p: &[f64; 7]) -> DMatrix<f64> {
+    DMatrix::from_fn(tau.len(), 7, |i, j| {
+        let t = tau[i];
+        let e = (-p[6] * t).exp();
+        let (s, c) = (p[5] * t).sin_cos();
+        match j {
+            0 => 1.0,
+            1 => t,
+            2 => t * t,
+            3 => e * s,
+            4 => e * c,
+            5 => e * t * (p[3] * c - p[4] * s),
+            _ => -t * e * (p[3] * s + p[4] * c),
+        }
+    })
+}
+
+/// The seven-parameter fit as a least-squares problem (analytic Jacobian; the normal
+/// equations kept until a step is accepted).
+struct Sinusoid<'a> {
+    tau: &'a [f64],
+    y: &'a [f64],
+    normal: Option<NormalEquations>,
+}
+
+impl Sinusoid<'_> {
+    fn residual(&self, p: &[f64; 7]) -> DVector<f64> {
+        DVector::from_fn(self.tau.len(), |i, _| self.y[i] - model(p, self.tau[i]))
+    }
+}
+
+impl LeastSquares for Sinusoid<'_> {
+    fn normal_equations(&mut self, p: &[f64]) -> Option<NormalEquations> {
+        if self.normal.is_none() {
+            let p: [f64; 7] = p.try_into().ok()?;
+            let j = jacobian(self.tau, &p);
+            let r = self.residual(&p);
+            self.normal = Some(NormalEquations {
+                jtj: j.transpose() * &j,
+                jtr: j.transpose() * &r,
+            });
+        }
+        self.normal.clone()
+    }
+
+    fn trial(&mut self, p: &[f64]) -> Option<f64> {
+        let p: [f64; 7] = p.try_into().ok()?;
+        Some(self.residual(&p).norm_squared())
+    }
+
+    fn accept(&mut self) {
+        self.normal = None;
+    }
 }
 
 /// Least squares of `y` on the columns of `x`: coefficients and residual sum of squares.
@@ -135,60 +192,20 @@ pub fn fit_damped_sinusoid(
             }
         }
     }
-    let (mut rss, mut p) = best.ok_or(ModalReject::TooShort)?;
+    let (rss, p) = best.ok_or(ModalReject::TooShort)?;
     // Levenberg–Marquardt on all seven parameters
-    let jac = |p: &[f64; 7]| {
-        DMatrix::from_fn(n, 7, |i, j| {
-            let t = tau[i];
-            let e = (-p[6] * t).exp();
-            let (s, c) = (p[5] * t).sin_cos();
-            match j {
-                0 => 1.0,
-                1 => t,
-                2 => t * t,
-                3 => e * s,
-                4 => e * c,
-                5 => e * t * (p[3] * c - p[4] * s),
-                _ => -t * e * (p[3] * s + p[4] * c),
-            }
-        })
+    let mut problem = Sinusoid {
+        tau: &tau,
+        y,
+        normal: None,
     };
-    let resid = |p: &[f64; 7]| DVector::from_fn(n, |i, _| y[i] - model(p, tau[i]));
-    let mut lambda = 1e-3;
-    for _ in 0..200 {
-        let j = jac(&p);
-        let r = resid(&p);
-        let jtj = j.transpose() * &j;
-        let g = j.transpose() * &r;
-        let mut improved = false;
-        while lambda < 1e12 {
-            let mut a = jtj.clone();
-            for d in 0..7 {
-                a[(d, d)] += lambda * jtj[(d, d)].max(1e-12);
-            }
-            let Some(step) = a.cholesky().map(|c| c.solve(&g)) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let mut q = p;
-            for d in 0..7 {
-                q[d] += step[d];
-            }
-            let rss_q = resid(&q).norm_squared();
-            if rss_q.is_finite() && rss_q < rss {
-                let gain = (rss - rss_q) / rss;
-                p = q;
-                rss = rss_q;
-                lambda = (lambda / 10.0).max(1e-12);
-                improved = gain > 1e-12;
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
-            break;
-        }
-    }
+    let settings = Settings {
+        gain_tolerance: 1e-12,
+        ..Settings::new(Damping::CLASSICAL, Scaling::Floored(1e-12), 200)
+    };
+    let report = minimise(&mut problem, &p, rss, &settings, &mut Silent);
+    let rss = report.cost;
+    let p: [f64; 7] = std::array::from_fn(|d| report.params[d]);
     let frequency_hz = p[5].abs() / (2.0 * std::f64::consts::PI);
     let amplitude = p[3].hypot(p[4]);
     // sin(ωτ + φ) = sin ωτ cos φ + cos ωτ sin φ, with a = A cos φ, b = A sin φ (ω ≥ 0)
@@ -201,7 +218,7 @@ pub fn fit_damped_sinusoid(
     let r2 = 1.0 - rss / rss_trend;
     let dof = (n - 7) as f64;
     let s2 = rss / dof;
-    let j = jac(&p);
+    let j = jacobian(&tau, &p);
     let cov = (j.transpose() * &j).try_inverse();
     let se = |d: usize| {
         cov.as_ref()

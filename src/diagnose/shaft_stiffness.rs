@@ -2,7 +2,7 @@
 //! linearised shuffle modes ([`super::linearised_mode`]) match the modes measured after a
 //! drive's clutch engagements ([`super::modal`]; docs/models/driveline.md,
 //! docs/diagnosis/method.md): least squares of the log-frequency differences in `ln k_d` by
-//! Gauss–Newton, with a Student-t confidence interval.
+//! Levenberg–Marquardt, with a Student-t confidence interval.
 //!
 //! Stiffness in N·m/rad; frequencies in Hz.
 
@@ -10,6 +10,7 @@ use super::linearised_mode::locked_mode;
 use super::modal::EngagementModes;
 use super::modal_config::ModalConfig;
 use crate::model::driveline::DrivelineParams;
+use crate::optim::{minimise, Damping, ScalarResiduals, Scaling, Settings, Silent};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -30,8 +31,9 @@ pub struct StiffnessFit {
 /// Fits the drive-shaft stiffness `k_d` (`driveline_compliance`) to the accepted measured modes
 /// of `fits`: least squares of `ln f_measured − ln f_linearised(k_d)` over the engagements
 /// (each at its gear and measured speed, [`locked_mode`] on `p` with `k_d` replaced), in
-/// `x = ln(k_d / k_d,nominal)` by Gauss–Newton with a central-difference derivative (20
-/// iterations at most, `x` kept within ±2). Engagements whose measured mode is not within a
+/// `x = ln(k_d / k_d,nominal)` by Levenberg–Marquardt from `x = 0`
+/// ([`crate::optim::minimise`], Gauss–Newton steps while they lower the cost) with a
+/// central-difference derivative (20 steps at most, to a step below 10⁻⁶, `x` kept within ±2). Engagements whose measured mode is not within a
 /// factor [`ModalConfig::max_mode_ratio`] of the nominal linearised one are left out. `None`
 /// below two engagements.
 pub fn fit_shaft_stiffness(
@@ -62,31 +64,20 @@ pub fn fit_shaft_stiffness(
             .map(|&(g, v, lf)| Some(lf - locked_mode(&q, ratios, g, v)?.frequency_hz.ln()))
             .collect()
     };
-    let mut x = 0.0;
-    let h = 0.01;
-    let mut jac = Vec::new();
-    for _ in 0..20 {
-        let (rp, rm) = (residuals(x + h)?, residuals(x - h)?);
-        // d r / d x = −d ln f / d x
-        jac = rp
-            .iter()
-            .zip(&rm)
-            .map(|(a, b)| (a - b) / (2.0 * h))
-            .collect();
-        let r = residuals(x)?;
-        let jtj: f64 = jac.iter().map(|j| j * j).sum();
-        if jtj <= 0.0 {
-            return None;
-        }
-        let step = -jac.iter().zip(&r).map(|(j, r)| j * r).sum::<f64>() / jtj;
-        x = (x + step).clamp(-2.0, 2.0);
-        if step.abs() < 1e-6 {
-            break;
-        }
-    }
-    let r = residuals(x)?;
+    let mut problem = ScalarResiduals::new(residuals, 0.01);
+    let start_cost = problem.start(0.0)?;
+    let settings = Settings {
+        bounds: vec![(-2.0, 2.0)],
+        step_tolerance: 1e-6,
+        ..Settings::new(Damping::GAUSS_NEWTON_FIRST, Scaling::Marquardt, 20)
+    };
+    let x = minimise(&mut problem, &[0.0], start_cost, &settings, &mut Silent).params[0];
+    let r = problem.residuals(x)?;
     let rss: f64 = r.iter().map(|v| v * v).sum();
-    let jtj: f64 = jac.iter().map(|j| j * j).sum();
+    let jtj: f64 = problem.derivative(x)?.iter().map(|j| j * j).sum();
+    if jtj <= 0.0 {
+        return None;
+    }
     let se = (rss / (n - 1) as f64 / jtj).sqrt();
     let tq = StudentsT::new(0.0, 1.0, (n - 1) as f64)
         .ok()?

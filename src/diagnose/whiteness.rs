@@ -3,14 +3,19 @@
 //! rule compares, and the effective number of independent samples of a residual
 //! ([`effective_samples`]), which sets the fit's interval.
 //!
+//! The statistics themselves are in [`crate::signal::whiteness`]; this module applies them to a
+//! diagnosis channel's residual on its train or held-out rows.
+//!
 //! Lags in s (of events for an events channel); residuals standardised by each row's own weight
 //! ([`Channel::weight`]); the non-white power in the units of the weighted mean square
 //! (dimensionless).
 
 use super::channel::Channel;
 use super::split::Part;
-use crate::signal::stats::index_runs;
-use realfft::RealFftPlanner;
+use crate::signal::stats::run_positions;
+use crate::signal::whiteness::{
+    effective_samples as signal_effective_samples, mean_squared_autocorrelation,
+};
 use serde::Serialize;
 
 /// Lags (s) of the whiteness statistic: 0.1 s to 2 s in 0.1 s steps — from the driveline's
@@ -77,33 +82,11 @@ pub fn whiteness(
             .iter()
             .map(|&i| (ch.measured[i] - y[i]) * ch.weight(i).sqrt())
             .collect();
-        let e0: f64 = r.iter().map(|x| x * x).sum();
-        if e0 <= 0.0 {
+        let Some(q) = mean_squared_autocorrelation(&r, &run_positions(rows), step, WHITENESS_LAGS)
+        else {
             continue;
-        }
-        // positions of the runs in `r`
-        let mut bounds = Vec::new();
-        let mut pos = 0;
-        for run in index_runs(rows) {
-            bounds.push((pos, pos + run.len()));
-            pos += run.len();
-        }
-        let mut q = 0.0;
-        for k in 1..=WHITENESS_LAGS {
-            let lag = k * step;
-            let mut s = 0.0;
-            for &(a, b) in &bounds {
-                if b - a > lag {
-                    s += r[a..b - lag]
-                        .iter()
-                        .zip(&r[a + lag..b])
-                        .map(|(x, y)| x * y)
-                        .sum::<f64>();
-                }
-            }
-            q += (s / e0).powi(2);
-        }
-        let q = q / WHITENESS_LAGS as f64;
+        };
+        let e0: f64 = r.iter().map(|x| x * x).sum();
         qn += q;
         pw += q.sqrt() * e0 / (r.len() as f64 * sg * sg);
     }
@@ -118,22 +101,8 @@ pub fn whiteness(
 /// over the lags `k` = 1 … min([`WHITENESS_LAGS`], n − 1) of the squared non-centred
 /// autocorrelation `(Σ z_i z_{i+k} / Σ z_i²)²`; 0 for fewer than 2 events or a zero residual.
 pub fn event_whiteness(z: &[f64]) -> f64 {
-    let e0: f64 = z.iter().map(|x| x * x).sum();
     let lags = WHITENESS_LAGS.min(z.len().saturating_sub(1));
-    if e0 <= 0.0 || lags == 0 {
-        return 0.0;
-    }
-    let q: f64 = (1..=lags)
-        .map(|k| {
-            let s: f64 = z[..z.len() - k]
-                .iter()
-                .zip(&z[k..])
-                .map(|(a, b)| a * b)
-                .sum();
-            (s / e0).powi(2)
-        })
-        .sum();
-    q / lags as f64
+    mean_squared_autocorrelation(z, std::slice::from_ref(&(0..z.len())), 1, lags).unwrap_or(0.0)
 }
 
 /// Effective number of independent samples of the residual of one channel on `part`:
@@ -144,56 +113,14 @@ pub fn event_whiteness(z: &[f64]) -> f64 {
 /// count as independent: `N`.
 pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
     let rows = ch.rows(part);
-    let n = rows.len();
-    if n < 2 || ch.events.is_some() {
-        return n as f64;
+    if ch.events.is_some() {
+        return rows.len() as f64;
     }
     let r: Vec<f64> = rows
         .iter()
         .map(|&i| (ch.measured[i] - sim[i]) * ch.weight(i).sqrt())
         .collect();
-    let mean = r.iter().sum::<f64>() / n as f64;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let mut acov: Vec<f64> = Vec::new();
-    let mut pos = 0;
-    for run in index_runs(rows) {
-        let len = run.len();
-        let x: Vec<f64> = r[pos..pos + len].iter().map(|v| v - mean).collect();
-        pos += len;
-        let m = (2 * len).next_power_of_two();
-        let fwd = planner.plan_fft_forward(m);
-        let inv = planner.plan_fft_inverse(m);
-        let mut buf = vec![0.0; m];
-        buf[..len].copy_from_slice(&x);
-        let mut spec = fwd.make_output_vec();
-        if fwd.process(&mut buf, &mut spec).is_err() {
-            continue;
-        }
-        for c in spec.iter_mut() {
-            *c = num_complex::Complex::new(c.norm_sqr(), 0.0);
-        }
-        let mut out = inv.make_output_vec();
-        if inv.process(&mut spec, &mut out).is_err() {
-            continue;
-        }
-        if acov.len() < len {
-            acov.resize(len, 0.0);
-        }
-        for k in 0..len {
-            acov[k] += out[k] / m as f64;
-        }
-    }
-    if acov.is_empty() || acov[0] <= 0.0 {
-        return n as f64;
-    }
-    let mut tau = 1.0;
-    for (m, a) in acov.iter().enumerate().skip(1) {
-        tau += 2.0 * a / acov[0];
-        if m as f64 >= 5.0 * tau {
-            break;
-        }
-    }
-    n as f64 / tau.max(1.0)
+    signal_effective_samples(&r, &run_positions(rows))
 }
 
 #[cfg(test)]
@@ -249,22 +176,6 @@ mod tests {
         assert!((ratio - 1.0).abs() < 0.08, "{with:?} -> {without:?}");
         let old = (without.q_per_n * ms_slow) / (with.q_per_n * ms_mixed);
         assert!(old > 5.0, "(Q/n)·MS rose only {old}×");
-    }
-
-    #[test]
-    fn effective_samples_of_ar1_noise() {
-        // AR(1), φ = 0.9: τ = (1 + φ)/(1 − φ) = 19
-        let mut rng = Xoshiro256StarStar::seed_from_u64(2);
-        let mut x = 0.0;
-        let v: Vec<f64> = (0..200_000)
-            .map(|_| {
-                x = 0.9 * x + gauss(&mut rng);
-                x
-            })
-            .collect();
-        let n = v.len() as f64;
-        let ne = effective_samples(&channel(v), &vec![0.0; n as usize], Part::Train);
-        assert!((n / ne / 19.0 - 1.0).abs() < 0.2, "τ = {}", n / ne);
     }
 
     #[test]

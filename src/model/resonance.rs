@@ -15,6 +15,7 @@
 
 use super::driveline::DrivelineParams;
 use super::linear::{linearize, rigid_response, LinearDriveline, StateSpace};
+use crate::optim::golden_section;
 
 /// Engine speed of the operating point, rad/s (1200 rpm).
 pub const OPERATING_ENGINE_SPEED_RAD_S: f64 = 1200.0 * std::f64::consts::PI / 30.0;
@@ -96,17 +97,8 @@ pub fn resonance(p: &DrivelineParams, ratios: &[f64], gear: usize, path: Path) -
     };
     if let Some(k) = best {
         // golden-section search for the maximum on [grid[k-1], grid[k+1]] in log f
-        let (mut a, mut b) = (grid[k - 1].ln(), grid[k + 1].ln());
-        let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..80 {
-            let (c, d) = (b - g * (b - a), a + g * (b - a));
-            if mag(c.exp()) >= mag(d.exp()) {
-                b = d;
-            } else {
-                a = c;
-            }
-        }
-        let f = (0.5 * (a + b)).exp();
+        let (log_f, _) = golden_section(|x| -mag(x.exp()), grid[k - 1].ln(), grid[k + 1].ln(), 80);
+        let f = log_f.exp();
         let h = mag(f);
         out.peak_hz = Some(f);
         out.peak_per_m = Some(f / v_top);

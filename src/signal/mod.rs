@@ -28,6 +28,7 @@ mod sos;
 mod spectrum;
 pub mod stats;
 mod welch;
+pub mod whiteness;
 
 pub use butterworth::{
     butter, lowest_order_meeting, try_lowest_order_meeting, BandType, Sos, MAX_SEARCH_ORDER,

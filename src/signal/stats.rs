@@ -39,14 +39,15 @@ pub fn runs(ok: &[bool]) -> Vec<(usize, usize)> {
     out
 }
 
-/// Contiguous runs of `rows` (sorted row indices): consecutive indices belong to one run.
-pub fn index_runs(rows: &[usize]) -> Vec<&[usize]> {
+/// The runs of consecutive indices in `rows` (increasing), as ranges of positions in `rows` (and
+/// so in a vector gathered at `rows`): `[3, 4, 5, 9, 10]` → `[0..3, 3..5]`.
+pub fn run_positions(rows: &[usize]) -> Vec<std::ops::Range<usize>> {
     let mut out = Vec::new();
     let mut start = 0;
     for k in 1..=rows.len() {
         if k == rows.len() || rows[k] != rows[k - 1] + 1 {
             if k > start {
-                out.push(&rows[start..k]);
+                out.push(start..k);
             }
             start = k;
         }
@@ -137,11 +138,8 @@ mod tests {
         );
         assert!(runs(&[false, false]).is_empty());
         let rows = [1, 2, 3, 7, 9, 10];
-        assert_eq!(
-            index_runs(&rows),
-            vec![&[1, 2, 3][..], &[7][..], &[9, 10][..]]
-        );
-        assert!(index_runs(&[]).is_empty());
+        assert_eq!(run_positions(&rows), vec![0..3, 3..4, 4..6]);
+        assert!(run_positions(&[]).is_empty());
     }
 
     #[test]
