@@ -11,6 +11,7 @@
 #![deny(missing_docs)]
 
 pub mod diagnose;
+pub mod fleet;
 pub mod ingest;
 pub mod io;
 pub mod model;

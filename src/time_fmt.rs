@@ -37,6 +37,11 @@ pub fn rfc3339_ns(t_ns: i64) -> String {
     )
 }
 
+/// UTC calendar date `YYYY-MM-DD` of a time in ns since the Unix epoch.
+pub fn utc_date(t_ns: i64) -> String {
+    rfc3339_ns(t_ns)[..10].to_string()
+}
+
 /// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant's days-from-civil).
 fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
     let y = if m <= 2 { y - 1 } else { y };

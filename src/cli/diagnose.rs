@@ -5,7 +5,7 @@ use crate::commands::failure::{setting, Failure};
 use crate::commands::{diagnose, prove};
 use clap::{Args, ValueEnum};
 use fleetdyn::diagnose::run::DiagnoseConfig;
-use fleetdyn::proof::{Driving, ProofConfig};
+use fleetdyn::proof::{Driving, FleetProofConfig, ProofConfig};
 use std::path::PathBuf;
 
 /// Diagnose where a recording and the nominal model disagree (docs/diagnosis/method.md):
@@ -92,6 +92,20 @@ pub struct ProveCmd {
     /// driver and ignores it.
     #[arg(long, value_enum, default_value = "drawn")]
     driving: DrivingArg,
+    /// The fleet-level proof instead (docs/fleet.md): trucks drawn once from the independent
+    /// truth, payload per trip, some developing a fault part-way; every drive diagnosed, the
+    /// fleet evidence scored (detection delay, false alarms per vehicle-month, estimate errors).
+    #[arg(long)]
+    fleet: bool,
+    /// Fleet proof: trucks.
+    #[arg(long, default_value_t = 20, requires = "fleet")]
+    trucks: usize,
+    /// Fleet proof: drives per truck (one a day).
+    #[arg(long, default_value_t = 30, requires = "fleet")]
+    drives_per_truck: usize,
+    /// Fleet proof: trucks that develop a fault.
+    #[arg(long, default_value_t = 6, requires = "fleet")]
+    faulty: usize,
 }
 
 /// Where the proof's drives come from.
@@ -115,6 +129,25 @@ enum DrivingArg {
 impl ProveCmd {
     /// The job: the plan, the nominal vehicle file, output and threads.
     pub fn resolve(self) -> Result<prove::Job, Failure> {
+        if self.fleet {
+            let cfg = FleetProofConfig {
+                seed: self.seed,
+                trucks: self.trucks,
+                drives_per_truck: self.drives_per_truck,
+                faulty: self.faulty,
+                length_km: (self.min_km, self.max_km),
+                ..FleetProofConfig::default()
+            };
+            cfg.validate().map_err(setting)?;
+            return Ok(prove::Job::Fleet {
+                cfg,
+                vehicle: self
+                    .vehicle
+                    .unwrap_or_else(|| PathBuf::from("fixtures/vehicles/truck-40t.toml")),
+                output: self.output,
+                jobs: jobs(self.jobs)?,
+            });
+        }
         let base = match self.truth {
             TruthArg::Independent => ProofConfig::independent(),
             TruthArg::Model => ProofConfig::model(),
@@ -137,7 +170,7 @@ impl ProveCmd {
             ..base
         };
         cfg.validate().map_err(setting)?;
-        Ok(prove::Job {
+        Ok(prove::Job::Cases {
             cfg,
             vehicle,
             output: self.output,

@@ -2,19 +2,33 @@
 
 use super::failure::{io, model, usage, Failure};
 use super::progress::Progress;
-use fleetdyn::proof::{run_proof, ProofConfig, ProveError};
-use std::path::PathBuf;
+use fleetdyn::proof::{run_fleet_proof, run_proof, FleetProofConfig, ProofConfig, ProveError};
+use std::path::{Path, PathBuf};
 
 /// A resolved `prove`.
-pub struct Job {
-    /// The plan.
-    pub cfg: ProofConfig,
-    /// Nominal vehicle file.
-    pub vehicle: PathBuf,
-    /// Output folder.
-    pub output: PathBuf,
-    /// Worker threads.
-    pub jobs: usize,
+pub enum Job {
+    /// The per-drive proof.
+    Cases {
+        /// The plan.
+        cfg: ProofConfig,
+        /// Nominal vehicle file.
+        vehicle: PathBuf,
+        /// Output folder.
+        output: PathBuf,
+        /// Worker threads.
+        jobs: usize,
+    },
+    /// The fleet proof (`--fleet`).
+    Fleet {
+        /// The plan.
+        cfg: FleetProofConfig,
+        /// Nominal vehicle file.
+        vehicle: PathBuf,
+        /// Output folder.
+        output: PathBuf,
+        /// Worker threads.
+        jobs: usize,
+    },
 }
 
 fn category(e: ProveError) -> Failure {
@@ -27,11 +41,58 @@ fn category(e: ProveError) -> Failure {
 
 /// Runs it.
 pub fn run(job: Job) -> Result<(), Failure> {
+    match job {
+        Job::Cases {
+            cfg,
+            vehicle,
+            output,
+            jobs,
+        } => run_cases(&cfg, &vehicle, &output, jobs),
+        Job::Fleet {
+            cfg,
+            vehicle,
+            output,
+            jobs,
+        } => run_fleet(&cfg, &vehicle, &output, jobs),
+    }
+}
+
+fn run_fleet(
+    cfg: &FleetProofConfig,
+    vehicle: &Path,
+    output: &Path,
+    jobs: usize,
+) -> Result<(), Failure> {
     let t0 = std::time::Instant::now();
-    let planned = if job.cfg.only.is_empty() {
-        job.cfg.drives
+    let total = cfg.trucks * cfg.drives_per_truck;
+    let bar = Progress::bar(total as u64, "drives");
+    let progress = |done: usize, total: usize| {
+        if bar.is_drawn() {
+            bar.set_position(done as u64);
+        } else if done.is_multiple_of(10) || done == total {
+            eprintln!(
+                "prove --fleet: {done}/{total} drives ({:.0} s)",
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    };
+    let run = run_fleet_proof(cfg, vehicle, output, jobs, &progress).map_err(category)?;
+    drop(bar);
+    say!("{}", run.to_markdown());
+    say!(
+        "wrote     {} and {}",
+        output.join("fleet_proof.md").display(),
+        output.join("fleet").join("fleet.html").display()
+    );
+    Ok(())
+}
+
+fn run_cases(cfg: &ProofConfig, vehicle: &Path, output: &Path, jobs: usize) -> Result<(), Failure> {
+    let t0 = std::time::Instant::now();
+    let planned = if cfg.only.is_empty() {
+        cfg.drives
     } else {
-        job.cfg.only.len()
+        cfg.only.len()
     };
     let bar = Progress::bar(planned as u64, "drives");
     let progress = |done: usize, total: usize| {
@@ -44,8 +105,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
             );
         }
     };
-    let run =
-        run_proof(&job.cfg, &job.vehicle, &job.output, job.jobs, &progress).map_err(category)?;
+    let run = run_proof(cfg, vehicle, output, jobs, &progress).map_err(category)?;
     drop(bar);
     say!("{}", run.summary.to_markdown());
     for f in &run.failed {
@@ -59,9 +119,9 @@ pub fn run(job: Job) -> Result<(), Failure> {
     }
     say!(
         "wrote     {} ({} drives, {} jobs, {:.0} s)",
-        job.output.join("proof.md").display(),
+        output.join("proof.md").display(),
         run.summary.drives,
-        job.jobs,
+        jobs,
         t0.elapsed().as_secs_f64()
     );
     Ok(())

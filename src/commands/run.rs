@@ -133,6 +133,16 @@ pub fn run(job: Job) -> Result<(), Failure> {
             .join("summary.md")
             .display()
     );
+    if let Some(f) = &report.fleet {
+        say!(
+            "fleet evidence: {} vehicles, {} drives, {} flagged, {} changes; {}",
+            f.vehicles,
+            f.drives,
+            f.flagged,
+            f.changes,
+            std::path::Path::new(&f.dir).join("fleet.html").display()
+        );
+    }
     for d in report
         .drives
         .iter()

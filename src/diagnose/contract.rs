@@ -3,6 +3,7 @@
 //! schemas/outputs/{mismatch,findings}.toml). Field names are part of the contract; units are SI
 //! and named in every parameter entry.
 
+use super::parameter_table::{parameter_columns, ParameterRow};
 use crate::io::{config_hash, write_table, AtomicFile, OutColumn, OutData, OutputError, TableMeta};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -180,9 +181,15 @@ impl Diagnosis {
         source: &str,
         fp: &str,
     ) -> Result<(), OutputError> {
+        let cols = self.mismatch_columns();
+        write_table(path, &self.meta("mismatch", vehicle_id, source, fp), &cols)
+    }
+
+    /// The columns of `mismatch.parquet` (schema `mismatch`).
+    pub fn mismatch_columns(&self) -> Vec<OutColumn> {
         let m = &self.mismatch;
         let f = |g: &dyn Fn(&MismatchEntry) -> f64| m.iter().map(g).collect::<Vec<f64>>();
-        let cols = vec![
+        vec![
             OutColumn {
                 name: "signal".into(),
                 unit: "1".into(),
@@ -206,8 +213,7 @@ impl Diagnosis {
             },
             OutColumn::f64("rms_residual", "per row: see unit", f(&|x| x.rms_residual)),
             OutColumn::f64("significance", "1", f(&|x| x.significance)),
-        ];
-        write_table(path, &self.meta("mismatch", vehicle_id, source, fp), &cols)
+        ]
     }
 
     /// Writes `findings.parquet`: one row per finding, parameter and signal (a finding with
@@ -223,6 +229,29 @@ impl Diagnosis {
         source: &str,
         fp: &str,
     ) -> Result<(), OutputError> {
+        let cols = self.findings_columns();
+        write_table(path, &self.meta("findings", vehicle_id, source, fp), &cols)
+    }
+
+    /// Writes `parameter_estimates.parquet` from `rows` ([`super::parameter_table`]).
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn write_parameter_estimates(
+        &self,
+        path: &Path,
+        rows: &[ParameterRow],
+        vehicle_id: Option<&str>,
+        source: &str,
+        fp: &str,
+    ) -> Result<(), OutputError> {
+        let cols = parameter_columns(rows);
+        let meta = self.meta("parameter_estimates", vehicle_id, source, fp);
+        write_table(path, &meta, &cols)
+    }
+
+    /// The columns of `findings.parquet` (schema `findings`).
+    pub fn findings_columns(&self) -> Vec<OutColumn> {
         let mut rows: Vec<FindingRow> = Vec::new();
         for (k, fe) in self.findings.iter().enumerate() {
             for (pn, pe) in &fe.parameters {
@@ -233,7 +262,7 @@ impl Diagnosis {
         }
         let s = |g: &dyn Fn(&FindingRow) -> String| OutData::Str(rows.iter().map(g).collect());
         let f = |g: &dyn Fn(&FindingRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
-        let cols = vec![
+        vec![
             OutColumn {
                 name: "rank".into(),
                 unit: "1".into(),
@@ -306,8 +335,7 @@ impl Diagnosis {
                 "per row: see signal_unit",
                 f(&|r| r.5.heldout_after),
             ),
-        ];
-        write_table(path, &self.meta("findings", vehicle_id, source, fp), &cols)
+        ]
     }
 }
 

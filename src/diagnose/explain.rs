@@ -55,6 +55,7 @@ use super::fit::{
     applicable, deviance_threshold, fit_effect, fit_spec, profile_interval, screen, Eval,
     Evaluator, ScreenEntry, MAX_FULL_FITS,
 };
+use super::linearised::linearised_estimates;
 use super::problem::{ExplainError, Part, Problem};
 use super::signal_fits::signal_fits;
 use crate::model::catalogue::Effect;
@@ -97,6 +98,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
     let mut consistent: Vec<ConsistentEstimate> = Vec::new();
     let domains = problem.domains();
     let mut probes: BTreeMap<Effect, Arc<super::fit::Probe>> = BTreeMap::new();
+    let mut linearised = Vec::new();
     // outputs of every model at the round's parameters
     let mut bases: Vec<Arc<Vec<Vec<f64>>>> = problem
         .nominal_outputs()
@@ -114,6 +116,9 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             .filter(|e| !excluded.contains(e) && applicable(problem, *e))
             .collect();
         let scr = screen(&ev, &base, &effects, &mut probes);
+        if round == 0 {
+            linearised = linearised_estimates(&ev, &base, &scr);
+        }
         // candidates ranked by the share of every model's train SSE they remove
         let mut cands: Vec<usize> = (0..scr.entries.len())
             .filter(|&k| scr.entries[k].candidate)
@@ -279,6 +284,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         rounds,
         findings,
         consistent,
+        linearised,
         theta,
     })
 }

@@ -24,7 +24,7 @@ fn signal_words(name: &str) -> &str {
 }
 
 /// `x` with three significant figures (no exponent between 1e-4 and 1e6).
-fn num(x: f64) -> String {
+pub fn num(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
     }

@@ -11,6 +11,7 @@ use super::acceptance::{AcceptanceRule, CandidateFit, ModelScore};
 use super::contract::Verdict;
 use super::extended::Theta;
 use super::fit::Screen;
+use super::linearised::LinearisedEstimate;
 use super::problem::{Split, Whiteness};
 use super::signal_fits::{SignalFit, SignalMetrics};
 use crate::model::catalogue::Domain;
@@ -177,6 +178,9 @@ pub struct Explanation {
     /// Fitted parameters that passed rules 1 to 3 with an interval overlapping the vehicle
     /// file's tolerance band, in the order they were met.
     pub consistent: Vec<ConsistentEstimate>,
+    /// Every parameter the drive informs, linearised from the first round's screen
+    /// ([`super::linearised`]).
+    pub linearised: Vec<LinearisedEstimate>,
     /// Final parameters (nominal with the findings' values).
     #[serde(skip)]
     pub theta: Theta,

@@ -30,13 +30,14 @@ use super::contract::{
     Diagnosis, EstimateEntry, FindingEntry, FitEntry, MismatchEntry, ParameterEntry,
 };
 use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding};
-use super::extended::{window_starts, ExtendedError, LongitudinalConfig};
+use super::extended::{window_starts, ExtendedError, LongitudinalConfig, Theta};
 use super::fit::fit_spec;
 use super::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
 use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
+use super::parameter_table::{EstimateMethod, ParameterRow};
 use super::problem::{ExplainError, Problem};
 use super::setup::Setup;
 use super::tyre_slip::tyre_slip_variance;
@@ -187,6 +188,8 @@ pub struct Diagnosed {
     pub models: ModelsUsed,
     /// Shuffle modes per clutch engagement (`None` without an engine-speed comparison).
     pub modal: Option<ModalComparison>,
+    /// Every catalogue parameter the drive informs ([`super::parameter_table`]).
+    pub parameters: Vec<ParameterRow>,
     /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
     /// where a row does not count; `None` without the longitudinal model): the weights of
     /// the explain step's clutch-actuation view ([`super::problem::Problem::with_actuation`]).
@@ -435,8 +438,10 @@ pub fn diagnose(
             })
             .collect(),
     };
+    let parameters = parameter_rows(&explanation, &setup.nominal, &vehicle.tolerance);
     Ok(Diagnosed {
         diagnosis,
+        parameters,
         floors,
         location,
         explanation,
@@ -452,6 +457,67 @@ pub fn diagnose(
         modal,
         actuation_variance,
     })
+}
+
+/// The rows of `ex` in catalogue order: a finding's fit, else a fit within tolerance, else the
+/// linearised estimate; effects the drive does not inform have no row. `nominal` holds the
+/// vehicle file's parameters, `tolerances` its bands.
+pub fn parameter_rows(
+    ex: &Explanation,
+    nominal: &Theta,
+    tolerances: &Tolerances,
+) -> Vec<ParameterRow> {
+    let mut rows = Vec::new();
+    for e in Effect::ALL {
+        let id = e.id();
+        let nom = nominal.get(e);
+        let (tolerance_low, tolerance_high) = tolerances.band(e, nom);
+        let row = |method, value: f64, ci_low: f64, ci_high: f64, n_eff: f64| ParameterRow {
+            effect: id,
+            parameter: e.parameter(),
+            unit: e.unit(),
+            value,
+            ci_low,
+            ci_high,
+            nominal: nom,
+            tolerance_low,
+            tolerance_high,
+            method,
+            n_eff,
+        };
+        let named = ex
+            .findings
+            .iter()
+            .find(|f| f.effect == id)
+            .and_then(|f| f.parameters.values().next());
+        if let Some(p) = named {
+            rows.push(row(
+                EstimateMethod::Named,
+                p.value,
+                p.ci_low,
+                p.ci_high,
+                f64::NAN,
+            ));
+        } else if let Some(c) = ex.consistent.iter().find(|c| c.effect == id) {
+            let p = &c.estimate;
+            rows.push(row(
+                EstimateMethod::Fitted,
+                p.value,
+                p.ci_low,
+                p.ci_high,
+                f64::NAN,
+            ));
+        } else if let Some(l) = ex.linearised.iter().find(|l| l.effect == id) {
+            rows.push(row(
+                EstimateMethod::Linearised,
+                l.value,
+                l.ci_low,
+                l.ci_high,
+                l.n_eff,
+            ));
+        }
+    }
+    rows
 }
 
 #[cfg(test)]

@@ -114,6 +114,23 @@ pub struct ScreenEntry {
     /// The finite-difference probe.
     #[serde(skip)]
     pub probe: Option<Arc<Probe>>,
+    /// The single-effect least-squares sums on the screened rows.
+    #[serde(skip)]
+    pub sums: ScreenSums,
+}
+
+/// The weighted inner products of one effect's single-effect screen fit ([`Evaluator::inner`]
+/// on the screened rows, in the cost's units): `⟨S, S⟩`, `⟨S, r⟩`, `⟨r, r⟩` for the sensitivity
+/// `S` (per parameter unit) and the round's residual `r`. The cost along the effect's
+/// parameter is, linearised, `J(θ + δ) = ⟨r, r⟩ − 2δ⟨S, r⟩ + δ²⟨S, S⟩`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ScreenSums {
+    /// `⟨S, S⟩`, cost units per parameter unit².
+    pub ss: f64,
+    /// `⟨S, r⟩`, cost units per parameter unit.
+    pub sr: f64,
+    /// `⟨r, r⟩`, cost units.
+    pub rr: f64,
 }
 
 impl ScreenEntry {
@@ -315,6 +332,7 @@ pub fn screen(
                 red_screen > SCREEN_MIN_REDUCTION
             },
             probe: Some(probe.clone()),
+            sums: ScreenSums { ss, sr, rr },
         });
     }
     // joint least squares over every model (normal equations, small ridge for collinear

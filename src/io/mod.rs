@@ -1,9 +1,11 @@
 //! File output: Parquet tables with units, provenance metadata and atomic writes.
 
 mod atomic;
+mod escape;
 mod parquet_out;
 
 pub use atomic::AtomicFile;
+pub use escape::escape;
 pub use parquet_out::{
     config_hash, drive_log_columns, write_column_refs_with_constants, write_table,
     write_table_with, write_table_with_constants, ColumnRef, DataRef, OutColumn, OutData,

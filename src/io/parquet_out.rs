@@ -13,7 +13,8 @@ use super::AtomicFile;
 use crate::schema::{drive_log, output_schema, Dtype, SchemaError};
 use crate::table::{DriveLog, Signal};
 use arrow::array::{
-    ArrayRef, Float64Array, Int16Array, StringArray, TimestampNanosecondArray, UInt64Array,
+    ArrayRef, BooleanArray, Float64Array, Int16Array, StringArray, TimestampNanosecondArray,
+    UInt64Array,
 };
 use arrow::datatypes::{DataType, Field, Schema, TimeUnit};
 use arrow::record_batch::RecordBatch;
@@ -44,6 +45,8 @@ pub enum OutData {
     Str(Vec<String>),
     /// Unsigned integers (seeds, counts), written as `uint64`.
     U64(Vec<u64>),
+    /// Flags, written as `bool`.
+    Bool(Vec<bool>),
 }
 
 /// Column data borrowed for writing: what [`OutData`] holds, without owning it, plus columns of
@@ -62,6 +65,8 @@ pub enum DataRef<'a> {
     Str(&'a [String]),
     /// Unsigned integers, written as `uint64`.
     U64(&'a [u64]),
+    /// Flags, written as `bool`.
+    Bool(&'a [bool]),
     /// A float column of this many rows, every one null (as an `F64` of NaN).
     NullF64(usize),
     /// An `int16` column of this many rows, every one null (as an `I16` of NaN).
@@ -75,6 +80,7 @@ impl DataRef<'_> {
             DataRef::F64(v) | DataRef::I16(v) => v.len(),
             DataRef::Str(v) => v.len(),
             DataRef::U64(v) => v.len(),
+            DataRef::Bool(v) => v.len(),
             DataRef::NullF64(n) | DataRef::NullI16(n) => *n,
         }
     }
@@ -85,6 +91,7 @@ impl DataRef<'_> {
             DataRef::I16(_) | DataRef::NullI16(_) => Dtype::I16,
             DataRef::Str(_) => Dtype::Str,
             DataRef::U64(_) => Dtype::U64,
+            DataRef::Bool(_) => Dtype::Bool,
         }
     }
 }
@@ -125,6 +132,7 @@ impl<'a> ColumnRef<'a> {
             DataRef::I16(v) => OutData::I16(v.to_vec()),
             DataRef::Str(v) => OutData::Str(v.to_vec()),
             DataRef::U64(v) => OutData::U64(v.to_vec()),
+            DataRef::Bool(v) => OutData::Bool(v.to_vec()),
             DataRef::NullF64(n) => OutData::F64(vec![f64::NAN; n]),
             DataRef::NullI16(n) => OutData::I16(vec![f64::NAN; n]),
         };
@@ -184,6 +192,7 @@ impl OutColumn {
             OutData::I16(v) => DataRef::I16(v),
             OutData::Str(v) => DataRef::Str(v),
             OutData::U64(v) => DataRef::U64(v),
+            OutData::Bool(v) => DataRef::Bool(v),
         };
         ColumnRef {
             name: &self.name,
@@ -427,6 +436,7 @@ fn write_table_full(
                     Dtype::I16 => DataType::Int16,
                     Dtype::Str => DataType::Utf8,
                     Dtype::U64 => DataType::UInt64,
+                    Dtype::Bool => DataType::Boolean,
                 };
                 let nullable = !matches!(c.data, DataRef::Timestamp(_));
                 Field::new(c.name, dt, nullable).with_metadata(unit_meta(c.unit))
@@ -454,6 +464,7 @@ fn write_table_full(
                     )),
                     DataRef::Str(v) => Arc::new(StringArray::from_iter_values(v[r.clone()].iter())),
                     DataRef::U64(v) => Arc::new(UInt64Array::from(v[r.clone()].to_vec())),
+                    DataRef::Bool(v) => Arc::new(BooleanArray::from(v[r.clone()].to_vec())),
                     // built as the NaN columns they stand for are, so the bytes are the same
                     DataRef::NullF64(_) => Arc::new(Float64Array::from_iter(std::iter::repeat_n(
                         None::<f64>,

@@ -6,6 +6,7 @@
 //! OUT/_state/model_version=<M>/<aa>/<key>.json    done-marker of one input (key: hash of its
 //!                                                 content hash and its path as listed)
 //! OUT/_reports/<pipeline>/model_version=<M>[/shard-<i>-of-<N>]/  run report, fleet tables, plots
+//! OUT/_reports/diagnose/model_version=<M>/vehicle_id=<V>/<drive_id>/  a drive's diagnosis report
 //! ```
 //!
 //! Each table folder reads as one table (polars `scan_parquet(hive_partitioning=True)`, DuckDB
@@ -30,23 +31,7 @@ use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-/// Escapes a partition value or file stem: letters, digits, `-`, `_`, `.` kept, everything else
-/// (and a leading `.`) as `%XX` of its UTF-8 bytes.
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for (i, b) in s.bytes().enumerate() {
-        let keep = b.is_ascii_alphanumeric() || b == b'-' || b == b'_' || (b == b'.' && i > 0);
-        if keep {
-            out.push(b as char);
-        } else {
-            out.push_str(&format!("%{b:02X}"));
-        }
-    }
-    if out.is_empty() {
-        out.push_str("%00");
-    }
-    out
-}
+pub use crate::io::escape;
 
 /// Hex SHA-256 of a file's bytes, streamed.
 ///
@@ -66,20 +51,7 @@ pub fn file_sha256(path: &Path) -> std::io::Result<String> {
     Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }
 
-/// UTC calendar date `YYYY-MM-DD` of a time in ns since the Unix epoch.
-pub fn utc_date(t_ns: i64) -> String {
-    // days since 1970-01-01 to a civil date (H. Hinnant's algorithm)
-    let z = t_ns.div_euclid(86_400_000_000_000) + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}")
-}
+pub use crate::time_fmt::utc_date;
 
 /// The dataset under one output root, for one model version.
 #[derive(Debug, Clone)]
@@ -110,6 +82,16 @@ impl Dataset {
             .join(format!("vehicle_id={}", escape(vehicle_id)))
             .join(format!("date={date}"))
             .join(format!("{}.parquet", escape(drive_id)))
+    }
+
+    /// Folder of a drive's diagnosis report (`diagnosis.json`, `report.md`, plots), relative to
+    /// the root.
+    pub fn diagnosis_rel(&self, vehicle_id: &str, drive_id: &str) -> PathBuf {
+        PathBuf::from("_reports")
+            .join("diagnose")
+            .join(format!("model_version={}", escape(&self.model_version)))
+            .join(format!("vehicle_id={}", escape(vehicle_id)))
+            .join(escape(drive_id))
     }
 
     /// Path of the done-marker with key `key` (hex), relative to the root.

@@ -19,11 +19,13 @@ use super::spec::Plan;
 use super::spec_sections::{DatasetTable, PipelineStage};
 use super::vehicles::LoadedVehicle;
 use super::{resample_stage, slope_stage};
+use crate::diagnose::parameter_table::parameter_columns;
 use crate::io::{
     config_hash, write_column_refs_with_constants, AtomicFile, ColumnRef, OutColumn, TableMeta,
 };
 use crate::report::axle_sim::{axle_sim_columns, AxleSimExtra, TimeAxis};
 use crate::report::axle_validation::{axle_meta, axle_validation_columns};
+use crate::report::diagnosis_files::write_outputs;
 use crate::table::DriveLog;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -51,7 +53,9 @@ fn drive_config_hash(
 }
 
 fn needs_vehicle(plan: &Plan) -> bool {
-    plan.has(PipelineStage::Shuffle) || plan.has(PipelineStage::Axle)
+    plan.has(PipelineStage::Shuffle)
+        || plan.has(PipelineStage::Axle)
+        || plan.has(PipelineStage::Diagnose)
 }
 
 fn check_gears(log: &DriveLog, v: &LoadedVehicle) -> Result<(), String> {
@@ -344,6 +348,19 @@ fn write_drive(
                     return Some((m, Built(spectrum_columns(sp))));
                 }
             }
+            DatasetTable::Mismatch | DatasetTable::Findings | DatasetTable::ParameterEstimates => {
+                if let Some(d) = &c.diagnosis {
+                    let diag = &d.diagnosis;
+                    let mut m = meta(t.name());
+                    m.extra = vec![("verdict".into(), diag.verdict.as_str().into())];
+                    let cols = match t {
+                        DatasetTable::Mismatch => diag.mismatch_columns(),
+                        DatasetTable::Findings => diag.findings_columns(),
+                        _ => parameter_columns(&d.parameters),
+                    };
+                    return Some((m, Built(cols)));
+                }
+            }
             DatasetTable::DriveSummary => {
                 return Some((meta("drive_summary"), Built(summary_columns(&rec))));
             }
@@ -358,6 +375,25 @@ fn write_drive(
             let _ = std::fs::remove_file(root.join(p));
         }
     };
+    // the drive's diagnosis report, before the tables (drive_summary stays the last file)
+    if let (Some(d), Some(spec)) = (&c.diagnosis, &plan.diagnose) {
+        if spec.reports {
+            let rel = ctx.ds.diagnosis_rel(&vehicle_id, &rec.drive_id);
+            match write_outputs(&root.join(&rel), d, log, hash) {
+                Ok(w) => {
+                    let mut files = vec![w.mismatch, w.findings, w.parameter_estimates, w.report];
+                    files.extend(w.plots);
+                    files.extend([w.detail, w.json]);
+                    for f in files {
+                        if let Ok(p) = f.strip_prefix(root) {
+                            written.push(p.to_path_buf());
+                        }
+                    }
+                }
+                Err(e) => return Err(fail(wst, e)),
+            }
+        }
+    }
     for &t in &plan.tables {
         let Some((m, cols)) = build(t) else {
             continue;

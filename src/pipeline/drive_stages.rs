@@ -1,6 +1,6 @@
 //! The analysis stages of one drive, in memory, before anything is written: resample to
 //! distance, slope filter, the shuffle and axle simulations side by side (`rayon::join`), the
-//! road slope spectrum. A stage that cannot serve a drive (see [`super::spec`]:
+//! road slope spectrum, the diagnosis. A stage that cannot serve a drive (see [`super::spec`]:
 //! `missing = "skip"`) is skipped with its reason and the drive succeeds; with
 //! `missing = "fail"`, or on a stage error, the drive fails with that stage (`Fail`).
 
@@ -9,6 +9,8 @@ use super::record::StageNote;
 use super::spec::Plan;
 use super::spec_sections::{LongitudinalSpec, MissingPolicy, PipelineStage, SlopeInput};
 use super::vehicles::LoadedVehicle;
+use crate::diagnose::extended::ExtendedError;
+use crate::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError, Diagnosed};
 use crate::road::slope_filter::{filter_slope, SlopeFiltered};
 use crate::road::study::{slope_spectrum, RoadSpectrum, StudyError};
 use crate::schema::{drive_log, Stage};
@@ -209,6 +211,29 @@ fn run_spectrum(
     }
 }
 
+fn run_diagnose(
+    plan: &Plan,
+    log: &DriveLog,
+    vehicle: &LoadedVehicle,
+    notes: &mut Vec<StageNote>,
+) -> Result<Option<Diagnosed>, Fail> {
+    let Some(spec) = &plan.diagnose else {
+        return Ok(None);
+    };
+    let st = PipelineStage::Diagnose;
+    match diagnose(log, &vehicle.file, &DiagnoseConfig::default()) {
+        Ok(d) => {
+            notes.push(ran(st));
+            Ok(Some(d))
+        }
+        Err(e @ DiagnoseError::Setup(ExtendedError::NoModel { .. })) => {
+            cannot_serve(spec.missing, st, e.to_string(), notes)?;
+            Ok(None)
+        }
+        Err(e) => Err(fail(st, e)),
+    }
+}
+
 /// Everything a drive produced, in memory, before anything is written.
 pub(super) struct Computed {
     pub(super) log: DriveLog,
@@ -217,6 +242,7 @@ pub(super) struct Computed {
     pub(super) shuffle: Option<ShuffleOut>,
     pub(super) axle: Option<AxleValidation>,
     pub(super) spectrum: Option<RoadSpectrum>,
+    pub(super) diagnosis: Option<Diagnosed>,
     pub(super) gravity: f64,
 }
 
@@ -290,6 +316,10 @@ pub(super) fn compute(
     if plan.has(PipelineStage::Validate) {
         notes.push(ran(PipelineStage::Validate));
     }
+    let diagnosis = match vehicle {
+        Some(v) => run_diagnose(plan, &log, v, &mut notes)?,
+        None => None,
+    };
     let gravity = vehicle
         .and_then(|v| v.file.axles.as_ref())
         .map_or(9.81, |a| a.gravity_m_per_s2);
@@ -301,6 +331,7 @@ pub(super) fn compute(
             shuffle,
             axle,
             spectrum,
+            diagnosis,
             gravity,
         },
         notes,

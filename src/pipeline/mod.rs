@@ -8,6 +8,7 @@ pub mod dataset;
 pub mod drive_job;
 pub mod drive_stages;
 pub mod drive_tables;
+pub mod fleet_stage;
 pub mod ingest_stage;
 pub mod inputs;
 pub mod record;

@@ -171,6 +171,23 @@ pub struct DriveOutcome {
     pub record: Option<DriveRecord>,
 }
 
+/// What the fleet stage ([`super::fleet_stage`]) wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FleetSummary {
+    /// Folder of its outputs.
+    pub dir: String,
+    /// Vehicles with diagnosed drives.
+    pub vehicles: usize,
+    /// Drives read.
+    pub drives: usize,
+    /// Drives left out because their table could not be read.
+    pub unreadable: usize,
+    /// Vehicles with a parameter outside its tolerance.
+    pub flagged: usize,
+    /// Changes over time found.
+    pub changes: usize,
+}
+
 /// The whole run.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunReport {
@@ -204,6 +221,9 @@ pub struct RunReport {
     pub report_dir: String,
     /// Per drive, in input order.
     pub drives: Vec<DriveOutcome>,
+    /// The fleet stage's outputs, when it ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fleet: Option<FleetSummary>,
 }
 
 /// Why a run could not complete (drive failures are not errors: they are in the report).
@@ -224,6 +244,9 @@ pub enum RunError {
     /// A report table.
     #[error(transparent)]
     Table(#[from] OutputError),
+    /// The fleet stage could not write its outputs.
+    #[error(transparent)]
+    Fleet(#[from] crate::fleet::FleetError),
     /// The output root cannot be written (read-only, no permission): checked before any drive.
     #[error("output folder {path} is not writable: {source}")]
     OutputFolder {

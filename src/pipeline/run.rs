@@ -108,6 +108,10 @@ pub fn run_plan(
     let count = |s: DriveStatus| drives.iter().filter(|d| d.status == s).count();
     let shard = opts.shard.map(|s| (s.index, s.count));
     let report_dir = ctx.ds.report_dir(&plan.spec.name, shard);
+    let fleet = match (plan.has(super::spec::PipelineStage::Fleet), shard) {
+        (true, None) => Some(super::fleet_stage::run_fleet(&ctx.ds, plan, &report_dir)?),
+        _ => None,
+    };
     let report = RunReport {
         pipeline: plan.spec.name.clone(),
         pipeline_file: plan.file.clone(),
@@ -124,6 +128,7 @@ pub fn run_plan(
         output_dir: opts.out_root.display().to_string(),
         report_dir: report_dir.display().to_string(),
         drives,
+        fleet,
     };
     super::run_report::write_run_report(&report_dir, plan, &report)?;
     Ok(report)

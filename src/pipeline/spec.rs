@@ -18,7 +18,7 @@
 //! "TRK-0001" = "fixtures/vehicles/truck-40t.toml"
 //! [ingest]   # IngestConfig        [resample] # ResampleConfig   [slope] # SlopeFilterConfig
 //! [shuffle]  # ShuffleSpec         [axle]     # AxleSpec         [spectrum] # SpectrumSpec
-//! [write]    # WriteSpec           [report]   # ReportSpec
+//! [diagnose] # DiagnoseSpec        [write]    # WriteSpec        [report]   # ReportSpec
 //! ```
 //!
 //! Relative paths are resolved against the current directory (run from the repository top);
@@ -30,8 +30,8 @@
 use super::ingest_stage::IngestConfig;
 use super::inputs::InputItem;
 pub use super::spec_sections::{
-    AccelSpec, AxleSpec, DatasetTable, LongitudinalSpec, MissingPolicy, PipelineStage, ReportSpec,
-    ShuffleSpec, SlopeInput, SpectrumSpec, WriteSpec,
+    AccelSpec, AxleSpec, DatasetTable, DiagnoseSpec, LongitudinalSpec, MissingPolicy,
+    PipelineStage, ReportSpec, ShuffleSpec, SlopeInput, SpectrumSpec, WriteSpec,
 };
 use super::vehicles::VehicleBook;
 use crate::ingest::IngestOptions;
@@ -90,6 +90,8 @@ pub struct PipelineSpec {
     pub axle: Option<AxleSpec>,
     /// Spectrum settings (only with the `spectrum` stage).
     pub spectrum: Option<SpectrumSpec>,
+    /// Diagnosis settings (only with the `diagnose` stage).
+    pub diagnose: Option<DiagnoseSpec>,
     /// Output selection.
     #[serde(default)]
     pub write: WriteSpec,
@@ -130,6 +132,8 @@ pub struct Plan {
     pub axle: Option<AxleSpec>,
     /// Spectrum settings, when the stage runs.
     pub spectrum: Option<SpectrumSpec>,
+    /// Diagnosis settings, when the stage runs.
+    pub diagnose: Option<DiagnoseSpec>,
     /// Tables written, in writing order.
     pub tables: Vec<DatasetTable>,
     /// Canonical text of the whole configuration except vehicle files (each drive's config

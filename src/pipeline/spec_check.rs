@@ -2,7 +2,8 @@
 //! every problem found is collected into one [`PlanError`] before any drive is read.
 //!
 //! **Stages and their order**: `ingest`, `resample`, `slope`, `shuffle`, `axle`, `spectrum`,
-//! `validate`, `write`; `ingest` first, `write` last, no repeats. `slope` and `spectrum` need
+//! `validate`, `diagnose`, `write`, `fleet`; `ingest` first, `write` last but for `fleet` (which
+//! needs `diagnose`), no repeats. `slope` and `spectrum` need
 //! `resample`; a simulation with `slope = "filtered"` needs `slope`.
 //!
 //! What can be known before reading drives is checked here: a stage that *no* configured
@@ -70,6 +71,7 @@ impl PipelineSpec {
             ("shuffle", self.shuffle.is_some(), PipelineStage::Shuffle),
             ("axle", self.axle.is_some(), PipelineStage::Axle),
             ("spectrum", self.spectrum.is_some(), PipelineStage::Spectrum),
+            ("diagnose", self.diagnose.is_some(), PipelineStage::Diagnose),
         ] {
             if present && !has(stage) {
                 problems.push(format!(
@@ -81,6 +83,8 @@ impl PipelineSpec {
         let axle = has(PipelineStage::Axle).then(|| self.axle.clone().unwrap_or_default());
         let spectrum =
             has(PipelineStage::Spectrum).then(|| self.spectrum.clone().unwrap_or_default());
+        let diagnose =
+            has(PipelineStage::Diagnose).then(|| self.diagnose.clone().unwrap_or_default());
 
         // vehicles
         let vehicles = VehicleBook::load(
@@ -93,9 +97,10 @@ impl PipelineSpec {
             || axle
                 .as_ref()
                 .is_some_and(|a| a.longitudinal == LongitudinalSpec::Driveline);
-        if (shuffle.is_some() || axle.is_some()) && vehicles.is_empty() {
+        let vehicle_stages = shuffle.is_some() || axle.is_some() || diagnose.is_some();
+        if vehicle_stages && vehicles.is_empty() {
             problems.push(
-                "stages shuffle and axle need vehicle files: set vehicle, vehicle_dir or [vehicles]"
+                "stages shuffle, axle and diagnose need vehicle files: set vehicle, vehicle_dir or [vehicles]"
                     .into(),
             );
         } else {
@@ -222,7 +227,7 @@ impl PipelineSpec {
                 Vec::new()
             }
         };
-        if shuffle.is_some() || axle.is_some() {
+        if vehicle_stages {
             let mut unknown: BTreeMap<&str, usize> = BTreeMap::new();
             for it in &listed {
                 if let Some(id) = &it.vehicle_id {
@@ -245,7 +250,7 @@ impl PipelineSpec {
             });
         }
         let ingest = ingest.expect("no problems");
-        let fingerprint = format!(
+        let mut fingerprint = format!(
             "pipeline:v2 stages={:?} model_version={}\n{}\n{}\n{}\nshuffle:{:?}\naxle:{:?}\nspectrum:{:?}\ntables:{:?}",
             stages,
             self.model_version,
@@ -257,6 +262,13 @@ impl PipelineSpec {
             spectrum,
             tables,
         );
+        // only with the stage, so that the hashes of pipelines without it stay as they are
+        if let Some(d) = &diagnose {
+            fingerprint.push_str(&format!(
+                "\ndiagnose:{d:?} {:?}",
+                crate::diagnose::run::DiagnoseConfig::default()
+            ));
+        }
         Ok(Plan {
             spec: self,
             file: file.into(),
@@ -267,6 +279,7 @@ impl PipelineSpec {
             shuffle,
             axle,
             spectrum,
+            diagnose,
             tables,
             fingerprint,
         })
@@ -286,8 +299,14 @@ impl PipelineSpec {
         if stages.first() != Some(&PipelineStage::Ingest) {
             problems.push("the first stage must be ingest".into());
         }
-        if stages.last() != Some(&PipelineStage::Write) {
-            problems.push("the last stage must be write".into());
+        let per_drive = stages.iter().rfind(|s| **s != PipelineStage::Fleet);
+        if per_drive != Some(&PipelineStage::Write) {
+            problems.push("the last stage must be write (only fleet may follow it)".into());
+        }
+        if stages.contains(&PipelineStage::Fleet) && !stages.contains(&PipelineStage::Diagnose) {
+            problems.push(
+                "stage fleet needs diagnose: it pools the drives' parameter estimates".into(),
+            );
         }
         for (s, need) in [
             (PipelineStage::Slope, PipelineStage::Resample),

@@ -33,13 +33,18 @@ pub enum PipelineStage {
     Spectrum,
     /// Per-drive summary row and fleet-level validation tables.
     Validate,
+    /// The diagnosis of the drive against its vehicle file (docs/diagnosis/guide.md).
+    Diagnose,
     /// Outputs to the partitioned dataset.
     Write,
+    /// Per-vehicle evidence over every diagnosed drive of the dataset (docs/fleet.md); after
+    /// `write`, in an unsharded run.
+    Fleet,
 }
 
 impl PipelineStage {
     /// Every stage, in order.
-    pub const ALL: [PipelineStage; 8] = [
+    pub const ALL: [PipelineStage; 10] = [
         PipelineStage::Ingest,
         PipelineStage::Resample,
         PipelineStage::Slope,
@@ -47,7 +52,9 @@ impl PipelineStage {
         PipelineStage::Axle,
         PipelineStage::Spectrum,
         PipelineStage::Validate,
+        PipelineStage::Diagnose,
         PipelineStage::Write,
+        PipelineStage::Fleet,
     ];
 
     /// The name used in pipeline files and reports.
@@ -60,7 +67,9 @@ impl PipelineStage {
             PipelineStage::Axle => "axle",
             PipelineStage::Spectrum => "spectrum",
             PipelineStage::Validate => "validate",
+            PipelineStage::Diagnose => "diagnose",
             PipelineStage::Write => "write",
+            PipelineStage::Fleet => "fleet",
         }
     }
 
@@ -238,6 +247,28 @@ impl SpectrumSpec {
     }
 }
 
+/// `[diagnose]`: the diagnosis of each drive against its vehicle file (`fleetdyn diagnose`,
+/// its default settings).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DiagnoseSpec {
+    /// Write each drive's diagnosis folder (`diagnosis.json`, `report.md`, residual plots,
+    /// `detail.json`) under `_reports/diagnose/`.
+    pub reports: bool,
+    /// Drives that no model can be compared on (no `[driveline]` and no `[axles]` the
+    /// recording can drive).
+    pub missing: MissingPolicy,
+}
+
+impl Default for DiagnoseSpec {
+    fn default() -> Self {
+        Self {
+            reports: true,
+            missing: MissingPolicy::Skip,
+        }
+    }
+}
+
 /// Per-drive tables of the dataset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -260,13 +291,19 @@ pub enum DatasetTable {
     AxleValidation,
     /// Road slope spectrum.
     RoadSpectrum,
+    /// Located mismatches of the diagnosis (schema `mismatch`).
+    Mismatch,
+    /// Accepted findings of the diagnosis (schema `findings`).
+    Findings,
+    /// Every catalogue parameter the drive informs (schema `parameter_estimates`).
+    ParameterEstimates,
     /// One row per drive: the validation summary (the `validate` stage).
     DriveSummary,
 }
 
 impl DatasetTable {
     /// Every table, in writing order (`drive_summary` last: the drive's commit row).
-    pub const ALL: [DatasetTable; 10] = [
+    pub const ALL: [DatasetTable; 13] = [
         DatasetTable::DriveLog,
         DatasetTable::DistanceLog,
         DatasetTable::SlopeDistance,
@@ -276,6 +313,9 @@ impl DatasetTable {
         DatasetTable::AxleSim,
         DatasetTable::AxleValidation,
         DatasetTable::RoadSpectrum,
+        DatasetTable::Mismatch,
+        DatasetTable::Findings,
+        DatasetTable::ParameterEstimates,
         DatasetTable::DriveSummary,
     ];
 
@@ -291,6 +331,9 @@ impl DatasetTable {
             DatasetTable::AxleSim => "axle_sim",
             DatasetTable::AxleValidation => "axle_validation",
             DatasetTable::RoadSpectrum => "road_spectrum",
+            DatasetTable::Mismatch => "mismatch",
+            DatasetTable::Findings => "findings",
+            DatasetTable::ParameterEstimates => "parameter_estimates",
             DatasetTable::DriveSummary => "drive_summary",
         }
     }
@@ -304,6 +347,9 @@ impl DatasetTable {
             DatasetTable::ShuffleSim | DatasetTable::ShuffleValidation => PipelineStage::Shuffle,
             DatasetTable::AxleSim | DatasetTable::AxleValidation => PipelineStage::Axle,
             DatasetTable::RoadSpectrum => PipelineStage::Spectrum,
+            DatasetTable::Mismatch | DatasetTable::Findings | DatasetTable::ParameterEstimates => {
+                PipelineStage::Diagnose
+            }
             DatasetTable::DriveSummary => PipelineStage::Validate,
         }
     }

@@ -47,12 +47,16 @@
 //! - out-of-catalogue drives pass when the verdict is `unexplained` or a mismatch overlaps the
 //!   stretch without any catalogue effect being named.
 
+pub mod fleet;
+pub mod fleet_run;
 pub mod generate;
 pub mod plan;
 pub mod run;
 pub mod score;
 pub mod summary;
 
+pub use fleet::{FleetFault, FleetProofConfig};
+pub use fleet_run::{run_fleet_proof, FleetProofRun};
 pub use generate::{drive_config, generate, GenerateError, GeneratedCase, ProofTruth, Stretch};
 pub use plan::{drawn_driver, plan, Driving, Hidden, Outside, ProofCase, ProofConfig, TruthSource};
 pub use run::{run_proof, ProofRun, ProveError, MAX_ATTEMPTS, RESEED_STRIDE};

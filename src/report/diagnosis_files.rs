@@ -1,5 +1,5 @@
 //! The per-drive output folder of a diagnosis (docs/diagnosis/contract.md): `diagnosis.json`,
-//! `mismatch.parquet`, `findings.parquet`, `report.md` with one residual SVG per compared
+//! `mismatch.parquet`, `findings.parquet`, `parameter_estimates.parquet`, `report.md` with one residual SVG per compared
 //! signal (before: nominal; after: with the accepted findings), and `detail.json` with
 //! everything the diagnosis computed (window tests, band powers, coherence, lags, condition
 //! cells, statements, every greedy round's screen and fits) for an engineer who wants to check
@@ -64,6 +64,8 @@ pub struct Written {
     pub mismatch: PathBuf,
     /// `findings.parquet`.
     pub findings: PathBuf,
+    /// `parameter_estimates.parquet`.
+    pub parameter_estimates: PathBuf,
     /// `report.md`.
     pub report: PathBuf,
     /// Residual plots.
@@ -125,6 +127,7 @@ pub fn write_outputs(
         json: p("diagnosis.json"),
         mismatch: p("mismatch.parquet"),
         findings: p("findings.parquet"),
+        parameter_estimates: p("parameter_estimates.parquet"),
         report: p("report.md"),
         plots: names
             .iter()
@@ -161,9 +164,17 @@ fn write_staged(
         source,
         fingerprint,
     )?;
+    diag.write_parameter_estimates(
+        &stage.join("parameter_estimates.parquet"),
+        &d.parameters,
+        vehicle_id,
+        source,
+        fingerprint,
+    )?;
     let mut names = vec![
         "mismatch.parquet".to_string(),
         "findings.parquet".to_string(),
+        "parameter_estimates.parquet".to_string(),
     ];
     let mut plots = Vec::new();
     for r in &d.residuals {

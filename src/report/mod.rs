@@ -8,6 +8,8 @@ pub mod axle_validation;
 pub mod bode;
 pub mod diagnosis;
 pub mod diagnosis_files;
+pub mod fleet_files;
+pub mod fleet_html;
 mod ingest_summary;
 pub mod road_plot;
 pub mod road_spectra;

@@ -32,6 +32,9 @@ pub enum Dtype {
     /// 64-bit unsigned integer (seeds and counts in result tables).
     #[serde(rename = "u64")]
     U64,
+    /// Boolean flag.
+    #[serde(rename = "bool")]
+    Bool,
 }
 
 /// A schema file that does not parse or contradicts itself. These are build-time assets, so

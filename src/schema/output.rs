@@ -78,6 +78,22 @@ const FILES: &[(&str, &str)] = &[
         "findings",
         include_str!("../../schemas/outputs/findings.toml"),
     ),
+    (
+        "parameter_estimates",
+        include_str!("../../schemas/outputs/parameter-estimates.toml"),
+    ),
+    (
+        "fleet_vehicles",
+        include_str!("../../schemas/outputs/fleet-vehicles.toml"),
+    ),
+    (
+        "fleet_parameters",
+        include_str!("../../schemas/outputs/fleet-parameters.toml"),
+    ),
+    (
+        "fleet_changes",
+        include_str!("../../schemas/outputs/fleet-changes.toml"),
+    ),
 ];
 
 /// One column of an output table.

@@ -223,7 +223,7 @@ struct DriveLogColumnDoc {
 }
 
 /// A logical column type as the pages write it (`timestamp[ns, UTC]`, `f64`, `i16`, `string`,
-/// `u64`).
+/// `u64`, `bool`).
 fn dtype(name: &str, dtype: &str) -> Result<&'static str, SchemaError> {
     Ok(match dtype {
         "timestamp_ns_utc" => "timestamp[ns, UTC]",
@@ -231,6 +231,7 @@ fn dtype(name: &str, dtype: &str) -> Result<&'static str, SchemaError> {
         "i16" => "i16",
         "str" => "string",
         "u64" => "u64",
+        "bool" => "bool",
         other => return Err(invalid(name, format!("unknown dtype {other:?}"))),
     })
 }

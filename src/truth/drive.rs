@@ -62,6 +62,12 @@ pub struct IndependentDriveConfig {
     pub effect: TruthEffect,
     /// Draw the truck within tolerances (true) or use the nominal truck (false).
     pub draw_tolerances: bool,
+    /// Seed of the truck's tolerance draw when it is not the drive's: drives of one truck share
+    /// it (a fleet), so the truck is the same and only the road, driver and wind change.
+    pub truck_seed: Option<u64>,
+    /// The drawn mass times this (the trip's payload against the vehicle file's mass), with the
+    /// tyre load alike.
+    pub mass_scale: f64,
     /// Wind on (true) or calm (false).
     pub wind: bool,
     /// Give up after this simulated time, s.
@@ -78,6 +84,8 @@ impl IndependentDriveConfig {
             seed,
             effect: TruthEffect::None,
             draw_tolerances: true,
+            truck_seed: None,
+            mass_scale: 1.0,
             wind: true,
             max_duration_s: length_km * 1000.0 / 2.0 + 600.0,
         }
@@ -163,11 +171,22 @@ pub fn simulate_independent_drive(
     let rules = RoadRules::resolve(&cfg.rules)?;
     let length_m = cfg.length_km * 1000.0;
     let road = generate(&rules, length_m, 1.0, cfg.seed)?;
+    if !(cfg.mass_scale.is_finite() && cfg.mass_scale > 0.0) {
+        return Err(TruthError::BadConfig {
+            parameter: "mass_scale",
+            value: cfg.mass_scale,
+            requirement: "finite and > 0",
+        });
+    }
     let mut params = if cfg.draw_tolerances {
-        nominal.draw(&mut stream(cfg.seed, SALT_PARAMS))
+        nominal.draw(&mut stream(cfg.truck_seed.unwrap_or(cfg.seed), SALT_PARAMS))
     } else {
         nominal.clone()
     };
+    if cfg.mass_scale != 1.0 {
+        params.mass_kg *= cfg.mass_scale;
+        params.tyre.fz_n *= cfg.mass_scale;
+    }
     let (concealed, sensors, extras) = apply(
         &cfg.effect,
         &nominal,

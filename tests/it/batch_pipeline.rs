@@ -139,6 +139,59 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
     ] {
         assert!(rep.join(f).is_file(), "{f}");
     }
+    // the diagnose stage: each 40 t drive's mismatches, findings and parameter estimates in the
+    // dataset with its verdict, and its report folder; the 6x2 (no [driveline], no model the
+    // recording can drive) skipped with the reason
+    for (n, date) in [(1, "03-02"), (2, "03-02"), (3, "03-03"), (4, "03-03")] {
+        let part = format!(
+            "model_version=2026.1/vehicle_id=TRK-000{n}/date=2026-{date}/truck-000{n}.parquet"
+        );
+        let folder = out.join(format!(
+            "_reports/diagnose/model_version=2026.1/vehicle_id=TRK-000{n}/truck-000{n}"
+        ));
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(folder.join("diagnosis.json")).unwrap())
+                .unwrap();
+        for t in ["mismatch", "findings", "parameter_estimates"] {
+            let m = kv(&out.join(t).join(&part));
+            assert_eq!(m["table"], t);
+            assert_eq!(
+                m["verdict"],
+                j["verdict"].as_str().unwrap(),
+                "{t} of truck-000{n}"
+            );
+        }
+        assert!(folder.join("report.md").is_file());
+        let d = stages(&format!("truck-000{n}"));
+        assert!(d
+            .iter()
+            .any(|s| s["stage"] == "diagnose" && s["status"] == "ran"));
+    }
+    // the fleet stage: one row per diagnosed vehicle, the page, one drive each (too few to judge)
+    let fleet = rep.join("fleet");
+    let rows = |t: &str| {
+        SerializedFileReader::new(std::fs::File::open(fleet.join(t)).unwrap())
+            .unwrap()
+            .metadata()
+            .file_metadata()
+            .num_rows()
+    };
+    assert_eq!(rows("fleet_vehicles.parquet"), 4);
+    assert!(rows("fleet_parameters.parquet") >= 4 * 8);
+    assert_eq!(rows("fleet_changes.parquet"), 0);
+    let html = std::fs::read_to_string(fleet.join("fleet.html")).unwrap();
+    assert!(html.contains("TRK-0004") && !html.contains("SEED002-6X2"));
+    assert!(
+        !fleet.join("suggested").exists(),
+        "a suggestion from one drive"
+    );
+    assert_eq!(r["fleet"]["vehicles"].as_u64(), Some(4));
+    let diag = sh.iter().find(|s| s["stage"] == "diagnose").unwrap();
+    assert_eq!(diag["status"], "skipped");
+    assert!(diag["reason"]
+        .as_str()
+        .unwrap()
+        .contains("nothing to diagnose"));
     let md = std::fs::read_to_string(rep.join("summary.md")).unwrap();
     for needle in [
         "Slowest drives",
@@ -427,7 +480,7 @@ fn a_corrupt_drive_fails_alone_with_its_stage_and_exit_1() {
             .iter()
             .filter(|f| f.ends_with("truck-0001.parquet"))
             .count(),
-        7,
+        10,
         "{files:?}"
     );
     // the per-drive report table has every input, failures included

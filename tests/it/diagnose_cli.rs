@@ -1,11 +1,13 @@
 //! `fleetdyn diagnose` end to end: a synthetic drive with a hidden torque-reaction effect diagnosed
 //! through the CLI writes the contract's files — diagnosis.json with exactly the contract's keys,
-//! mismatch.parquet and findings.parquet with `unit` field metadata, report.md with the residual
-//! plots — and names the effect; a recording neither model can use fails with exit 1, a clear
+//! mismatch.parquet, findings.parquet and parameter_estimates.parquet with `unit` field metadata,
+//! report.md with the residual plots — and names the effect; a recording neither model can use fails with exit 1, a clear
 //! message and nothing written; a missing vehicle is a usage error (exit 2).
 //! `fleetdyn prove --driving` records its choice and rejects an unknown one.
 
 use crate::common::fixture;
+use arrow::array::AsArray;
+use arrow::datatypes::Float64Type;
 use fleetdyn::model::catalogue::Effect;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect};
 use fleetdyn::synth::effects::EffectChoice;
@@ -30,6 +32,16 @@ fn keys(v: &serde_json::Value) -> BTreeSet<String> {
 
 fn set(k: &[&str]) -> BTreeSet<String> {
     k.iter().map(|s| s.to_string()).collect()
+}
+
+fn read_table(p: &Path) -> arrow::record_batch::RecordBatch {
+    let f = std::fs::File::open(p).unwrap();
+    let r = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(f)
+        .unwrap()
+        .build()
+        .unwrap();
+    let batches: Vec<_> = r.map(|b| b.unwrap()).collect();
+    arrow::compute::concat_batches(&batches[0].schema(), &batches).unwrap()
 }
 
 fn parquet_units(p: &Path) -> (i64, Vec<(String, Option<String>)>) {
@@ -164,6 +176,53 @@ fn diagnose_writes_the_contract_and_names_the_effect() {
         .sum();
     assert_eq!(rows as usize, fit_rows);
     assert!(units.iter().all(|(_, u)| u.is_some()), "{units:?}");
+    // every parameter the drive informs, the named one among them with the fitted interval
+    let pe = out.join("parameter_estimates.parquet");
+    let (rows, units) = parquet_units(&pe);
+    assert!(rows >= 10, "{rows} parameter rows");
+    assert!(units.iter().all(|(_, u)| u.is_some()), "{units:?}");
+    let t = read_table(&pe);
+    let effect = t
+        .column_by_name("effect")
+        .unwrap()
+        .as_string::<i32>()
+        .clone();
+    let method = t
+        .column_by_name("method")
+        .unwrap()
+        .as_string::<i32>()
+        .clone();
+    let f64s = |n: &str| {
+        t.column_by_name(n)
+            .unwrap()
+            .as_primitive::<Float64Type>()
+            .clone()
+    };
+    let (value, lo, hi) = (f64s("value"), f64s("ci_low"), f64s("ci_high"));
+    let consistent = t
+        .column_by_name("consistent_with_file")
+        .unwrap()
+        .as_boolean()
+        .clone();
+    let named = j["findings"][0]["effect"].as_str().unwrap();
+    let mut seen = BTreeSet::new();
+    for i in 0..t.num_rows() {
+        assert!(
+            seen.insert(effect.value(i).to_string()),
+            "one row per parameter"
+        );
+        assert!(lo.value(i) <= value.value(i) && value.value(i) <= hi.value(i));
+        if effect.value(i) == named {
+            assert_eq!(method.value(i), "named");
+            let p = &j["findings"][0]["parameters"];
+            let (_, p) = p.as_object().unwrap().iter().next().unwrap();
+            assert_eq!(value.value(i), p["value"].as_f64().unwrap());
+            assert!(!consistent.value(i));
+        } else {
+            assert!(["fitted", "linearised"].contains(&method.value(i)));
+        }
+    }
+    assert!(seen.contains(named));
     // the report with its plots, MAE and fit %
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("**Verdict: explained**"));

@@ -27,6 +27,8 @@ mod driveline_reference;
 mod driveline_validate;
 mod fault_injection;
 mod fixtures_regen;
+mod fleet_proof;
+mod fleet_report;
 mod ingest_errors;
 mod ingest_fixtures;
 mod proof_independent;

@@ -1,0 +1,250 @@
+//! Running a fleet proof ([`run_fleet_proof`]): every planned drive simulated and diagnosed in
+//! parallel, each truck scored ([`super::fleet`]), the summary against the targets and the
+//! fleet evidence written.
+
+use super::fleet::{
+    fleet_plan, run_drive, score_truck, FleetDriveResult, FleetProofConfig, TruckScore,
+};
+use super::run::ProveError;
+use crate::fleet::evidence::VehicleEvidence;
+use crate::io::AtomicFile;
+use crate::model::vehicle::VehicleFile;
+use crate::report::fleet_files::{write_fleet_outputs, FleetMeta};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The targets a fleet proof is held to.
+pub const TARGET_DELAY_DRIVES: usize = 5;
+/// Most false alarms per 20 vehicle-months.
+pub const TARGET_FALSE_ALARMS_PER_20_VEHICLE_MONTHS: f64 = 1.0;
+/// Largest pooled estimate error of drag area, rolling resistance and clutch capacity.
+pub const TARGET_ESTIMATE_ERROR: f64 = 0.05;
+
+/// A fleet proof's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct FleetProofRun {
+    /// The configuration.
+    pub config: FleetProofConfig,
+    /// Per truck.
+    pub trucks: Vec<TruckScore>,
+    /// Faulty trucks whose fault was flagged within [`TARGET_DELAY_DRIVES`] drives.
+    pub detected_in_time: usize,
+    /// Faulty trucks flagged at all.
+    pub detected: usize,
+    /// Faulty trucks.
+    pub faulty: usize,
+    /// False alarms.
+    pub false_alarms: usize,
+    /// Vehicle-months observed (drives / drives a month).
+    pub vehicle_months: f64,
+    /// Drives that failed.
+    pub failed_drives: usize,
+    /// Drives.
+    pub drives: usize,
+    /// Simulated drive hours.
+    pub drive_hours: f64,
+    /// Diagnosis time per drive-hour, s (all threads).
+    pub seconds_per_drive_hour: f64,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+}
+
+impl FleetProofRun {
+    /// False alarms per 20 vehicle-months.
+    pub fn false_alarm_rate(&self) -> f64 {
+        20.0 * self.false_alarms as f64 / self.vehicle_months.max(1e-12)
+    }
+
+    /// The summary in Markdown.
+    pub fn to_markdown(&self) -> String {
+        let c = &self.config;
+        let mut s = format!(
+            "# Fleet proof (independent truth)\n\n\
+             Seed {}, {} trucks × {} drives of {}–{} km ({} faulty), {} drives a month.\n\n\
+             | measure | result | target |\n|---|---|---|\n\
+             | faults flagged within {} drives of onset | {} of {} ({} flagged at all) | all |\n\
+             | false alarms per 20 vehicle-months | {:.2} ({} in {:.1} vehicle-months) | ≤ {} |\n",
+            c.seed,
+            c.trucks,
+            c.drives_per_truck,
+            c.length_km.0,
+            c.length_km.1,
+            c.faulty,
+            c.drives_per_month,
+            TARGET_DELAY_DRIVES,
+            self.detected_in_time,
+            self.faulty,
+            self.detected,
+            self.false_alarm_rate(),
+            self.false_alarms,
+            self.vehicle_months,
+            TARGET_FALSE_ALARMS_PER_20_VEHICLE_MONTHS,
+        );
+        for id in ["aero_drag", "rolling_resistance", "clutch_slip"] {
+            let errs: Vec<f64> = self
+                .trucks
+                .iter()
+                .flat_map(|t| &t.estimates)
+                .filter(|e| e.0 == id && e.3.is_finite())
+                .map(|e| e.3.abs())
+                .collect();
+            let within = errs.iter().filter(|e| **e <= TARGET_ESTIMATE_ERROR).count();
+            let mut sorted = errs.clone();
+            let med = crate::signal::stats::median(&mut sorted);
+            s.push_str(&format!(
+                "| {id} pooled estimate within 5 % of the truth | {within} of {} trucks (median error {:.1} %) | all |\n",
+                errs.len(),
+                100.0 * med
+            ));
+        }
+        s.push_str(&format!(
+            "\n{} drives ({} failed), {:.1} drive-hours, diagnosis {:.1} s per drive-hour, {:.0} s wall.\n\n\
+             | truck | fault (onset day) | flagged after | false alarms | other flags after onset | drag area est./truth | c_r1 est./truth | clutch est./truth |\n|---|---|---|---|---|---|---|---|\n",
+            self.drives,
+            self.failed_drives,
+            self.drive_hours,
+            self.seconds_per_drive_hour,
+            self.elapsed_s
+        ));
+        for t in &self.trucks {
+            let fault = t
+                .fault
+                .map_or("—".to_string(), |(f, d)| format!("{} ({d})", f.effect()));
+            let delay = match (t.fault, t.delay) {
+                (None, _) => "—".to_string(),
+                (Some(_), Some(d)) => format!("{d} drives"),
+                (Some(_), None) => "not flagged".to_string(),
+            };
+            let list = |v: &[(String, usize)]| {
+                if v.is_empty() {
+                    "—".to_string()
+                } else {
+                    v.iter()
+                        .map(|(p, d)| format!("{p} (day {d})"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            };
+            let est = |id: &str| {
+                t.estimates
+                    .iter()
+                    .find(|e| e.0 == id)
+                    .map_or("—".to_string(), |e| {
+                        format!("{:.4} / {:.4} ({:+.1} %)", e.1, e.2, 100.0 * e.3)
+                    })
+            };
+            s.push_str(&format!(
+                "| {} | {fault} | {delay} | {} | {} | {} | {} | {} |\n",
+                t.vehicle_id,
+                list(&t.false_alarms),
+                list(&t.side_flags),
+                est("aero_drag"),
+                est("rolling_resistance"),
+                est("clutch_slip"),
+            ));
+        }
+        s
+    }
+}
+
+/// Runs the fleet proof of `cfg` on the vehicle file `vehicle` into `out` with `jobs` threads;
+/// `progress(done, total)` after each drive.
+///
+/// # Errors
+/// [`ProveError`] for the vehicle file, the thread pool or the outputs; a failing drive only
+/// fails that drive.
+pub fn run_fleet_proof(
+    cfg: &FleetProofConfig,
+    vehicle: &Path,
+    out: &Path,
+    jobs: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<FleetProofRun, ProveError> {
+    use rayon::prelude::*;
+    let t0 = std::time::Instant::now();
+    let vf = VehicleFile::load(vehicle)?;
+    let (trucks, drives) = fleet_plan(cfg);
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ProveError::Io { path, source }
+    };
+    let scratch = out.join("scratch");
+    std::fs::create_dir_all(&scratch).map_err(io(&scratch))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| ProveError::Pool(e.to_string()))?;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<FleetDriveResult> = pool.install(|| {
+        drives
+            .par_iter()
+            .map(|d| {
+                let dir = scratch.join(format!("t{:03}-d{:03}", d.truck, d.day));
+                let r = run_drive(d, &trucks[d.truck], vehicle, &vf, &dir);
+                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(k, drives.len());
+                r
+            })
+            .collect()
+    });
+    let _ = std::fs::remove_dir_all(&scratch);
+    let mut scores = Vec::new();
+    let mut evidence: Vec<VehicleEvidence> = Vec::new();
+    for (t, truck) in trucks.iter().enumerate() {
+        let mine: Vec<&FleetDriveResult> = results.iter().filter(|r| r.drive.truck == t).collect();
+        let (s, v) = score_truck(truck, &mine);
+        scores.push(s);
+        if !v.drives.is_empty() {
+            evidence.push(v);
+        }
+    }
+    let ok: Vec<&FleetDriveResult> = results.iter().filter(|r| r.error.is_none()).collect();
+    let drive_hours = ok.iter().map(|r| r.duration_s).sum::<f64>() / 3600.0;
+    let faulty = scores.iter().filter(|s| s.fault.is_some()).count();
+    let run = FleetProofRun {
+        config: cfg.clone(),
+        detected_in_time: scores
+            .iter()
+            .filter(|s| s.delay.is_some_and(|d| d <= TARGET_DELAY_DRIVES))
+            .count(),
+        detected: scores.iter().filter(|s| s.delay.is_some()).count(),
+        faulty,
+        false_alarms: scores.iter().map(|s| s.false_alarms.len()).sum(),
+        vehicle_months: ok.len() as f64 / cfg.drives_per_month,
+        failed_drives: results.len() - ok.len(),
+        drives: results.len(),
+        drive_hours,
+        seconds_per_drive_hour: ok.iter().map(|r| r.seconds).sum::<f64>() / drive_hours.max(1e-12),
+        elapsed_s: t0.elapsed().as_secs_f64(),
+        trucks: scores,
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let md = out.join("fleet_proof.md");
+    AtomicFile::write_all(&md, run.to_markdown().as_bytes()).map_err(io(&md))?;
+    let json = out.join("fleet_proof.json");
+    let mut text = serde_json::to_string_pretty(&(&run, &results)).unwrap_or_default();
+    text.push('\n');
+    AtomicFile::write_all(&json, text.as_bytes()).map_err(io(&json))?;
+    let files: BTreeMap<String, String> = trucks
+        .iter()
+        .map(|t| (t.vehicle_id.clone(), vehicle.display().to_string()))
+        .collect();
+    write_fleet_outputs(
+        &out.join("fleet"),
+        &evidence,
+        &files,
+        &FleetMeta {
+            pipeline: "prove --fleet",
+            model_version: "proof",
+            source_file: &vehicle.display().to_string(),
+            config_hash: "",
+        },
+        &|_, _| "#".to_string(),
+    )
+    .map_err(|e| ProveError::Io {
+        path: out.join("fleet"),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    Ok(run)
+}
