@@ -13,12 +13,10 @@ pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
 /// autocorrelation count `n_acf` binds, `t²_{B−1}(0.975)` when the between-block count does (its
 /// `B − 1` degrees of freedom, as a cluster-robust t test).
 pub fn deviance_threshold(n_acf: f64, cluster: Option<(f64, usize)>) -> (f64, f64) {
-    use statrs::distribution::{ContinuousCDF, StudentsT};
     match cluster {
         Some((n_cl, b)) if n_cl < n_acf && b >= 2 => {
-            let t = StudentsT::new(0.0, 1.0, (b - 1) as f64)
-                .map(|d| d.inverse_cdf(0.975))
-                .unwrap_or(f64::INFINITY);
+            let t = crate::signal::stats::t_quantile(0.975, (b - 1) as f64);
+            let t = if t.is_nan() { f64::INFINITY } else { t };
             (n_cl, t * t)
         }
         _ => (n_acf, CHI2_1_95),

@@ -36,7 +36,6 @@
 use crate::model::driveline::DrivelineParams;
 use crate::table::DriveLog;
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 pub use super::clutch_engagements::{engagements, Engagement};
 pub use super::linearised_mode::{
@@ -173,8 +172,8 @@ fn t_test(x: &[f64]) -> Option<(f64, f64, f64)> {
         return Some((m, se, if m == 0.0 { 1.0 } else { 0.0 }));
     }
     let t = m / se;
-    let dist = StudentsT::new(0.0, 1.0, (x.len() - 1) as f64).ok()?;
-    Some((t, se, 2.0 * dist.cdf(-t.abs())))
+    let tail = crate::signal::stats::t_cdf(-t.abs(), (x.len() - 1) as f64);
+    (!tail.is_nan()).then_some((t, se, 2.0 * tail))
 }
 
 /// Fits the mode of every usable engagement of `log` ([`engagements`]) on the measured engine

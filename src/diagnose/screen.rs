@@ -119,7 +119,7 @@ pub struct ScreenEntry {
     pub sums: ScreenSums,
 }
 
-/// The weighted inner products of one effect's single-effect screen fit ([`Evaluator::inner`]
+/// The weighted inner products of one effect's single-effect screen fit (`Evaluator::inner`
 /// on the screened rows, in the cost's units): `⟨S, S⟩`, `⟨S, r⟩`, `⟨r, r⟩` for the sensitivity
 /// `S` (per parameter unit) and the round's residual `r`. The cost along the effect's
 /// parameter is, linearised, `J(θ + δ) = ⟨r, r⟩ − 2δ⟨S, r⟩ + δ²⟨S, S⟩`.

@@ -12,7 +12,6 @@ use super::modal_config::ModalConfig;
 use crate::model::driveline::DrivelineParams;
 use crate::optim::{minimise, Damping, ScalarResiduals, Scaling, Settings, Silent};
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// The drive-shaft stiffness that makes the linearised modes match the measured ones.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -79,9 +78,10 @@ pub fn fit_shaft_stiffness(
         return None;
     }
     let se = (rss / (n - 1) as f64 / jtj).sqrt();
-    let tq = StudentsT::new(0.0, 1.0, (n - 1) as f64)
-        .ok()?
-        .inverse_cdf(0.975);
+    let tq = crate::signal::stats::t_quantile(0.975, (n - 1) as f64);
+    if tq.is_nan() {
+        return None;
+    }
     Some(StiffnessFit {
         k_d_nm_per_rad: k0 * x.exp(),
         ci95_nm_per_rad: (k0 * (x - tq * se).exp(), k0 * (x + tq * se).exp()),

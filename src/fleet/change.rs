@@ -2,7 +2,7 @@
 //! two-sample test at every split, its false-alarm rate fixed in advance.
 
 use super::pool::{pool, Pooled};
-use statrs::distribution::{ContinuousCDF, Normal};
+use crate::signal::stats::normal_sf;
 
 /// Fewest drives on either side of a change: a change needs three drives to stand on (one drive
 /// is one road, one payload, one driver).
@@ -36,7 +36,6 @@ pub fn best_split(points: &[(f64, f64)]) -> Option<Change> {
         return None;
     }
     let splits = n - 2 * MIN_SEGMENT + 1;
-    let normal = Normal::new(0.0, 1.0).ok()?;
     let mut best: Option<Change> = None;
     for k in MIN_SEGMENT..=n - MIN_SEGMENT {
         let (Some(a), Some(b)) = (pool(&points[..k]), pool(&points[k..])) else {
@@ -47,7 +46,7 @@ pub fn best_split(points: &[(f64, f64)]) -> Option<Change> {
             continue;
         }
         if best.is_none_or(|c| z.abs() > c.z.abs()) {
-            let p = 2.0 * normal.sf(z.abs());
+            let p = 2.0 * normal_sf(z.abs());
             best = Some(Change {
                 at: k,
                 z,

@@ -19,8 +19,15 @@ pub enum Status {
     TooFewDrives,
     /// The current segment's interval overlaps the tolerance band.
     Consistent,
-    /// The current segment's interval lies outside the band.
-    OutsideTolerance,
+    /// The drives' pooled interval lies outside the band, and did so from the first drive on
+    /// (no change): not flagged. A per-drive estimate carries what else its drive's residual
+    /// holds, and a truck's own departures from the file within tolerance (an engine map, its
+    /// tyres) bias every drive of it alike, so pooling shrinks the interval but not the bias
+    /// (docs/fleet.md).
+    DiffersFromFile,
+    /// The current segment follows a change and lies outside the band: flagged. A bias common
+    /// to the truck's drives cancels between the segments a change compares.
+    Changed,
 }
 
 impl Status {
@@ -29,7 +36,8 @@ impl Status {
         match self {
             Status::TooFewDrives => "too_few_drives",
             Status::Consistent => "consistent",
-            Status::OutsideTolerance => "outside_tolerance",
+            Status::DiffersFromFile => "differs_from_file",
+            Status::Changed => "changed",
         }
     }
 }
@@ -138,7 +146,10 @@ impl ParameterEvidence {
         s.push_str(match self.status {
             Status::TooFewDrives => ", too few drives to judge",
             Status::Consistent => ", within its tolerance",
-            Status::OutsideTolerance => ", outside its tolerance",
+            Status::DiffersFromFile => {
+                ", outside its tolerance on every drive (not flagged: no change)"
+            }
+            Status::Changed => ", outside its tolerance since a change",
         });
         if let Some(prev) = self.segments.iter().rev().nth(1) {
             let q = &prev.pooled;
@@ -176,19 +187,19 @@ pub struct VehicleEvidence {
 }
 
 impl VehicleEvidence {
-    /// Parameters whose current segment (of at least [`MIN_SEGMENT`] drives) lies outside the
-    /// tolerance band.
-    pub fn outside(&self) -> impl Iterator<Item = &ParameterEvidence> {
+    /// Flagged parameters: the current segment (of at least [`MIN_SEGMENT`] drives) follows a
+    /// change and lies outside the tolerance band ([`Status::Changed`]).
+    pub fn flagged(&self) -> impl Iterator<Item = &ParameterEvidence> {
         self.parameters
             .iter()
-            .filter(|p| p.status == Status::OutsideTolerance)
+            .filter(|p| p.status == Status::Changed)
     }
 }
 
 /// The evidence of one vehicle from its drives (any order; sorted by start time, then drive id):
 /// for every persistent catalogue parameter (not [`PER_TRIP`], not a switch) the drives'
 /// estimates, the changes at [`FALSE_ALARM`], the segments and the current status (judged only
-/// on at least [`MIN_SEGMENT`] drives).
+/// on at least [`MIN_SEGMENT`] drives; flagged only after a change).
 pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> VehicleEvidence {
     drives.sort_by(|a, b| (a.start_ns, &a.drive_id).cmp(&(b.start_ns, &b.drive_id)));
     let mut parameters = Vec::new();
@@ -232,7 +243,11 @@ pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> Ve
         let status = if cur.end - cur.start < MIN_SEGMENT {
             Status::TooFewDrives
         } else if cur.pooled.ci_low > band.1 || cur.pooled.ci_high < band.0 {
-            Status::OutsideTolerance
+            if found.is_empty() {
+                Status::DiffersFromFile
+            } else {
+                Status::Changed
+            }
         } else {
             Status::Consistent
         };
@@ -294,7 +309,7 @@ mod tests {
         assert_eq!(p.effect, Effect::AeroDrag);
         assert_eq!(p.changes.len(), 1);
         assert_eq!(p.changes[0].at, 12);
-        assert_eq!(p.status, Status::OutsideTolerance);
+        assert_eq!(p.status, Status::Changed);
         let s = p.sentence();
         assert!(s.starts_with("aero_drag: 6.90 m^2"), "{s}");
         assert!(
@@ -316,7 +331,7 @@ mod tests {
         let p = &v.parameters[0];
         assert!(p.changes.is_empty());
         assert_eq!(p.status, Status::Consistent);
-        assert_eq!(v.outside().count(), 0);
+        assert_eq!(v.flagged().count(), 0);
     }
 
     #[test]

@@ -1,7 +1,5 @@
 //! A parameter's per-drive estimates pooled into one ([`pool`]).
 
-use statrs::distribution::{ContinuousCDF, StudentsT};
-
 use super::series::Z_975;
 
 /// A pooled estimate.
@@ -50,9 +48,10 @@ pub fn pool(points: &[(f64, f64)]) -> Option<Pooled> {
     };
     let se = (dispersion / sw).sqrt();
     let q = if dispersion > 1.0 {
-        StudentsT::new(0.0, 1.0, (n - 1) as f64)
-            .map(|t| t.inverse_cdf(0.975))
-            .unwrap_or(Z_975)
+        match crate::signal::stats::t_quantile(0.975, (n - 1) as f64) {
+            q if q.is_nan() => Z_975,
+            q => q,
+        }
     } else {
         Z_975
     };

@@ -22,7 +22,7 @@ pub fn file_key(e: Effect) -> Option<(&'static str, &'static str)> {
 /// The suggested update of `v`'s vehicle file `file` (as the pipeline names it), `None` when
 /// nothing lies outside its tolerance. Values with three significant digits.
 pub fn suggestion(v: &VehicleEvidence, file: &str) -> Option<String> {
-    let outside: Vec<_> = v.outside().collect();
+    let outside: Vec<_> = v.flagged().collect();
     if outside.is_empty() {
         return None;
     }

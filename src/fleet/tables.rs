@@ -50,8 +50,8 @@ pub fn vehicle_columns(vs: &[VehicleEvidence]) -> Vec<OutColumn> {
         ),
         count("unexplained", verdicts("unexplained")),
         count(
-            "parameters_outside_tolerance",
-            vs.iter().map(|v| v.outside().count() as u64).collect(),
+            "parameters_flagged",
+            vs.iter().map(|v| v.flagged().count() as u64).collect(),
         ),
         count(
             "changes",

@@ -111,7 +111,7 @@ pub fn run_fleet(ds: &Dataset, plan: &Plan, report_dir: &Path) -> Result<FleetSu
         unreadable,
         flagged: vehicles
             .iter()
-            .filter(|v| v.outside().next().is_some())
+            .filter(|v| v.flagged().next().is_some())
             .count(),
         changes: vehicles
             .iter()

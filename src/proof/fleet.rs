@@ -15,11 +15,11 @@
 //! others stay as drawn.
 //!
 //! # Scores
-//! - *detected*: the fault's parameter flagged (`outside_tolerance`) by the evidence of the drives
-//!   up to some drive after the onset; the delay counts the drives from the onset (the first
-//!   faulty drive is 1);
-//! - *false alarms*: a parameter turning `outside_tolerance` on a clean truck, or on a faulty one
-//!   before its onset, counted once per turn; per vehicle-month with
+//! - *detected*: the fault's parameter flagged (`changed`) by the evidence of the drives up to
+//!   some drive from the onset on; the delay counts the drives from the onset (the first faulty
+//!   drive is 1);
+//! - *false alarms*: a parameter turning flagged on a clean truck, or on a faulty one before its
+//!   onset, counted once per turn; per vehicle-month with
 //!   [`FleetProofConfig::drives_per_month`] drives a month; flags of other parameters of a
 //!   faulty truck after its onset are reported apart (a lost fairing also moves the rolling
 //!   resistance estimate);
@@ -371,7 +371,7 @@ pub fn score_truck(
     let flagged = |v: &VehicleEvidence| -> Vec<String> {
         v.parameters
             .iter()
-            .filter(|p| p.status == Status::OutsideTolerance)
+            .filter(|p| p.status == Status::Changed)
             .map(|p| p.effect.id().to_string())
             .collect()
     };
@@ -381,13 +381,14 @@ pub fn score_truck(
         let v = vehicle_evidence(&truck.vehicle_id, truck_drives(truck, results, upto));
         let now = flagged(&v);
         let day = upto - 1;
+        if let Some((f, onset)) = truck.fault {
+            if day >= onset && delay.is_none() && now.iter().any(|p| p == f.effect()) {
+                delay = Some(day - onset + 1);
+            }
+        }
         for p in now.iter().filter(|p| !before.contains(p)) {
             match truck.fault {
-                Some((f, onset)) if day >= onset && p == f.effect() => {
-                    if delay.is_none() {
-                        delay = Some(day - onset + 1);
-                    }
-                }
+                Some((f, onset)) if day >= onset && p == f.effect() => {}
                 Some((_, onset)) if day >= onset => side_flags.push((p.clone(), day)),
                 _ => false_alarms.push((p.clone(), day)),
             }

@@ -29,12 +29,12 @@ pub fn esc(s: &str) -> String {
 const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:2em;color:#222;max-width:1100px}\
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}\
 table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right;white-space:nowrap}\
-td:first-child,th:first-child{text-align:left}.flag{color:#b00;font-weight:600}.ok{color:#070}\
+td:first-child,th:first-child{text-align:left}.flag{color:#b00;font-weight:600}.note{color:#a60}.ok{color:#070}\
 figure{margin:1em 0}figcaption{font-size:0.95em;margin-bottom:0.3em}svg{background:#fff;border:1px solid #ddd}";
 
 /// Whether a parameter's evidence is worth a plot: outside its tolerance, or changed.
 fn notable(p: &ParameterEvidence) -> bool {
-    p.status == Status::OutsideTolerance || !p.changes.is_empty()
+    p.status == Status::Changed || p.status == Status::DiffersFromFile || !p.changes.is_empty()
 }
 
 /// The page (module documentation). `drive_link(vehicle_id, drive_id)` gives the link of a
@@ -53,7 +53,8 @@ pub fn fleet_html(
          <h1>Fleet evidence: {p}, model version {m}</h1>\n<p>{nv} vehicles, {drives} diagnosed drives. \
          Each vehicle's drives are pooled parameter by parameter; a change over time needs a \
          p-value below 0.001 after the search over split points; a parameter is flagged when the \
-         drives since its last change put it outside the vehicle file's tolerance.</p>\n",
+         drives since a change put it outside the vehicle file's tolerance; one that differs from the \
+         file on every drive is shown but not flagged (a truck's own model bias looks the same).</p>\n",
         p = esc(info.pipeline),
         m = esc(info.model_version),
         nv = vehicles.len(),
@@ -76,10 +77,10 @@ pub fn fleet_html(
             id = esc(&v.vehicle_id),
         );
         for p in v.parameters.iter().filter(|p| notable(p)) {
-            let class = if p.status == Status::OutsideTolerance {
-                "flag"
-            } else {
-                "ok"
+            let class = match p.status {
+                Status::Changed => "flag",
+                Status::DiffersFromFile => "note",
+                _ => "ok",
             };
             let _ = writeln!(
                 h,
@@ -89,10 +90,10 @@ pub fn fleet_html(
             );
         }
     }
-    h.push_str("<h2>Every vehicle</h2>\n<table><tr><th>vehicle</th><th>drives</th><th>first drive</th><th>last drive</th><th>explained</th><th>no significant mismatch</th><th>unexplained</th><th>outside tolerance</th><th>changes</th></tr>\n");
+    h.push_str("<h2>Every vehicle</h2>\n<table><tr><th>vehicle</th><th>drives</th><th>first drive</th><th>last drive</th><th>explained</th><th>no significant mismatch</th><th>unexplained</th><th>flagged</th><th>changes</th></tr>\n");
     for v in vehicles {
         let verdicts = |name: &str| v.drives.iter().filter(|d| d.verdict == name).count();
-        let out = v.outside().count();
+        let out = v.flagged().count();
         let changes: usize = v.parameters.iter().map(|p| p.changes.len()).sum();
         let name = if v.parameters.iter().any(notable) {
             format!("<a href=\"#v-{0}\">{0}</a>", esc(&v.vehicle_id))

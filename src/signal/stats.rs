@@ -1,10 +1,11 @@
 //! Small statistics shared by the diagnosis, the proof and the noise estimates: the median, run
 //! finders, Holm's step-down adjustment of a family of p-values, the upper tail of the F
-//! distribution, the standard normal quantile, and the cross-correlation sums of two series by
+//! distribution, the standard normal quantile and tail, the Student t quantile and distribution
+//! function, and the cross-correlation sums of two series by
 //! FFT.
 
 use realfft::RealFftPlanner;
-use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal, StudentsT};
 
 /// Median of `v` (sorted in place by `f64::total_cmp`; the mean of the two middle values for an
 /// even count); NaN for an empty slice.
@@ -81,6 +82,22 @@ pub fn f_sf(x: f64, d1: f64, d2: f64) -> f64 {
 /// Standard normal quantile.
 pub fn z_quantile(p: f64) -> f64 {
     Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.inverse_cdf(p))
+}
+
+/// Standard normal upper tail `P(Z > x)`.
+pub fn normal_sf(x: f64) -> f64 {
+    Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.sf(x))
+}
+
+/// Student t quantile with `dof` degrees of freedom; NaN for `dof` that is not positive.
+pub fn t_quantile(p: f64, dof: f64) -> f64 {
+    StudentsT::new(0.0, 1.0, dof).map_or(f64::NAN, |t| t.inverse_cdf(p))
+}
+
+/// Student t distribution function with `dof` degrees of freedom; NaN for `dof` that is not
+/// positive.
+pub fn t_cdf(x: f64, dof: f64) -> f64 {
+    StudentsT::new(0.0, 1.0, dof).map_or(f64::NAN, |t| t.cdf(x))
 }
 
 /// Σ_t a(t)·b(t+k) for k = −max_lag..=max_lag, by FFT (index k + max_lag).
