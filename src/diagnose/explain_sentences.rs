@@ -50,14 +50,28 @@ pub(super) fn consistent_sentence(
     } else {
         format!(" {}", e.unit())
     };
+    let width = |t: Tolerance| match t {
+        Tolerance::Relative(r) => format!("± {} %", num(100.0 * r)),
+        Tolerance::Absolute(a) => format!("± {}{unit}", num(a)),
+        Tolerance::None => String::new(),
+    };
     let band = match tol {
-        Tolerance::Relative(r) => format!("{}{unit} ± {} %", num(nominal), num(100.0 * r)),
-        Tolerance::Absolute(a) => format!("{}{unit} ± {}{unit}", num(nominal), num(a)),
         Tolerance::None => format!("{}{unit}", num(nominal)),
+        t => format!("{}{unit} {}", num(nominal), width(t)),
+    };
+    // the model's own allowance widens the band the estimate is judged against
+    let model = match e.spec().model_form {
+        Tolerance::Relative(r) if r > 0.0 => {
+            format!(" and the model's own {}", width(e.spec().model_form))
+        }
+        Tolerance::Absolute(a) if a > 0.0 => {
+            format!(" and the model's own {}", width(e.spec().model_form))
+        }
+        _ => String::new(),
     };
     format!(
-        "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}: consistent \
-         with the file, not named",
+        "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}{model}: \
+         consistent with the file, not named",
         e.parameter(),
         num(est.value),
         num(est.ci_low),

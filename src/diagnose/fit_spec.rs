@@ -14,7 +14,8 @@
 //! cell width the cure reconstructs with; its interval is that estimate's lattice tolerance
 //! (±1 %), and its likelihood-ratio test (reconstruction against raw slope) stands in for "the
 //! interval excludes the nominal". It applies only when the recorded slope's step is above
-//! 1.5 × the nominal resolution ([`super::setup::NOMINAL_SLOPE_RESOLUTION`]).
+//! [`COARSER_THAN_NOMINAL`] × the nominal resolution (the vehicle file's `[sensors]
+//! road_slope_resolution`, [`crate::model::vehicle::Sensors`]).
 
 use super::problem::Problem;
 use crate::model::catalogue::{Effect, FitRule, Scale};
@@ -75,16 +76,24 @@ pub fn fit_spec(e: Effect, nom: f64, slope_step: Option<f64>) -> FitSpec {
     }
 }
 
+/// How much coarser than the nominal resolution the recorded slope's lattice step must be for
+/// `slope_quantization` to apply: 10 %, ten times the lattice estimate's tolerance (±1 %; a
+/// slope sent on its bus's lattice gives its step to rounding), so a recording on the file's
+/// own lattice never qualifies and any coarser encoding does.
+pub const COARSER_THAN_NOMINAL: f64 = 1.1;
+
 /// Whether `e` can be explained on `problem`: its model is in use; `slope_quantization` also
 /// needs a recorded slope quantised more coarsely than the nominal resolution (its lattice step
-/// above 1.5 × the nominal: "the sensor is coarser than the model assumes").
+/// above [`COARSER_THAN_NOMINAL`] × the nominal: "the sensor is coarser than the file says").
 pub fn applicable(problem: &Problem<'_>, e: Effect) -> bool {
     if !problem.domains().contains(&e.domain()) {
         return false;
     }
     if e == Effect::SlopeQuantization {
         let nom = problem.nominal().get(e);
-        return problem.slope_step().is_some_and(|q| q > 1.5 * nom);
+        return problem
+            .slope_step()
+            .is_some_and(|q| q > COARSER_THAN_NOMINAL * nom);
     }
     true
 }

@@ -9,8 +9,10 @@
 //! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Rows with a real
 //!   pressure sample count, away from shifts ([`super::rows::axle_rows`]).
 //! - Operating conditions: [`Conditions::from_log`].
-//! - The slope sensor's resolution is estimated from the recording (`slope_quantization`'s
-//!   nominal value, [`crate::signal::quantization`]); an unquantised slope counts as 0.1 %.
+//! - The slope sensor's resolution is estimated from the recording
+//!   ([`crate::signal::quantization`]; an unquantised slope counts as the nominal);
+//!   `slope_quantization`'s nominal value is the vehicle file's `[sensors]
+//!   road_slope_resolution` ([`crate::model::vehicle::Sensors`]).
 
 use super::compare::Conditions;
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
@@ -23,13 +25,6 @@ use crate::table::DriveLog;
 
 /// Speed below which longitudinal rows do not count, m/s.
 pub const MIN_SPEED_MPS: f64 = 1.0;
-
-/// The slope resolution the nominal model assumes, tan α per step: 0.001 (0.1 %), the fine
-/// sensor of the proof's drives without `slope_quantization`. It is `slope_quantization`'s
-/// nominal value; the recording's own lattice step ([`Setup::slope_resolution`]) is what that
-/// effect's fit compares with it ([`super::fit::applicable`]). With the recorded step as the
-/// nominal, as before, the effect could never apply: a step is never above 1.5 × itself.
-pub const NOMINAL_SLOPE_RESOLUTION: f64 = 0.001;
 
 /// Which models apply, and what they need.
 #[derive(Debug, Clone)]
@@ -133,13 +128,17 @@ impl Setup {
                 })
             }
         };
+        // `slope_quantization`'s nominal value: the resolution the vehicle file says the bus
+        // sends the slope with; the recording's own lattice step is what the effect's fit
+        // compares with it (`fit_spec::applicable`)
+        let nominal_slope_resolution = vehicle.sensors.road_slope_resolution();
         let slope = column(log, "road_slope", Interpolation::Hold).unwrap_or_else(|| vec![0.0; n]);
         let slope_resolution = estimate_quantization(&slope)
             .map(|q| q.step)
             .filter(|q| *q > 0.0 && *q < 0.1)
-            .unwrap_or(NOMINAL_SLOPE_RESOLUTION);
+            .unwrap_or(nominal_slope_resolution);
         let nominal_truth = ExtendedVehicle::nominal(d, vehicle.axles.as_ref());
-        let nominal = Theta::nominal(&nominal_truth, NOMINAL_SLOPE_RESOLUTION);
+        let nominal = Theta::nominal(&nominal_truth, nominal_slope_resolution);
         let conditions = Conditions::from_log(log);
         Ok(Setup {
             nominal_truth,

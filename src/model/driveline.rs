@@ -55,6 +55,9 @@ pub struct VehicleSchema {
     pub driveline: Vec<KeySpec>,
     /// Keys of the `[axles]` table.
     pub axles: Vec<KeySpec>,
+    /// Keys of the optional `[sensors]` table (each key optional).
+    #[serde(default)]
+    pub sensors: Vec<KeySpec>,
 }
 
 /// Checks a raw vehicle-file table against its key specs: no unknown key, every key present,

@@ -121,9 +121,13 @@ impl Tolerances {
         self.given.contains_key(e.parameter())
     }
 
-    /// The band `(θ₀ − w, θ₀ + w)` of `e`'s parameter around `nominal`.
+    /// The band `(θ₀ − w, θ₀ + w)` of `e`'s parameter around `nominal` that an estimate must
+    /// leave to be named: the half-width `w` is the file's tolerance ([`Tolerances::of_effect`])
+    /// plus the catalogue's model-form allowance ([`crate::model::catalogue::EffectSpec::model_form`]),
+    /// the two added because a healthy truck may sit at the edge of the one and its estimate
+    /// miss it by the other.
     pub fn band(&self, e: Effect, nominal: f64) -> (f64, f64) {
-        let w = self.of_effect(e).half_width(nominal);
+        let w = self.of_effect(e).half_width(nominal) + e.spec().model_form.half_width(nominal);
         (nominal - w, nominal + w)
     }
 
@@ -164,10 +168,19 @@ mod tests {
             Some(Tolerance::Relative(0.10))
         );
         assert_eq!(t.of_key("wheel_radius_m"), None);
+        // the band: the file's tolerance plus the catalogue's model-form allowance
         let (lo, hi) = t.band(Effect::VehicleMass, 40_000.0);
-        assert!((lo - 38_000.0).abs() < 1e-9 && (hi - 42_000.0).abs() < 1e-9);
+        let w = 0.05 * 40_000.0 + Effect::VehicleMass.spec().model_form.half_width(40_000.0);
+        assert!(w > 2000.0);
+        assert!((lo - (40_000.0 - w)).abs() < 1e-9 && (hi - (40_000.0 + w)).abs() < 1e-9);
         let (lo, hi) = Tolerances::default().band(Effect::GradeOffset, 0.0);
-        assert_eq!((lo, hi), (-0.002, 0.002));
+        let w = 0.002 + Effect::GradeOffset.spec().model_form.half_width(0.0);
+        assert_eq!((lo, hi), (-w, w));
+        // a switch has neither
+        assert_eq!(
+            Tolerances::default().band(Effect::SlopeQuantization, 0.01),
+            (0.01, 0.01)
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! (docs/models/axle.md) sections, each checked key by key against `schemas/vehicle.toml`.
 
 use super::axle::AxleParams;
-use super::driveline::{vehicle_schema, DrivelineParams};
+use super::driveline::{check_keys, vehicle_schema, DrivelineParams};
 use super::tolerance::Tolerances;
 use serde::Deserialize;
 use std::path::Path;
@@ -53,6 +53,12 @@ pub struct VehicleFile {
     /// The raw `[axles]` table as written (checked and converted by [`VehicleFile::parse`]).
     #[serde(default, rename = "axles")]
     axles_raw: Option<toml::Table>,
+    /// How the vehicle's bus sends its signals (the optional `[sensors]` table).
+    #[serde(skip)]
+    pub sensors: Sensors,
+    /// The raw `[sensors]` table as written.
+    #[serde(default, rename = "sensors")]
+    sensors_raw: Option<toml::Table>,
     /// Tolerances of the file's values ([`super::tolerance`]): the `[tolerance]` table's
     /// entries, every other parameter its kind's default.
     #[serde(skip)]
@@ -60,6 +66,28 @@ pub struct VehicleFile {
     /// The raw `[tolerance]` table as written.
     #[serde(default, rename = "tolerance")]
     tolerance_raw: Option<toml::Table>,
+}
+
+/// The optional `[sensors]` table: how the vehicle's bus sends its signals (from its DBC or
+/// J1939 scaling), each key checked against `schemas/vehicle.toml`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sensors {
+    /// Resolution of the `road_slope` channel, tan α per step (a grade sent in whole percent:
+    /// 0.01), when the file gives it.
+    pub road_slope_resolution: Option<f64>,
+}
+
+impl Sensors {
+    /// The slope resolution a vehicle file without `road_slope_resolution` stands for: 0.001
+    /// tan α per step (a grade sent in tenths of a percent).
+    pub const DEFAULT_ROAD_SLOPE_RESOLUTION: f64 = 0.001;
+
+    /// The `road_slope` channel's resolution, tan α per step: the file's, else
+    /// [`Sensors::DEFAULT_ROAD_SLOPE_RESOLUTION`].
+    pub fn road_slope_resolution(&self) -> f64 {
+        self.road_slope_resolution
+            .unwrap_or(Self::DEFAULT_ROAD_SLOPE_RESOLUTION)
+    }
 }
 
 /// A vehicle file that cannot be used; names the file and the key.
@@ -208,6 +236,25 @@ impl VehicleFile {
             }
             v.axles = Some(p);
         }
+        if let Some(t) = v.sensors_raw.take() {
+            let specs: Vec<_> = vehicle_schema()
+                .sensors
+                .iter()
+                .filter(|s| t.contains_key(&s.key))
+                .cloned()
+                .collect();
+            check_keys(&specs, &t, usize::from(g.forward_gears)).map_err(
+                |(key, value, rule)| VehicleError::Range {
+                    file: file.into(),
+                    key: format!("sensors.{key}"),
+                    value,
+                    rule,
+                },
+            )?;
+            v.sensors = Sensors {
+                road_slope_resolution: t.get("road_slope_resolution").and_then(number),
+            };
+        }
         if let Some(t) = v.tolerance_raw.take() {
             let schema = vehicle_schema();
             let known = |k: &str| {
@@ -272,6 +319,15 @@ impl VehicleFile {
     }
 }
 
+/// A TOML number as `f64`.
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -303,5 +359,57 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("colour"), "{e}");
+    }
+
+    const HEAD: &str = "vehicle_id = \"T\"\n[gearbox]\nforward_gears = 2\nratios = [2.0, 1.0]\n";
+
+    #[test]
+    fn the_sensors_table_is_optional_and_checked_key_by_key() {
+        let v = VehicleFile::parse(HEAD, "v.toml").unwrap();
+        assert_eq!(v.sensors.road_slope_resolution, None);
+        assert_eq!(v.sensors.road_slope_resolution(), 0.001);
+        let v = VehicleFile::parse(
+            &format!("{HEAD}[sensors]\nroad_slope_resolution = 0.01\n"),
+            "v.toml",
+        )
+        .unwrap();
+        assert_eq!(v.sensors.road_slope_resolution(), 0.01);
+        for (body, key, rule) in [
+            (
+                "road_slope_resolutoin = 0.01",
+                "sensors.road_slope_resolutoin",
+                "unknown key",
+            ),
+            (
+                "road_slope_resolution = 0.5",
+                "sensors.road_slope_resolution",
+                "within",
+            ),
+            (
+                "road_slope_resolution = \"1 %\"",
+                "sensors.road_slope_resolution",
+                "must be",
+            ),
+        ] {
+            match VehicleFile::parse(&format!("{HEAD}[sensors]\n{body}\n"), "v.toml") {
+                Err(VehicleError::Range {
+                    key: k, rule: r, ..
+                }) => {
+                    assert_eq!(k, key, "{body}");
+                    assert!(r.contains(rule), "{body}: {r}");
+                }
+                other => panic!("{body}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn the_bundled_40_t_truck_sends_its_slope_in_whole_percent() {
+        let p = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/vehicles/truck-40t.toml"
+        );
+        let v = VehicleFile::load(std::path::Path::new(p)).unwrap();
+        assert_eq!(v.sensors.road_slope_resolution(), 0.01);
     }
 }

@@ -1,13 +1,14 @@
 //! Running a proof: every case generated, diagnosed blind and scored, in parallel; the
 //! results written.
 
-use super::score::{contract_held, own_ratios};
+use super::score::{contract_held, estimate_misses, own_ratios};
 use super::*;
 use crate::diagnose::contract::Diagnosis;
 use crate::model::catalogue::Effect;
 use crate::model::vehicle::VehicleFile;
 use crate::table::DriveLog;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Why a proof could not run at all (a failing case only fails that case).
@@ -99,7 +100,13 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
     let t0 = std::time::Instant::now();
     // the contract, the actuated rows' null variance (the oracle's view weights), the log and
     // the vehicle
-    type BlindResult = (Diagnosis, Option<Vec<f64>>, DriveLog, VehicleFile);
+    type BlindResult = (
+        Diagnosis,
+        Option<Vec<f64>>,
+        DriveLog,
+        VehicleFile,
+        Vec<crate::diagnose::parameter_table::ParameterRow>,
+    );
     let diagnosed = (|| -> Result<BlindResult, String> {
         let vf = VehicleFile::load(&g.vehicle).map_err(|e| e.to_string())?;
         let opts = crate::pipeline::ingest_stage::IngestConfig::default()
@@ -113,11 +120,20 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
             .join("diagnoses")
             .join(format!("case-{:04}", case.index));
         write_outputs(&dir, &d, &log, "fleetdyn prove").map_err(|e| e.to_string())?;
-        Ok((d.diagnosis, d.actuation_variance, log, vf))
+        Ok((d.diagnosis, d.actuation_variance, log, vf, d.parameters))
     })();
     let seconds = t0.elapsed().as_secs_f64();
     match diagnosed {
-        Ok((d, act, log, vf)) => {
+        Ok((d, act, log, vf, rows)) => {
+            // no-effect drives: every estimate against the truck's true values
+            let estimate_misses = if g.truth.hidden == Hidden::Nothing {
+                match truck_values(&g.answer) {
+                    Ok(truck) => estimate_misses(&rows, &truck),
+                    Err(e) => return fail("answer", e),
+                }
+            } else {
+                Vec::new()
+            };
             // the scorer's own look, with the answer: could the rule see the hidden effect,
             // and what did the finding do against the noise-free signals?
             match scorer_look(&log, &vf, &d, act.as_deref(), &g) {
@@ -127,6 +143,7 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
                     oracle_visible: look.oracle.as_ref().map(|o| o.both_hold()),
                     noise_free_heldout_ratio: look.noise_free_fitted,
                     noise_free_truth_ratio: look.noise_free_truth,
+                    estimate_misses,
                     ..score(&g.case, &g.truth, &d, log.duration_s(), seconds)
                 })),
                 Err(e) => fail("oracle", e),
@@ -134,6 +151,22 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
         }
         Err(e) => fail("diagnose", e),
     }
+}
+
+/// The truck's true parameter values from an answer file's `params` (the truth plant's drawn
+/// truck; empty for a model-truth answer, whose truck is the file's).
+fn truck_values(answer: &Path) -> Result<BTreeMap<String, f64>, String> {
+    let text = std::fs::read_to_string(answer).map_err(|e| format!("{}: {e}", answer.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", answer.display()))?;
+    Ok(v.get("params")
+        .and_then(|p| p.as_object())
+        .map(|m| {
+            m.iter()
+                .filter_map(|(k, x)| Some((k.clone(), x.as_f64()?)))
+                .collect()
+        })
+        .unwrap_or_default())
 }
 
 /// What the scorer finds with the answer, after the blind diagnosis ([`scorer_look`]).

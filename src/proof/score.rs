@@ -78,6 +78,52 @@ pub struct CaseScore {
     pub noise_free_truth_ratio: Option<f64>,
     /// Generator attempts (more than 1 when the drive was drawn again, see [`run_proof`]).
     pub attempts: u32,
+    /// No-effect drives: each estimated parameter against the truck's true value
+    /// ([`estimate_misses`]); empty on other drives.
+    pub estimate_misses: Vec<EstimateMiss>,
+}
+
+/// One parameter estimate of a no-effect drive against the truck's true value, as a fraction
+/// of the file's value θ₀ for a parameter whose tolerance is relative, else in its unit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimateMiss {
+    /// Catalogue id.
+    pub effect: &'static str,
+    /// Estimate − the truck's value.
+    pub error: f64,
+    /// Distance from the truck's value to the estimate's 95 % interval (0 inside it).
+    pub miss: f64,
+    /// How the estimate was obtained (`named`, `fitted`, `linearised`).
+    pub method: &'static str,
+}
+
+/// Every continuous estimate of `rows` against the truck's true values `truck` (parameter
+/// name → value, the plant's; a parameter it lacks is at the file's value): the measurement
+/// behind the catalogue's model-form allowance
+/// ([`crate::model::catalogue::EffectSpec::model_form`]).
+pub fn estimate_misses(
+    rows: &[crate::diagnose::parameter_table::ParameterRow],
+    truck: &BTreeMap<String, f64>,
+) -> Vec<EstimateMiss> {
+    use crate::model::catalogue::Tolerance;
+    rows.iter()
+        .filter_map(|r| {
+            let e = Effect::from_id(r.effect).ok()?;
+            let scale = match e.spec().tolerance.default_tolerance() {
+                Tolerance::Relative(_) if r.nominal != 0.0 => r.nominal.abs(),
+                Tolerance::Absolute(_) => 1.0,
+                _ => return None,
+            };
+            let t = truck.get(r.parameter).copied().unwrap_or(r.nominal);
+            let miss = (r.ci_low - t).max(t - r.ci_high).max(0.0);
+            (r.value.is_finite() && miss.is_finite()).then(|| EstimateMiss {
+                effect: r.effect,
+                error: (r.value - t) / scale,
+                miss: miss / scale,
+                method: r.method.as_str(),
+            })
+        })
+        .collect()
 }
 
 /// Scores the diagnosis `d` of a drive whose answer is `truth`; `drive_s` is the drive's
@@ -158,6 +204,7 @@ pub fn score(
         noise_free_heldout_ratio: None,
         noise_free_truth_ratio: None,
         attempts: 1,
+        estimate_misses: Vec::new(),
     }
 }
 
@@ -221,4 +268,79 @@ pub fn noise_free_reference(
         reference.insert(crate::diagnose::rows::ACTUATION_CHANNEL.to_string(), engine);
     }
     reference
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::parameter_table::{EstimateMethod, ParameterRow};
+
+    fn row(
+        e: Effect,
+        nominal: f64,
+        value: f64,
+        ci: (f64, f64),
+        method: EstimateMethod,
+    ) -> ParameterRow {
+        ParameterRow {
+            effect: e.id(),
+            parameter: e.parameter(),
+            unit: e.unit(),
+            value,
+            ci_low: ci.0,
+            ci_high: ci.1,
+            nominal,
+            tolerance_low: f64::NAN,
+            tolerance_high: f64::NAN,
+            method,
+            n_eff: f64::NAN,
+        }
+    }
+
+    #[test]
+    fn misses_are_distances_to_the_interval_relative_or_absolute_by_the_tolerance_kind() {
+        let truck: BTreeMap<String, f64> = [("k_d_nm_per_rad".to_string(), 380_000.0)].into();
+        let rows = [
+            // relative kind: the interval 320–330 kN·m/rad misses 380 by 50 = 12.5 % of 400
+            row(
+                Effect::DrivelineCompliance,
+                400_000.0,
+                325_000.0,
+                (320_000.0, 330_000.0),
+                EstimateMethod::Named,
+            ),
+            // absolute kind, the truck at the file's 0 s: the interval 0.06–0.09 s misses by 0.06
+            row(
+                Effect::SignalDelay,
+                0.0,
+                0.07,
+                (0.06, 0.09),
+                EstimateMethod::Fitted,
+            ),
+            // an interval holding the truck's value misses by 0
+            row(
+                Effect::VehicleMass,
+                40_000.0,
+                40_500.0,
+                (39_000.0, 42_000.0),
+                EstimateMethod::Linearised,
+            ),
+            // a switch has no continuous value
+            row(
+                Effect::SlopeQuantization,
+                0.01,
+                0.02,
+                (0.02, 0.02),
+                EstimateMethod::Named,
+            ),
+        ];
+        let m = estimate_misses(&rows, &truck);
+        assert_eq!(m.len(), 3);
+        assert_eq!(m[0].effect, "driveline_compliance");
+        assert!((m[0].miss - 0.125).abs() < 1e-12 && (m[0].error + 0.1375).abs() < 1e-12);
+        assert_eq!(m[0].method, "named");
+        assert!((m[1].miss - 0.06).abs() < 1e-12 && (m[1].error - 0.07).abs() < 1e-12);
+        assert_eq!(m[2].miss, 0.0);
+        assert!((m[2].error - 0.0125).abs() < 1e-12);
+    }
 }

@@ -77,6 +77,58 @@ pub struct ProofSummary {
     pub median_seconds_per_drive_hour: f64,
     /// Total drive time, s.
     pub drive_s: f64,
+    /// No-effect drives: each parameter's estimates against the truck's true values.
+    pub no_effect_estimates: Vec<EstimateSpread>,
+}
+
+/// One parameter's estimates on the no-effect drives against the truck's true values
+/// ([`CaseScore::estimate_misses`]), as a fraction of θ₀ for a parameter whose tolerance is
+/// relative, else in its unit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimateSpread {
+    /// Catalogue id.
+    pub effect: &'static str,
+    /// Drives with a full fit of the parameter (named, or an estimate within the band).
+    pub drives: usize,
+    /// Median |estimate − truck|.
+    pub median_abs_error: f64,
+    /// Drives whose interval misses the truck's value.
+    pub missed: usize,
+    /// Largest distance from the truck's value to the interval: the model-form allowance
+    /// this run measures ([`crate::model::catalogue::EffectSpec::model_form`]).
+    pub max_miss: f64,
+    /// The case of the largest miss.
+    pub max_miss_case: usize,
+}
+
+/// Per parameter, in catalogue order, the spread of [`CaseScore::estimate_misses`] over the
+/// full fits (a finding's or an estimate within the band; not the linearised estimates).
+fn estimate_spreads(scores: &[CaseScore]) -> Vec<EstimateSpread> {
+    crate::model::catalogue::Effect::ALL
+        .iter()
+        .filter_map(|e| {
+            let id = e.id();
+            let m: Vec<(usize, &super::score::EstimateMiss)> = scores
+                .iter()
+                .flat_map(|s| s.estimate_misses.iter().map(move |m| (s.index, m)))
+                // the full fits, which rule 4 of the acceptance rule judges; a linearised
+                // estimate's interval is the first round's approximation
+                .filter(|(_, m)| m.effect == id && m.method != "linearised")
+                .collect();
+            let (case, worst) = m
+                .iter()
+                .max_by(|a, b| a.1.miss.total_cmp(&b.1.miss).then(b.0.cmp(&a.0)))?;
+            Some(EstimateSpread {
+                effect: id,
+                drives: m.len(),
+                median_abs_error: median(m.iter().map(|(_, x)| x.error.abs()).collect())
+                    .unwrap_or(f64::NAN),
+                missed: m.iter().filter(|(_, x)| x.miss > 0.0).count(),
+                max_miss: worst.miss,
+                max_miss_case: *case,
+            })
+        })
+        .collect()
 }
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -216,6 +268,7 @@ pub fn summarize(scores: &[CaseScore], failed: &[FailedCase]) -> ProofSummary {
         )
         .unwrap_or(f64::NAN),
         drive_s: scores.iter().map(|s| s.drive_s).sum(),
+        no_effect_estimates: estimate_spreads(scores),
     }
 }
 
@@ -348,6 +401,25 @@ impl ProofSummary {
             "| median diagnosis time per drive-hour | {:.1} s |",
             self.median_seconds_per_drive_hour
         );
+        if !self.no_effect_estimates.is_empty() {
+            let _ = writeln!(
+                s,
+                "\n### Estimates on no-effect drives\n\nEach parameter's full fit (a finding, \
+                 or an estimate within the band) against the truck's true value, as a fraction of the file's value (drag, rolling \
+                 resistance, mass, stiffness, clutch capacity) or in its unit (offsets, delay, \
+                 lash); the largest miss of the truck's value by the 95 % interval is the \
+                 model-form allowance this run measures.\n\n\
+                 | parameter | drives with a fit | median abs. error | intervals missing the truck | \
+                 largest miss | its case |\n|---|---|---|---|---|---|"
+            );
+            for e in &self.no_effect_estimates {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {:.4} | {} | {:.4} | {} |",
+                    e.effect, e.drives, e.median_abs_error, e.missed, e.max_miss, e.max_miss_case
+                );
+            }
+        }
         s
     }
 }

@@ -132,6 +132,8 @@ struct VehicleSchemaDoc {
     schema_version: String,
     driveline: Vec<VehicleKeyDoc>,
     axles: Vec<VehicleKeyDoc>,
+    #[serde(default)]
+    sensors: Vec<VehicleKeyDoc>,
 }
 
 #[derive(Deserialize)]
@@ -148,9 +150,9 @@ struct VehicleKeyDoc {
 }
 
 /// The sections of a vehicle file that `schemas/vehicle.toml` describes key by key.
-pub const VEHICLE_SECTIONS: [&str; 2] = ["driveline", "axles"];
+pub const VEHICLE_SECTIONS: [&str; 3] = ["driveline", "axles", "sensors"];
 
-/// The keys of one section of a vehicle file (`"driveline"` or `"axles"`, see
+/// The keys of one section of a vehicle file (`"driveline"`, `"axles"` or `"sensors"`, see
 /// [`VEHICLE_SECTIONS`]) as a Markdown table: key, SI unit, accepted range `[min, max]`, shape
 /// (one number, one per forward gear, or a curve paired with another key) and meaning.
 ///
@@ -165,6 +167,7 @@ pub fn vehicle_section_markdown(vehicle_toml: &str, section: &str) -> Result<Str
     let keys = match section {
         "driveline" => &doc.driveline,
         "axles" => &doc.axles,
+        "sensors" => &doc.sensors,
         other => return Err(invalid(NAME, format!("no section [{other}]"))),
     };
     let mut out = String::from("| key | unit | range | shape | meaning |\n|---|---|---|---|---|\n");

@@ -70,6 +70,72 @@ fn proof(cfg: &ProofConfig) -> (tempfile::TempDir, ProofRun) {
     (dir, run)
 }
 
+/// The torque-delay reading of case `i`'s diagnosis in `dir`: `(value, ci_low, ci_high, named)`,
+/// from its finding when named, else from its estimates within the band.
+fn delay_reading(dir: &std::path::Path, i: usize) -> (f64, f64, f64, bool) {
+    let path = dir
+        .join("diagnoses")
+        .join(format!("case-{i:04}"))
+        .join("diagnosis.json");
+    let d: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let pick = |v: &serde_json::Value| {
+        (
+            v["value"].as_f64().unwrap(),
+            v["ci_low"].as_f64().unwrap(),
+            v["ci_high"].as_f64().unwrap(),
+        )
+    };
+    for f in d["findings"].as_array().unwrap() {
+        if f["effect"] == "signal_delay" {
+            let (v, lo, hi) = pick(&f["parameters"]["engine_torque_delay_s"]);
+            return (v, lo, hi, true);
+        }
+    }
+    for e in d["estimates"].as_array().unwrap() {
+        if e["effect"] == "signal_delay" {
+            let (v, lo, hi) = pick(e);
+            return (v, lo, hi, false);
+        }
+    }
+    panic!("case {i}: no signal_delay reading in {}", path.display());
+}
+
+/// A hidden torque delay is read within 20 % of its truth, and named exactly when its interval
+/// lies above the band of acceptance rule 4 (the file's ±0.02 s widened by the catalogue's
+/// model-form allowance, which the engine's own torque lag on a real truck fills): below it
+/// the diagnosis reports the delay as an estimate consistent with the file.
+fn assert_delay_read(dir: &std::path::Path, s: &CaseScore) {
+    use fleetdyn::model::catalogue::Effect;
+    use fleetdyn::model::tolerance::Tolerances;
+    assert_eq!(s.hidden, "signal_delay");
+    let truth = s.truth_value.unwrap();
+    let (value, lo, hi, named) = delay_reading(dir, s.index);
+    assert!(
+        (value - truth).abs() <= 0.2 * truth,
+        "{}: {value} s for {truth} s",
+        s.index
+    );
+    assert!(lo <= value && value <= hi, "{}", s.index);
+    let (_, band_high) = Tolerances::default().band(Effect::SignalDelay, 0.0);
+    assert_eq!(
+        named,
+        lo > band_high,
+        "{}: [{lo}, {hi}] against {band_high}",
+        s.index
+    );
+    assert_eq!(named, s.correct, "{s:?}");
+    assert_eq!(
+        s.verdict,
+        if named {
+            Verdict::Explained
+        } else {
+            Verdict::NoSignificantMismatch
+        },
+        "{s:?}"
+    );
+    assert!(s.findings.is_empty() || named, "{s:?}");
+}
+
 #[test]
 fn reduced_proof_names_the_identifiable_effects_and_nothing_else() {
     let (dir, run) = proof(&ProofConfig {
@@ -282,10 +348,11 @@ fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_dr
 /// the cure keeps what the sensor's noise says about where in its cell the grade lies
 /// (`signal::dequantise`: no median, cells widened by the noise; a cure that takes a median
 /// first leaves the slope further from the road than the recording and the held-out error
-/// worse).
+/// worse). Both delays are read within 20 % and named only when their interval leaves the
+/// band of acceptance rule 4 ([`assert_delay_read`]).
 #[test]
-fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mismatch() {
-    let (_dir, run) = proof(&ProofConfig {
+fn delays_are_read_a_coarse_slope_sensor_is_named_and_a_clean_city_drive_has_no_mismatch() {
+    let (dir, run) = proof(&ProofConfig {
         only: vec![27, 48, 49, 60],
         driving: Driving::Fixed,
         ..ProofConfig::model()
@@ -294,12 +361,11 @@ fn delays_and_a_coarse_slope_sensor_are_named_and_a_clean_city_drive_has_no_mism
     let by = |i: usize| run.scores.iter().find(|s| s.index == i).unwrap();
     for i in [27, 49] {
         let delay = by(i);
-        assert_eq!(delay.hidden, "signal_delay");
-        assert!(delay.correct, "{i}: {:?}", delay.findings);
-        assert_eq!(delay.verdict, Verdict::Explained, "{i}");
-        assert!(delay.parameter_error.unwrap() <= 0.2, "{delay:?}");
-        assert!(delay.heldout_ratio.unwrap() < 1.0, "{delay:?}");
+        assert_delay_read(dir.path(), delay);
         assert_eq!(delay.oracle_visible, Some(true), "{delay:?}");
+        if delay.correct {
+            assert!(delay.heldout_ratio.unwrap() < 1.0, "{delay:?}");
+        }
     }
     let clean = by(60);
     assert_eq!(clean.hidden, "none");
@@ -358,26 +424,29 @@ fn a_large_delay_is_fitted_in_its_own_basin() {
 /// every launch (the probe's sensitivity removes 8 % of the train SSE, under the screen's
 /// 10 %), and 0.2 s of delay explains 9.5 %. The screen also probes ½ and 1½ times the
 /// step of these threshold and shift effects and judges them by the best rung
-/// (`model::catalogue::SCREEN_LADDER`: 66 % and 22 % at −45 % and 0.3 s); both are named, fitted
-/// within 20 % and `explained`.
+/// (`model::catalogue::SCREEN_LADDER`: 66 % and 22 % at −45 % and 0.3 s); both are fitted
+/// within 20 %; the clutch is named and `explained`, the delay reported as an estimate within
+/// the band of acceptance rule 4 (its model-form allowance, docs/diagnosis/method.md).
 #[test]
 fn the_screen_probes_threshold_effects_across_their_range() {
-    let (_dir, run) = proof(&ProofConfig {
+    let (dir, run) = proof(&ProofConfig {
         seed: 5001,
         only: vec![49, 53],
         driving: Driving::Fixed,
         ..ProofConfig::model()
     });
     assert!(run.failed.is_empty(), "{:#?}", run.failed);
-    for (s, hidden) in run.scores.iter().zip(["signal_delay", "clutch_slip"]) {
-        assert_eq!(s.hidden, hidden);
-        assert!(s.correct, "{hidden}: {:?}", s.findings);
-        assert_eq!(s.verdict, Verdict::Explained, "{s:?}");
-        // measured 4.9 % (delay) and 0.03 % (clutch)
-        assert!(s.parameter_error.unwrap() <= 0.2, "{s:?}");
-        // the acceptance rule's own bound; measured 0.36 and 0.16
-        assert!(s.heldout_ratio.unwrap() < 0.75, "{s:?}");
-    }
+    // the delay (0.147 s) is read within 20 %; its interval lies inside the band of rule 4,
+    // so it is reported as an estimate, not named
+    assert_delay_read(dir.path(), &run.scores[0]);
+    let s = &run.scores[1];
+    assert_eq!(s.hidden, "clutch_slip");
+    assert!(s.correct, "{:?}", s.findings);
+    assert_eq!(s.verdict, Verdict::Explained, "{s:?}");
+    // measured 0.03 %
+    assert!(s.parameter_error.unwrap() <= 0.2, "{s:?}");
+    // the acceptance rule's own bound; measured 0.16
+    assert!(s.heldout_ratio.unwrap() < 0.75, "{s:?}");
     assert_eq!(run.scores.len(), 2);
 }
 
