@@ -195,7 +195,8 @@ fn scorer_look(
         .problem(log, actuation_variance)
         .map_err(|e| e.to_string())?;
     // slope_quantization's parameter is the sensor resolution the cure reconstructs with
-    // (extended.rs), its nominal the model's assumed 0.1 % (setup.rs): the truth is a value
+    // (extended.rs), its nominal the vehicle file's `[sensors]` resolution (setup.rs): the
+    // truth is a value
     let oracle = match g.truth.injection {
         Some(inj) => Some(
             crate::diagnose::explain::rules_at(
