@@ -60,12 +60,10 @@ pub(super) fn consistent_sentence(
         t => format!("{}{unit} {}", num(nominal), width(t)),
     };
     // the model's own allowance widens the band the estimate is judged against
-    let model = match e.spec().model_form {
-        Tolerance::Relative(r) if r > 0.0 => {
-            format!(" and the model's own {}", width(e.spec().model_form))
-        }
-        Tolerance::Absolute(a) if a > 0.0 => {
-            format!(" and the model's own {}", width(e.spec().model_form))
+    let allowance = e.spec().model_form;
+    let model = match allowance {
+        Tolerance::Relative(x) | Tolerance::Absolute(x) if x > 0.0 => {
+            format!(" and the model's own {}", width(allowance))
         }
         _ => String::new(),
     };

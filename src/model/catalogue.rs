@@ -20,8 +20,9 @@
 //! `model_form` is that miss, measured on the truth plant's no-effect drives (a virtual truck
 //! with that structure, docs/models/truth-plant.md) of calibration seeds that no reported proof
 //! figure uses: the largest distance from the truck's value to the estimate's interval, as a
-//! fraction of θ₀ or in the parameter's unit (`fleetdyn prove` prints it per parameter under
-//! *Estimates on no-effect drives*; docs/diagnosis/method.md gives the command and seeds), over
+//! fraction of θ₀ or in the parameter's unit, measured with every allowance at zero
+//! (`fleetdyn prove` prints it per parameter under *Estimates on no-effect drives*;
+//! docs/diagnosis/method.md gives the command and seeds), over
 //! the full fits only (a finding, or an estimate within the band), which the acceptance rule
 //! judges. `Tolerance::None` where nothing was measured: the switch, an effect no calibration
 //! drive fitted (`clutch_slip`) and the axle effects, which the truth plant does not model. The

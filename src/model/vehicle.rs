@@ -237,6 +237,8 @@ impl VehicleFile {
             v.axles = Some(p);
         }
         if let Some(t) = v.sensors_raw.take() {
+            // every key optional: the specs of the keys given, so a key outside the schema is
+            // still "unknown" and none is "missing"
             let specs: Vec<_> = vehicle_schema()
                 .sensors
                 .iter()
@@ -252,7 +254,9 @@ impl VehicleFile {
                 },
             )?;
             v.sensors = Sensors {
-                road_slope_resolution: t.get("road_slope_resolution").and_then(number),
+                road_slope_resolution: t
+                    .get("road_slope_resolution")
+                    .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))),
             };
         }
         if let Some(t) = v.tolerance_raw.take() {
@@ -316,15 +320,6 @@ impl VehicleFile {
             -i16::from(self.gearbox.reverse_gears),
             i16::from(self.gearbox.forward_gears),
         )
-    }
-}
-
-/// A TOML number as `f64`.
-fn number(v: &toml::Value) -> Option<f64> {
-    match v {
-        toml::Value::Float(x) => Some(*x),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
     }
 }
 
