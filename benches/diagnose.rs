@@ -20,6 +20,7 @@ use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig};
 use fleetdyn::ingest::{ingest_file, IngestOptions};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::report::diagnosis_files::write_outputs;
+use fleetdyn::report::sentences::finding_sentence;
 use hour_drive::{hour_drive, HOUR_DRIVE_KM};
 use std::time::Instant;
 
@@ -49,11 +50,11 @@ fn main() {
         times.push(s);
         println!(
             "run {run}: {s:.1} s on {threads} threads; verdict {}; first finding: {}",
-            r.diagnosis.verdict.as_str(),
-            r.diagnosis
+            r.verdict.as_str(),
+            r.explanation
                 .findings
                 .first()
-                .map_or("none".to_string(), |f| f.sentence.clone())
+                .map_or("none".to_string(), finding_sentence)
         );
     }
     times.sort_by(f64::total_cmp);

@@ -40,7 +40,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     // floor, locate the stretches above it, explain them with the effect catalogue, decide.
     let t0 = std::time::Instant::now();
     let d = diagnose(&log, &vehicle, &DiagnoseConfig::default())?;
-    let dg = &d.diagnosis; // the content of diagnosis.json, as Rust values
+    // the content of diagnosis.json, as Rust values, with its plain sentences
+    let dg = &fleetdyn::report::contract::assemble(&d);
     println!(
         "{}: {:.0} s of drive diagnosed in {:.1} s, verdict {}",
         dg.drive_id,

@@ -15,6 +15,7 @@ pub mod fleet;
 pub mod ingest;
 pub mod io;
 pub mod model;
+pub mod number_fmt;
 pub mod optim;
 pub mod pipeline;
 pub mod proof;

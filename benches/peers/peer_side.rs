@@ -224,7 +224,7 @@ fn main() {
                     .log;
                 let r = diagnose(&log, &vf, &DiagnoseConfig::default()).expect("diagnoses");
                 write_outputs(dir, &r, &log, "peer").expect("writes");
-                verdict = r.diagnosis.verdict.as_str().to_string();
+                verdict = r.verdict.as_str().to_string();
                 hours = log.duration_s() / 3600.0;
             });
             report(

@@ -54,7 +54,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
         job.diagnose.max_findings
     );
     let w = write_outputs(&job.output, &d, &ing.log, &fp).map_err(io)?;
-    let dg = &d.diagnosis;
+    let dg = &fleetdyn::report::contract::assemble(&d);
     say!(
         "{}: {:.0} s of drive diagnosed in {:.1} s: {}",
         dg.drive_id,

@@ -63,10 +63,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
                 confidence,
             )
             .map_err(input)?;
-            let fp = format!(
-                "spectrum:v1 from_profile step_m={} {column} {nperseg:?} {confidence}",
-                pc.step_m
-            );
+            let fp = spectrum::fingerprint(Some(pc.step_m), &column, nperseg, confidence);
             spectrum::write(output, &pc.meta, &sp, &fp).map_err(io)?;
             say!(
                 "{}: {} PSD on the profile's {} m grid, {} segments of {} samples (equivalent dof {:.1}); 90 % of power below {:.3e} {}, 99 % below {:.3e} {} -> {}",
@@ -90,9 +87,10 @@ pub fn run(job: Job) -> Result<(), Failure> {
             }
             .map_err(input)?;
             let fp = format!(
-                "{}\n{}\nspectrum:v1 {column} {nperseg:?} {confidence}",
+                "{}\n{}\n{}",
                 cfg.fingerprint(&opts),
-                resample_stage::fingerprint(&resample)
+                resample_stage::fingerprint(&resample),
+                spectrum::fingerprint(None, &column, nperseg, confidence)
             );
             spectrum::write(output, &ing.log.meta, &sp, &fp).map_err(io)?;
             say!(

@@ -43,13 +43,12 @@
 //! # The parts
 //! The acceptance rule, the views it scores and isolability: [`super::acceptance`]. Settings,
 //! rounds, findings and the result: [`super::explanation`]. Per-signal RMSE, MAE and fit %:
-//! [`super::signal_fits`]. The plain sentences: [`super::explain_sentences`].
+//! [`super::signal_fits`]. The plain sentences are the report's (`report::sentences`).
 //!
 //! # Verdict
 //! [`verdict`] combines the findings with step 2's significance test.
 
 use super::acceptance::{ambiguity_set, rule_figures, RuleFigures};
-use super::explain_sentences::{consistent_sentence, sentence};
 use super::extended::Theta;
 use super::fit::{
     applicable, deviance_threshold, fit_effect, fit_spec, profile_interval, screen, Eval,
@@ -68,12 +67,9 @@ pub use super::acceptance::{
 };
 pub use super::explanation::{
     verdict, ConsistentEstimate, Evidence, ExplainConfig, Explanation, Finding, ParameterEstimate,
-    Round, MAX_CONSISTENT_ROUNDS, MAX_FINDINGS,
+    Round, Verdict, MAX_CONSISTENT_ROUNDS, MAX_FINDINGS,
 };
 pub use super::signal_fits::{fits_against, BeforeAfter, SignalFit, SignalMetrics};
-
-/// Diagnosis verdict (docs/diagnosis/contract.md), the contract's type.
-pub use super::contract::Verdict;
 
 /// Explains `problem` (module documentation).
 ///
@@ -177,17 +173,9 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 .into_iter()
                 .map(|(a, _)| a)
                 .collect();
-            let mut sentence =
-                consistent_sentence(e, nominal.get(e), &estimate, cfg.tolerances.of_effect(e));
-            if !ambiguous.is_empty() {
-                sentence.push_str(&format!(
-                    "; the recorded signals cannot tell it from {}",
-                    ambiguous.join(", ")
-                ));
-            }
             consistent.push(ConsistentEstimate {
                 effect: e.id(),
-                sentence,
+                file_tolerance: cfg.tolerances.of_effect(e),
                 estimate,
                 nominal: nominal.get(e),
                 band_low,
@@ -253,7 +241,6 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             ci_high: ci.hi,
             unit: e.unit(),
         };
-        let sentence = sentence(e, nominal.get(e), &est, &met, &ambiguous);
         let mut parameters = BTreeMap::new();
         parameters.insert(e.parameter().to_string(), est);
         excluded.push(e);
@@ -263,7 +250,6 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         findings.push(Finding {
             effect: e.id(),
             ambiguous_with: ambiguous,
-            sentence,
             parameters,
             fit,
             metrics: met,

@@ -8,13 +8,13 @@
 //! the output contract these records feed is docs/diagnosis/contract.md.
 
 use super::acceptance::{AcceptanceRule, CandidateFit, ModelScore};
-use super::contract::Verdict;
 use super::extended::Theta;
 use super::fit::Screen;
 use super::linearised::LinearisedEstimate;
 use super::problem::{Split, Whiteness};
 use super::signal_fits::{SignalFit, SignalMetrics};
 use crate::model::catalogue::Domain;
+use crate::model::catalogue::Tolerance;
 use crate::model::tolerance::Tolerances;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -72,8 +72,10 @@ pub struct ConsistentEstimate {
     /// `ambiguous_with`): with the recorded signals, "within the file's tolerance" and these
     /// cannot be told apart, and the within-tolerance reading is not overruled.
     pub ambiguous_with: Vec<&'static str>,
-    /// Plain words.
-    pub sentence: String,
+    /// The vehicle file's own tolerance of the parameter (the band adds the model-form
+    /// allowance to it).
+    #[serde(skip)]
+    pub file_tolerance: Tolerance,
 }
 
 /// One greedy round.
@@ -140,7 +142,7 @@ pub struct Evidence {
 }
 
 /// One explained effect (docs/diagnosis/contract.md: `effect`, `ambiguous_with`,
-/// `sentence`, `parameters`, `fit`; `metrics` and `evidence` add MAE, fit % and the
+/// `parameters`, `fit`; the report adds the `sentence`; `metrics` and `evidence` add MAE, fit % and the
 /// acceptance statistics).
 #[derive(Debug, Clone, Serialize)]
 pub struct Finding {
@@ -148,8 +150,6 @@ pub struct Finding {
     pub effect: &'static str,
     /// Effects explaining the data alike (not isolable with the recorded signals).
     pub ambiguous_with: Vec<&'static str>,
-    /// One plain sentence with the parameter and its unit.
-    pub sentence: String,
     /// Fitted parameter by catalogue name.
     pub parameters: BTreeMap<String, ParameterEstimate>,
     /// Before/after RMSE per signal the finding changes.
@@ -184,6 +184,29 @@ pub struct Explanation {
     /// Final parameters (nominal with the findings' values).
     #[serde(skip)]
     pub theta: Theta,
+}
+
+/// The drive-level verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// A significant mismatch, explained by accepted findings.
+    Explained,
+    /// Nothing above the noise floor.
+    NoSignificantMismatch,
+    /// A significant mismatch that no catalogue effect explains.
+    Unexplained,
+}
+
+impl Verdict {
+    /// The contract's spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Explained => "explained",
+            Verdict::NoSignificantMismatch => "no_significant_mismatch",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
 }
 
 /// The verdict from the findings, the estimates consistent with the vehicle file and step 2's
@@ -228,7 +251,7 @@ mod tests {
             band_from_file: false,
             round: 0,
             ambiguous_with: Vec::new(),
-            sentence: String::new(),
+            file_tolerance: Tolerance::Relative(0.05),
         };
         assert_eq!(
             verdict(&[], std::slice::from_ref(&within), true),

@@ -1,7 +1,7 @@
-//! Step 2 of the diagnosis, locate: plain statements about a signal's residual, derived from
-//! the data (docs/diagnosis/method.md, "By operating condition").
+//! Step 2 of the diagnosis, locate: statements about the shape of a signal's residual, derived
+//! from the data (docs/diagnosis/method.md, "By operating condition").
 //!
-//! Plain statements ([`Statement`]) come from the data: the
+//! Statements ([`Statement`], put in words by the report) come from the data: the
 //! residual is regressed on candidate shapes — constant, speed, speed², acceleration, grade,
 //! engine torque, gear ratio — each in addition to a constant, and for the longitudinal
 //! signals (whose residual integrates a force error from each re-initialisation,
@@ -37,10 +37,9 @@ fn event_mask(n: usize, hw: usize, events: &[(usize, usize)]) -> Vec<bool> {
     m
 }
 
-/// A candidate shape of the residual: id, words, values per row.
+/// A candidate shape of the residual: id and values per row.
 struct Shape {
     id: &'static str,
-    text: &'static str,
     values: Vec<f64>,
 }
 
@@ -63,40 +62,34 @@ pub(super) fn statements(
     if let Some(v) = c.speed {
         shapes.push(Shape {
             id: "speed",
-            text: "grows with speed",
             values: v.to_vec(),
         });
         shapes.push(Shape {
             id: "speed_squared",
-            text: "grows with speed²",
             values: v.iter().map(|x| x * x).collect(),
         });
     }
     if let Some(a) = c.accel {
         shapes.push(Shape {
             id: "acceleration",
-            text: "proportional to acceleration",
             values: a.to_vec(),
         });
     }
     if let Some(s) = c.slope {
         shapes.push(Shape {
             id: "grade",
-            text: "proportional to grade",
             values: s.to_vec(),
         });
     }
     if let Some(m) = c.torque {
         shapes.push(Shape {
             id: "engine_torque",
-            text: "proportional to engine torque",
             values: m.to_vec(),
         });
     }
     if let (Some(g), false) = (c.gear, cfg.gear_ratios.is_empty()) {
         shapes.push(Shape {
             id: "gear_ratio",
-            text: "proportional to the gear ratio",
             values: g
                 .iter()
                 .map(|&x| {
@@ -171,7 +164,6 @@ pub(super) fn statements(
     if share_c >= cfg.min_share && p_c <= alpha_s {
         out.push(Statement {
             shape: "constant".into(),
-            text: "constant offset".into(),
             share: share_c,
             coefficient: if sbb > 0.0 { sbr / sbb } else { f64::NAN },
             p_value: p_c,
@@ -213,7 +205,6 @@ pub(super) fn statements(
         if added >= cfg.min_share && p <= alpha_s {
             out.push(Statement {
                 shape: s.id.into(),
-                text: s.text.into(),
                 share,
                 coefficient: c2,
                 p_value: p,
@@ -223,7 +214,7 @@ pub(super) fn statements(
     }
     // indicator masks
     let hw = (cfg.event_halfwidth_s / dt).round() as usize;
-    let mut masks: Vec<(&str, &str, Vec<bool>)> = Vec::new();
+    let mut masks: Vec<(&str, Vec<bool>)> = Vec::new();
     if let Some(m) = c.torque {
         let mut events = Vec::new();
         let mut last: Option<(f64, usize)> = None;
@@ -239,35 +230,23 @@ pub(super) fn statements(
             }
             last = Some((s, i));
         }
-        masks.push((
-            "torque_sign_change",
-            "only at torque sign changes",
-            event_mask(n, hw, &events),
-        ));
+        masks.push(("torque_sign_change", event_mask(n, hw, &events)));
     }
     if let Some(cl) = c.clutch {
-        masks.push((
-            "clutch_actuated",
-            "only while the clutch is actuated",
-            cl.to_vec(),
-        ));
+        masks.push(("clutch_actuated", cl.to_vec()));
     }
     if let Some(b) = c.braking {
-        masks.push(("braking", "only while braking", b.to_vec()));
+        masks.push(("braking", b.to_vec()));
     }
     if let Some(g) = c.gear {
         let events: Vec<(usize, usize)> = (1..n)
             .filter(|&i| g[i].is_finite() && g[i - 1].is_finite() && g[i] != g[i - 1])
             .map(|i| (i - 1, i))
             .collect();
-        masks.push((
-            "gear_shift",
-            "only at gear shifts",
-            event_mask(n, hw, &events),
-        ));
+        masks.push(("gear_shift", event_mask(n, hw, &events)));
     }
     let k_copies = floor.copies as f64;
-    for (id, text, m) in masks {
+    for (id, m) in masks {
         let inside: Vec<usize> = rows.iter().copied().filter(|&i| m[i]).collect();
         let outside: Vec<usize> = rows.iter().copied().filter(|&i| !m[i]).collect();
         if inside.is_empty() || inside.len() * 2 > rows.len() {
@@ -293,7 +272,6 @@ pub(super) fn statements(
         {
             out.push(Statement {
                 shape: id.into(),
-                text: text.into(),
                 share,
                 coefficient: f64::NAN,
                 p_value: p_in,
@@ -304,14 +282,6 @@ pub(super) fn statements(
     out.sort_by(|a, b| b.share.total_cmp(&a.share));
     if let Some(s) = out.first_mut() {
         s.best = true;
-    }
-    for s in out.iter_mut() {
-        let what = if s.coefficient.is_nan() {
-            "of the excess residual energy"
-        } else {
-            "of the residual energy"
-        };
-        s.text = format!("{} (explains {:.0} % {what})", s.text, 100.0 * s.share);
     }
     out
 }

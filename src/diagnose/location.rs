@@ -204,8 +204,6 @@ pub struct Statement {
     /// `engine_torque`, `gear_ratio`, `torque_sign_change`, `clutch_actuated`, `braking`,
     /// `gear_shift`.
     pub shape: String,
-    /// In words, e.g. "grows with speed² (explains 64 % of the residual energy)".
-    pub text: String,
     /// Share of the residual energy the shape explains together with the constant it is
     /// fitted with (the shape alone must add at least
     /// [`LocateConfig::min_share`](super::locate_config::LocateConfig::min_share)); for

@@ -26,10 +26,7 @@
 //!    band powers, coherence, lags, condition cells, statements, every greedy round's screen
 //!    and fits) for an engineer who wants to check a verdict.
 
-use super::contract::{
-    Diagnosis, EstimateEntry, FindingEntry, FitEntry, MismatchEntry, ParameterEntry,
-};
-use super::explain::{explain, verdict, ExplainConfig, Explanation, Finding};
+use super::explain::{explain, verdict, ExplainConfig, Explanation, Verdict};
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig, Theta};
 use super::fit::fit_spec;
 use super::locate::{
@@ -137,7 +134,7 @@ pub fn tolerance_variance(
 pub const MODAL_TOLERANCE_GEARS: usize = 4;
 
 /// Settings of a diagnosis.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct DiagnoseConfig {
     /// Noise-floor estimation.
     pub noise: NoiseConfig,
@@ -172,8 +169,10 @@ pub struct Residual {
 /// Everything a diagnosis produced.
 #[derive(Debug, Clone)]
 pub struct Diagnosed {
-    /// The contract's content.
-    pub diagnosis: Diagnosis,
+    /// The recording's drive id.
+    pub drive_id: String,
+    /// The verdict of step 5 ([`verdict`]).
+    pub verdict: Verdict,
     /// Step 3.
     pub floors: NoiseFloors,
     /// Step 4.
@@ -209,59 +208,6 @@ pub struct ModelsUsed {
     pub axle_reason: Option<String>,
     /// Slope-sensor resolution read from the recording, tan α per step.
     pub slope_resolution: f64,
-}
-
-fn mismatch_entry(m: &super::locate::Mismatch) -> MismatchEntry {
-    MismatchEntry {
-        signal: m.signal.clone(),
-        start_s: m.start_s,
-        end_s: m.end_s,
-        start_m: m.start_m,
-        end_m: m.end_m,
-        band_hz: m.band_hz,
-        condition: m.condition.clone(),
-        rms_residual: m.rms_residual,
-        significance: m.significance,
-    }
-}
-
-fn finding_entry(f: &Finding) -> FindingEntry {
-    FindingEntry {
-        effect: f.effect.to_string(),
-        ambiguous_with: f.ambiguous_with.iter().map(|s| s.to_string()).collect(),
-        sentence: f.sentence.clone(),
-        parameters: f
-            .parameters
-            .iter()
-            .map(|(k, p)| {
-                (
-                    k.clone(),
-                    ParameterEntry {
-                        value: p.value,
-                        ci_low: p.ci_low,
-                        ci_high: p.ci_high,
-                        unit: p.unit,
-                    },
-                )
-            })
-            .collect(),
-        fit: f
-            .fit
-            .iter()
-            .map(|(k, e)| {
-                (
-                    k.clone(),
-                    FitEntry {
-                        train_before: e.train_before,
-                        train_after: e.train_after,
-                        heldout_before: e.heldout_before,
-                        heldout_after: e.heldout_after,
-                        metric: e.metric,
-                    },
-                )
-            })
-            .collect(),
-    }
 }
 
 /// Diagnoses `log` against the nominal `vehicle` (module documentation).
@@ -365,11 +311,10 @@ pub fn diagnose(
             }
             m
         });
-    let noise_floor = floors.summary();
     let explanation = explain(
         &problem,
         &ExplainConfig {
-            noise_floor: Some(noise_floor.clone()),
+            noise_floor: Some(floors.summary()),
             max_findings: cfg.max_findings,
             tolerances: vehicle.tolerance.clone(),
         },
@@ -410,37 +355,10 @@ pub fn diagnose(
             }
         })
         .collect();
-    let diagnosis = Diagnosis {
-        drive_id: log.meta.drive_id.clone(),
-        verdict: v,
-        noise_floor,
-        mismatch: location.mismatch.iter().map(mismatch_entry).collect(),
-        findings: explanation.findings.iter().map(finding_entry).collect(),
-        estimates: explanation
-            .consistent
-            .iter()
-            .map(|c| {
-                let e = Effect::from_id(c.effect).expect("catalogue id");
-                EstimateEntry {
-                    effect: c.effect.to_string(),
-                    parameter: e.parameter().to_string(),
-                    value: c.estimate.value,
-                    ci_low: c.estimate.ci_low,
-                    ci_high: c.estimate.ci_high,
-                    unit: c.estimate.unit,
-                    nominal: c.nominal,
-                    tolerance_low: c.band_low,
-                    tolerance_high: c.band_high,
-                    consistent_with_file: true,
-                    ambiguous_with: c.ambiguous_with.iter().map(|a| a.to_string()).collect(),
-                    sentence: c.sentence.clone(),
-                }
-            })
-            .collect(),
-    };
     let parameters = parameter_rows(&explanation, &setup.nominal, &vehicle.tolerance);
     Ok(Diagnosed {
-        diagnosis,
+        drive_id: log.meta.drive_id.clone(),
+        verdict: v,
         parameters,
         floors,
         location,

@@ -173,7 +173,7 @@ impl ParameterEvidence {
 }
 
 /// Three significant figures, no exponent between 10⁻⁴ and 10⁶ (the diagnosis's sentences').
-pub use crate::diagnose::explain_sentences::num as sig;
+pub use crate::number_fmt::sig3 as sig;
 
 /// The evidence of one vehicle.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,8 +1,11 @@
-//! The fleet evidence as tables (schemas `fleet_vehicles`, `fleet_parameters`, `fleet_changes`):
-//! one row per vehicle, per vehicle and parameter, per change.
+//! The fleet evidence as tables (schemas `fleet_vehicles`, `fleet_parameters`, `fleet_changes`,
+//! `fleet_trips`): one row per vehicle, per vehicle and parameter, per change, per trip and
+//! per-trip parameter.
 
-use super::evidence::VehicleEvidence;
+use super::evidence::{VehicleEvidence, PER_TRIP};
+use super::trips::{trips, Trip};
 use crate::io::{OutColumn, OutData};
+use crate::model::catalogue::Effect;
 
 fn text(name: &str, v: Vec<String>) -> OutColumn {
     OutColumn {
@@ -198,5 +201,50 @@ pub fn change_columns(vs: &[VehicleEvidence]) -> Vec<OutColumn> {
             unit: "1".into(),
             data: OutData::Bool(rows.iter().map(band).collect()),
         },
+    ]
+}
+
+/// `fleet_trips`: every drive's estimate of each per-trip parameter
+/// ([`super::evidence::PER_TRIP`]), vehicle by vehicle in time order.
+pub fn trip_columns(vs: &[VehicleEvidence]) -> Vec<OutColumn> {
+    let rows: Vec<(&VehicleEvidence, Effect, Trip<'_>)> = vs
+        .iter()
+        .flat_map(|v| {
+            PER_TRIP
+                .iter()
+                .flat_map(move |&e| trips(v, e).into_iter().map(move |t| (v, e, t)))
+        })
+        .collect();
+    let f = |g: &dyn Fn(&Trip<'_>) -> f64| rows.iter().map(|(_, _, t)| g(t)).collect::<Vec<f64>>();
+    let s = |g: &dyn for<'a> Fn(&'a Trip<'a>) -> &'a str| {
+        rows.iter()
+            .map(|(_, _, t)| g(t).to_string())
+            .collect::<Vec<String>>()
+    };
+    let per_row = "per row: see parameter_unit";
+    vec![
+        text(
+            "vehicle_id",
+            rows.iter().map(|(v, _, _)| v.vehicle_id.clone()).collect(),
+        ),
+        text("drive_id", s(&|t| t.drive_id)),
+        OutColumn::timestamp(rows.iter().map(|(_, _, t)| t.start_ns).collect()),
+        text(
+            "effect",
+            rows.iter().map(|(_, e, _)| e.id().to_string()).collect(),
+        ),
+        text(
+            "parameter",
+            rows.iter()
+                .map(|(_, e, _)| e.parameter().to_string())
+                .collect(),
+        ),
+        text("parameter_unit", s(&|t| t.unit)),
+        OutColumn::f64("value", per_row, f(&|t| t.value)),
+        OutColumn::f64("ci_low", per_row, f(&|t| t.ci_low)),
+        OutColumn::f64("ci_high", per_row, f(&|t| t.ci_high)),
+        OutColumn::f64("nominal", per_row, f(&|t| t.nominal)),
+        text("method", s(&|t| t.method)),
+        text("source", s(&|t| t.source)),
     ]
 }

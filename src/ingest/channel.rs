@@ -11,7 +11,7 @@ use crate::schema::{drive_log, Interpolation};
 use std::path::Path;
 
 /// What to do when a channel's time goes backwards.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum TimeRepair {
     /// Reject the drive (default): a logger clock jump is a fault worth seeing.

@@ -2,10 +2,12 @@
 
 mod atomic;
 mod escape;
+mod fingerprint;
 mod parquet_out;
 
 pub use atomic::AtomicFile;
 pub use escape::escape;
+pub use fingerprint::canonical;
 pub use parquet_out::{
     config_hash, drive_log_columns, write_column_refs_with_constants, write_table,
     write_table_with, write_table_with_constants, ColumnRef, DataRef, OutColumn, OutData,

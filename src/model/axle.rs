@@ -11,7 +11,7 @@ use super::driveline::{check_keys, vehicle_schema, KeyProblem};
 use serde::Deserialize;
 
 /// Axle-load parameters, SI units (docs/models/axle.md).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)] // each field is documented in schemas/vehicle.toml (meaning, unit, range)
 pub struct AxleParams {

@@ -171,7 +171,7 @@ pub fn vehicle_schema() -> &'static VehicleSchema {
 }
 
 /// Driveline parameters, SI units (docs/models/driveline.md).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)] // each field is documented in schemas/vehicle.toml (meaning, unit, range)
 pub struct DrivelineParams {

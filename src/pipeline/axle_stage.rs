@@ -23,7 +23,7 @@ use crate::table::DriveLog;
 use std::path::Path;
 
 /// Where the axle model's longitudinal inputs come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum LongitudinalSource {
     /// The recording's torques and acceleration.
     Recorded,
@@ -32,7 +32,7 @@ pub enum LongitudinalSource {
 }
 
 /// Stage settings.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AxleStageConfig {
     /// Validation and input construction.
     pub validation: AxleValidationConfig,
@@ -46,7 +46,7 @@ impl AxleStageConfig {
     /// Canonical text of the settings and the axle parameters `p`, for the config hash of a
     /// single-drive simulation.
     pub fn fingerprint(&self, p: &crate::model::axle::AxleParams) -> String {
-        format!("axle:v1 {p:?} {self:?}")
+        crate::io::canonical("axle:v2", &(p, self))
     }
 }
 

@@ -350,7 +350,7 @@ fn write_drive(
             }
             DatasetTable::Mismatch | DatasetTable::Findings | DatasetTable::ParameterEstimates => {
                 if let Some(d) = &c.diagnosis {
-                    let diag = &d.diagnosis;
+                    let diag = &crate::report::contract::assemble(d);
                     let mut m = meta(t.name());
                     m.extra = vec![("verdict".into(), diag.verdict.as_str().into())];
                     let cols = match t {

@@ -1,7 +1,7 @@
 //! The `fleet` stage (docs/fleet.md): after the drives are written, every diagnosed drive of the
 //! dataset (this model version, all runs) is read back from its `parameter_estimates` table,
 //! grouped by vehicle, and turned into per-vehicle evidence ([`crate::fleet`]): the tables
-//! `fleet_vehicles`, `fleet_parameters` and `fleet_changes`, a suggested vehicle-file update per
+//! `fleet_vehicles`, `fleet_parameters`, `fleet_changes` and `fleet_trips`, a suggested vehicle-file update per
 //! vehicle with a parameter outside its tolerance, and the page `fleet.html`, all under the run
 //! report's `fleet/` folder. Only an unsharded run (the reduce step of a sharded one) runs it.
 //!

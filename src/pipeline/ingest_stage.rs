@@ -80,14 +80,16 @@ impl IngestConfig {
     /// mapping enters with the hash of its text; automatically chosen mappings are embedded in
     /// the binary, whose version every output records.
     pub fn fingerprint(&self, opts: &IngestOptions) -> String {
-        format!(
-            "ingest:v1 mapping={:?} time_base_hz={:?} max_nan_run_s={} time_repair={:?} stages={:?} gears={:?}",
-            opts.mapping.as_ref().map(|m| (&m.name, &m.text_sha256)),
-            self.time_base_hz,
-            self.max_nan_run_s,
-            self.time_repair,
-            opts.stages,
-            opts.gear_range
+        crate::io::canonical(
+            "ingest:v2",
+            &serde_json::json!({
+                "mapping": opts.mapping.as_ref().map(|m| (&m.name, &m.text_sha256)),
+                "time_base_hz": self.time_base_hz,
+                "max_nan_run_s": self.max_nan_run_s,
+                "time_repair": self.time_repair,
+                "stages": opts.stages,
+                "gears": opts.gear_range,
+            }),
         )
     }
 }

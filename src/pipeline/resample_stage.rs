@@ -6,7 +6,7 @@ use std::path::Path;
 
 /// Canonical text of the resample settings, for the config hash.
 pub fn fingerprint(cfg: &ResampleConfig) -> String {
-    format!("resample:v1 {cfg:?}")
+    crate::io::canonical("resample:v2", cfg)
 }
 
 /// Writes a distance log (schema `distance_log`).
@@ -34,10 +34,7 @@ pub fn table(d: &DistanceLog, config_fingerprint: &str) -> (TableMeta, Vec<OutCo
         config_hash: config_hash(&[config_fingerprint.as_bytes()]),
         extra: vec![
             ("step_m".into(), d.step_m.to_string()),
-            (
-                "distance_source".into(),
-                format!("{:?}", d.map.source).to_lowercase(),
-            ),
+            ("distance_source".into(), d.map.source.name().into()),
             ("collapsed_samples".into(), d.collapsed_samples.to_string()),
             ("reverse_samples".into(), d.map.reverse_samples.to_string()),
         ],

@@ -12,7 +12,7 @@ use std::path::Path;
 
 /// Canonical text of the slope settings, for the config hash.
 pub fn fingerprint(cfg: &SlopeFilterConfig) -> String {
-    format!("slope:v1 {cfg:?}")
+    crate::io::canonical("slope:v2", cfg)
 }
 
 /// Table metadata of a slope table (`slope_distance` or `slope_time`).
@@ -33,7 +33,7 @@ pub fn meta(
             ("cutoff_per_m".into(), cfg.cutoff_per_m.to_string()),
             ("zero_phase_order".into(), cfg.order.to_string()),
             ("causal_order".into(), f.causal_order.to_string()),
-            ("edge".into(), format!("{:?}", cfg.edge).to_lowercase()),
+            ("edge".into(), cfg.edge.name().into()),
             ("stop_per_m".into(), cfg.stop_per_m.to_string()),
             (
                 "design_gain_at_stop_db".into(),

@@ -251,22 +251,29 @@ impl PipelineSpec {
         }
         let ingest = ingest.expect("no problems");
         let mut fingerprint = format!(
-            "pipeline:v2 stages={:?} model_version={}\n{}\n{}\n{}\nshuffle:{:?}\naxle:{:?}\nspectrum:{:?}\ntables:{:?}",
-            stages,
-            self.model_version,
+            "{}\n{}\n{}\n{}\n{}",
+            crate::io::canonical(
+                "pipeline:v3",
+                &serde_json::json!({
+                    "stages": stages,
+                    "model_version": self.model_version,
+                    "shuffle": shuffle,
+                    "axle": axle,
+                    "spectrum": spectrum,
+                    "tables": tables,
+                }),
+            ),
             self.ingest.fingerprint(&ingest),
             super::resample_stage::fingerprint(&self.resample),
             super::slope_stage::fingerprint(&self.slope),
-            shuffle,
-            axle,
-            spectrum,
-            tables,
+            crate::io::canonical("diagnose:v2", &diagnose),
         );
-        // only with the stage, so that the hashes of pipelines without it stay as they are
-        if let Some(d) = &diagnose {
-            fingerprint.push_str(&format!(
-                "\ndiagnose:{d:?} {:?}",
-                crate::diagnose::run::DiagnoseConfig::default()
+        if diagnose.is_some() {
+            // the diagnosis's own settings, which the pipeline file does not set
+            fingerprint.push(' ');
+            fingerprint.push_str(&crate::io::canonical(
+                "diagnose-settings:v1",
+                &crate::diagnose::run::DiagnoseConfig::default(),
             ));
         }
         Ok(Plan {

@@ -80,7 +80,7 @@ impl PipelineStage {
 }
 
 /// What a simulation stage does with a drive it cannot serve.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MissingPolicy {
     /// Skip the stage for that drive, with the reason recorded (the drive succeeds).
@@ -91,7 +91,7 @@ pub enum MissingPolicy {
 }
 
 /// Which slope a simulation takes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SlopeInput {
     /// The zero-phase filtered slope of the `slope` stage, mapped to time.
@@ -102,7 +102,7 @@ pub enum SlopeInput {
 }
 
 /// `[shuffle]`: the driveline simulation of the recorded drive (`simulate shuffle --drive`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShuffleSpec {
     /// Re-initialisation window, s.
@@ -146,7 +146,7 @@ impl ShuffleSpec {
 }
 
 /// Acceleration input of the axle model (TOML spelling of [`AccelSource`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelSpec {
     /// The IMU column when present, else d(speed)/dt.
@@ -159,7 +159,7 @@ pub enum AccelSpec {
 }
 
 /// Longitudinal inputs of the axle model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LongitudinalSpec {
     /// The recording's torques and acceleration.
@@ -170,7 +170,7 @@ pub enum LongitudinalSpec {
 }
 
 /// `[axle]`: the axle-load simulation of the recorded drive (`simulate axle --drive`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AxleSpec {
     /// Acceleration input.
@@ -216,7 +216,7 @@ impl AxleSpec {
 
 /// `[spectrum]`: Welch PSD of the drive's raw road slope on the distance grid
 /// (docs/models/road.md).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SpectrumSpec {
     /// Welch segment length, m (frequency resolution = 1 / segment).
@@ -249,7 +249,7 @@ impl SpectrumSpec {
 
 /// `[diagnose]`: the diagnosis of each drive against its vehicle file (`fleetdyn diagnose`,
 /// its default settings).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DiagnoseSpec {
     /// Write each drive's diagnosis folder (`diagnosis.json`, `report.md`, residual plots,

@@ -23,6 +23,8 @@
 //!   [`FleetProofConfig::drives_per_month`] drives a month; flags of other parameters of a
 //!   faulty truck after its onset are reported apart (a lost fairing also moves the rolling
 //!   resistance estimate);
+//! - *mass per trip*: each drive's mass estimate against that trip's true mass (the payload
+//!   changes from trip to trip, so the mass is never pooled);
 //! - *estimate error*: the final pooled estimate (since the last change) of drag area, rolling
 //!   resistance and clutch capacity against the truck's truth at its last drive.
 
@@ -297,7 +299,7 @@ pub fn run_drive(
         let t0 = std::time::Instant::now();
         let dg = diagnose(&log, vf, &DiagnoseConfig::default()).map_err(|e| e.to_string())?;
         out.seconds = t0.elapsed().as_secs_f64();
-        out.verdict = dg.diagnosis.verdict.as_str().to_string();
+        out.verdict = dg.verdict.as_str().to_string();
         out.rows = dg
             .parameters
             .iter()
@@ -357,6 +359,9 @@ pub struct TruckScore {
     pub side_flags: Vec<(String, usize)>,
     /// Final pooled estimate against the truth: (parameter, estimate, truth, relative error).
     pub estimates: Vec<(String, f64, f64, f64)>,
+    /// Per trip: the drive's mass estimate against that trip's true mass, (estimate, truth,
+    /// relative error), for the drives that inform the mass.
+    pub trip_mass: Vec<(f64, f64, f64)>,
     /// Drives that failed.
     pub failed: usize,
 }
@@ -413,6 +418,17 @@ pub fn score_truck(
         Some((id.to_string(), est, truth[k], (est - truth[k]) / truth[k]))
     })
     .collect();
+    let trip_mass = results
+        .iter()
+        .filter(|r| r.error.is_none())
+        .filter_map(|r| {
+            let row = r.rows.iter().find(|x| x.effect == "vehicle_mass")?;
+            let truth = r.truth[3];
+            row.value
+                .is_finite()
+                .then(|| (row.value, truth, (row.value - truth) / truth))
+        })
+        .collect();
     (
         TruckScore {
             vehicle_id: truck.vehicle_id.clone(),
@@ -421,6 +437,7 @@ pub fn score_truck(
             false_alarms,
             side_flags,
             estimates,
+            trip_mass,
             failed: results.iter().filter(|r| r.error.is_some()).count(),
         },
         last,

@@ -98,6 +98,20 @@ impl FleetProofRun {
                 100.0 * med
             ));
         }
+        let mut mass: Vec<f64> = self
+            .trucks
+            .iter()
+            .flat_map(|t| &t.trip_mass)
+            .filter(|m| m.2.is_finite())
+            .map(|m| m.2.abs())
+            .collect();
+        let within = mass.iter().filter(|e| **e <= TARGET_ESTIMATE_ERROR).count();
+        let n_mass = mass.len();
+        let med = crate::signal::stats::median(&mut mass);
+        s.push_str(&format!(
+            "| mass per trip within 5 % of the trip's truth | {within} of {n_mass} trips (median error {:.1} %) | no target |\n",
+            100.0 * med
+        ));
         s.push_str(&format!(
             "\n{} drives ({} failed), {:.1} drive-hours, diagnosis {:.1} s per drive-hour, {:.0} s wall.\n\n\
              | truck | fault (onset day) | flagged after | false alarms | other flags after onset | drag area est./truth | c_r1 est./truth | clutch est./truth |\n|---|---|---|---|---|---|---|---|\n",

@@ -7,7 +7,7 @@ use crate::synth::driver::{DriverConfig, LiftOffs};
 use serde::Serialize;
 
 /// Settings of a proof run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ProofConfig {
     /// Number of drives.
     pub drives: usize,

@@ -3,9 +3,9 @@
 
 use super::score::{contract_held, estimate_misses, own_ratios};
 use super::*;
-use crate::diagnose::contract::Diagnosis;
 use crate::model::catalogue::Effect;
 use crate::model::vehicle::VehicleFile;
+use crate::report::contract::{assemble, Diagnosis};
 use crate::table::DriveLog;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -120,7 +120,7 @@ fn run_case(case: &ProofCase, vehicle: &Path, cfg: &ProofConfig, out: &Path) -> 
             .join("diagnoses")
             .join(format!("case-{:04}", case.index));
         write_outputs(&dir, &d, &log, "fleetdyn prove").map_err(|e| e.to_string())?;
-        Ok((d.diagnosis, d.actuation_variance, log, vf, d.parameters))
+        Ok((assemble(&d), d.actuation_variance, log, vf, d.parameters))
     })();
     let seconds = t0.elapsed().as_secs_f64();
     match diagnosed {
@@ -466,7 +466,7 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
         drive_id: format!("proof-seed-{}", cfg.seed),
         vehicle_id: None,
         source_file: "fleetdyn prove".into(),
-        config_hash: crate::io::config_hash(&[format!("{cfg:?}").as_bytes()]),
+        config_hash: crate::io::config_hash(&[crate::io::canonical("proof:v2", cfg).as_bytes()]),
         // with the seed and the plan's lengths (proof.json) it regenerates any case's drive
         extra: vec![("driving".into(), cfg.driving.label().into())],
     };

@@ -2,8 +2,8 @@
 //! read against.
 
 use super::*;
-use crate::diagnose::contract::{Diagnosis, Verdict};
 use crate::model::catalogue::{Domain, Effect};
+use crate::report::contract::{Diagnosis, Verdict};
 use crate::table::DriveLog;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -226,7 +226,7 @@ pub(crate) fn own_ratios<T>(
 }
 
 /// The held-out RMSE `(before, after)` of a contract fit entry.
-pub(crate) fn contract_held(m: &crate::diagnose::contract::FitEntry) -> (f64, f64) {
+pub(crate) fn contract_held(m: &crate::report::contract::FitEntry) -> (f64, f64) {
     (m.heldout_before, m.heldout_after)
 }
 

@@ -2,7 +2,7 @@
 //! held-out error, time; the case table.
 
 use super::*;
-use crate::diagnose::contract::Verdict;
+use crate::report::contract::Verdict;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -484,10 +484,10 @@ pub fn cases_markdown(scores: &[CaseScore], failed: &[FailedCase]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::contract::Diagnosis;
-    use crate::diagnose::contract::{FindingEntry, FitEntry, ParameterEntry};
     use crate::model::catalogue::Effect;
     use crate::proof::{score, Hidden, ProofCase, ProofTruth};
+    use crate::report::contract::Diagnosis;
+    use crate::report::contract::{FindingEntry, FitEntry, ParameterEntry};
     use crate::synth::effects::Injection;
 
     fn diag(effect: Option<(&str, f64)>, verdict: Verdict) -> Diagnosis {

@@ -130,8 +130,7 @@ pub fn run_scenario_with(
         source_file: String::new(),
         config_hash: config_hash(&[
             scenario.name().as_bytes(),
-            format!("{cfg:?}").as_bytes(),
-            format!("{p:?}").as_bytes(),
+            crate::io::canonical("axle-scenario:v2", &(cfg, p)).as_bytes(),
         ]),
         extra,
     };

@@ -11,7 +11,7 @@ use std::path::Path as FsPath;
 
 /// Canonical text of the driveline `p` and gear `ratios`, for the config hash of a Bode table.
 pub fn fingerprint(p: &DrivelineParams, ratios: &[f64]) -> String {
-    format!("bode:v1 {p:?} {ratios:?}")
+    crate::io::canonical("bode:v2", &(p, ratios))
 }
 
 /// One gear's row.

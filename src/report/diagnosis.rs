@@ -5,7 +5,7 @@
 //! accepted findings), the located stretches shaded. Everything is written atomically.
 
 use super::axle_plot::PlotError;
-use crate::diagnose::contract::{signal_unit, Diagnosis};
+use super::contract::{signal_unit, Diagnosis};
 use crate::diagnose::explain::{BeforeAfter, SignalMetrics};
 use crate::io::AtomicFile;
 use plotters::prelude::*;
@@ -129,14 +129,22 @@ pub fn plot_residuals(
     })
 }
 
-/// The Markdown report of `d`; `metrics` holds each finding's RMSE, MAE and fit % per signal
-/// (same order as `d.findings`; may be shorter), `plots` are (signal, file name) of the
-/// residual plots beside it.
-pub fn report_markdown(
-    d: &Diagnosis,
-    metrics: &[BTreeMap<String, SignalMetrics>],
-    plots: &[(String, String)],
-) -> String {
+/// What the Markdown report shows beside the contract's content.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReportParts<'a> {
+    /// Each finding's RMSE, MAE and fit % per signal (same order as the findings; may be
+    /// shorter).
+    pub metrics: &'a [BTreeMap<String, SignalMetrics>],
+    /// Per mismatched signal, its residual's shape in words ([`super::sentences::statement_text`]),
+    /// the best first.
+    pub shapes: &'a [(String, Vec<String>)],
+    /// (signal, file name) of the residual plots beside the report.
+    pub plots: &'a [(String, String)],
+}
+
+/// The Markdown report of `d` with `parts`.
+pub fn report_markdown(d: &Diagnosis, parts: &ReportParts<'_>) -> String {
+    let (metrics, plots) = (parts.metrics, parts.plots);
     let mut s = String::new();
     let _ = writeln!(s, "# Diagnosis of drive {}\n", d.drive_id);
     let _ = writeln!(s, "**Verdict: {}**\n", d.verdict.as_str());
@@ -169,6 +177,12 @@ pub fn report_markdown(
                 m.rms_residual * k,
                 m.significance
             );
+        }
+    }
+    if !parts.shapes.is_empty() {
+        let _ = writeln!(s, "\nWhat the residual looks like:\n");
+        for (sig, words) in parts.shapes {
+            let _ = writeln!(s, "- {sig}: {}", words.join("; "));
         }
     }
     let _ = writeln!(s, "\n## Findings\n");
@@ -279,19 +293,14 @@ Fitted, but within the file's tolerance \
 ///
 /// # Errors
 /// The I/O error.
-pub fn write_report(
-    path: &Path,
-    d: &Diagnosis,
-    metrics: &[BTreeMap<String, SignalMetrics>],
-    plots: &[(String, String)],
-) -> std::io::Result<()> {
-    AtomicFile::write_all(path, report_markdown(d, metrics, plots).as_bytes())
+pub fn write_report(path: &Path, d: &Diagnosis, parts: &ReportParts<'_>) -> std::io::Result<()> {
+    AtomicFile::write_all(path, report_markdown(d, parts).as_bytes())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::contract::{MismatchEntry, Verdict};
+    use crate::report::contract::{MismatchEntry, Verdict};
     #[test]
     fn report_and_plot_are_written() {
         let dir = tempfile::tempdir().unwrap();
@@ -333,10 +342,22 @@ mod tests {
         };
         let md = report_markdown(
             &d,
-            &[],
-            &[("vehicle_speed".into(), "residual_vehicle_speed.svg".into())],
+            &ReportParts {
+                metrics: &[],
+                shapes: &[(
+                    "vehicle_speed".into(),
+                    vec!["grows with speed² (explains 64 % of the residual energy)".into()],
+                )],
+                plots: &[("vehicle_speed".into(), "residual_vehicle_speed.svg".into())],
+            },
         );
         assert!(md.contains("**Verdict: unexplained**"));
+        assert!(
+            md.contains(
+                "- vehicle_speed: grows with speed² (explains 64 % of the residual energy)"
+            ),
+            "{md}"
+        );
         // 0.5 m/s shown as 1.800 km/h
         assert!(md.contains("1.800 km/h"), "{md}");
         assert!(md.contains("No catalogue effect passed"));

@@ -11,7 +11,9 @@
 //! partial diagnosis, and a failed one leaves the folder as it was (no partial outputs).
 
 use super::axle_plot::PlotError;
-use super::diagnosis::{plot_residuals, write_report, ResidualSeries};
+use super::contract::assemble;
+use super::diagnosis::{plot_residuals, write_report, ReportParts, ResidualSeries};
+use super::sentences::statement_text;
 use crate::diagnose::explain::{Explanation, SignalMetrics};
 use crate::diagnose::locate::Location;
 use crate::diagnose::modal::ModalComparison;
@@ -151,7 +153,7 @@ fn write_staged(
 ) -> Result<Vec<String>, WriteError> {
     let vehicle_id = log.meta.vehicle_id.as_deref();
     let source = log.meta.source_file.as_str();
-    let diag = &d.diagnosis;
+    let diag = &assemble(d);
     diag.write_mismatch(
         &stage.join("mismatch.parquet"),
         vehicle_id,
@@ -203,7 +205,22 @@ fn write_staged(
         names.push(name);
     }
     let report = stage.join("report.md");
-    write_report(&report, diag, &metrics_of(d), &plots).map_err(|source| WriteError::Io {
+    let shapes: Vec<(String, Vec<String>)> = d
+        .location
+        .signals
+        .iter()
+        .filter(|s| !s.statements.is_empty())
+        .map(|s| {
+            let words = s.statements.iter().map(statement_text).collect();
+            (s.signal.clone(), words)
+        })
+        .collect();
+    let parts = ReportParts {
+        metrics: &metrics_of(d),
+        shapes: &shapes,
+        plots: &plots,
+    };
+    write_report(&report, diag, &parts).map_err(|source| WriteError::Io {
         path: report.clone(),
         source,
     })?;

@@ -1,12 +1,13 @@
 //! The fleet evidence's output folder (docs/fleet.md): `fleet_vehicles.parquet`,
-//! `fleet_parameters.parquet`, `fleet_changes.parquet`, `suggested/<vehicle_id>.toml` and
+//! `fleet_parameters.parquet`, `fleet_changes.parquet`, `fleet_trips.parquet`,
+//! `suggested/<vehicle_id>.toml` and
 //! `fleet.html` ([`write_fleet_outputs`]). Each file is written atomically; the suggestions
 //! folder holds exactly this evidence's suggestions (those of vehicles now consistent are
 //! removed).
 
 use super::fleet_html::{fleet_html, PageInfo};
 use crate::fleet::suggest::suggestion;
-use crate::fleet::tables::{change_columns, parameter_columns, vehicle_columns};
+use crate::fleet::tables::{change_columns, parameter_columns, trip_columns, vehicle_columns};
 use crate::fleet::{FleetError, VehicleEvidence};
 use crate::io::{escape, write_table, AtomicFile, TableMeta};
 use std::collections::BTreeMap;
@@ -67,6 +68,11 @@ pub fn write_fleet_outputs(
         &dir.join("fleet_changes.parquet"),
         &table_meta("fleet_changes"),
         &change_columns(vehicles),
+    )?;
+    write_table(
+        &dir.join("fleet_trips.parquet"),
+        &table_meta("fleet_trips"),
+        &trip_columns(vehicles),
     )?;
     let sdir = dir.join("suggested");
     if sdir.is_dir() {

@@ -3,9 +3,10 @@
 //! come first, each parameter outside its tolerance or with a change over time plotted drive by
 //! drive (the 95 % interval of each drive, the tolerance band, the pooled estimate of each
 //! segment and the change points), each drive linked to its diagnosis report; then a table of
-//! every vehicle.
+//! every vehicle with its per-trip parameters' range and median.
 
 use crate::fleet::evidence::{sig, ParameterEvidence, Status, VehicleEvidence};
+use crate::fleet::trips::TripSummary;
 use crate::time_fmt::utc_date;
 use std::fmt::Write;
 
@@ -30,7 +31,7 @@ const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:2em;color:#222
 h1{font-size:1.5em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #ccc}\
 table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right;white-space:nowrap}\
 td:first-child,th:first-child{text-align:left}.flag{color:#b00;font-weight:600}.note{color:#a60}.ok{color:#070}\
-figure{margin:1em 0}figcaption{font-size:0.95em;margin-bottom:0.3em}svg{background:#fff;border:1px solid #ddd}";
+td.trip{text-align:left;white-space:normal}figure{margin:1em 0}figcaption{font-size:0.95em;margin-bottom:0.3em}svg{background:#fff;border:1px solid #ddd}";
 
 /// Whether a parameter's evidence is worth a plot: outside its tolerance, or changed.
 fn notable(p: &ParameterEvidence) -> bool {
@@ -90,7 +91,7 @@ pub fn fleet_html(
             );
         }
     }
-    h.push_str("<h2>Every vehicle</h2>\n<table><tr><th>vehicle</th><th>drives</th><th>first drive</th><th>last drive</th><th>explained</th><th>no significant mismatch</th><th>unexplained</th><th>flagged</th><th>changes</th></tr>\n");
+    h.push_str("<h2>Every vehicle</h2>\n<table><tr><th>vehicle</th><th>drives</th><th>first drive</th><th>last drive</th><th>explained</th><th>no significant mismatch</th><th>unexplained</th><th>flagged</th><th>changes</th><th>per trip</th></tr>\n");
     for v in vehicles {
         let verdicts = |name: &str| v.drives.iter().filter(|d| d.verdict == name).count();
         let out = v.flagged().count();
@@ -100,9 +101,14 @@ pub fn fleet_html(
         } else {
             esc(&v.vehicle_id)
         };
+        let per_trip = TripSummary::all(v)
+            .iter()
+            .map(|t| esc(&t.sentence()))
+            .collect::<Vec<_>>()
+            .join("<br>");
         let _ = writeln!(
             h,
-            "<tr><td>{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td{}>{out}</td><td>{changes}</td></tr>",
+            "<tr><td>{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td{}>{out}</td><td>{changes}</td><td class=\"trip\">{per_trip}</td></tr>",
             v.drives.len(),
             utc_date(v.drives[0].start_ns),
             utc_date(v.drives[v.drives.len() - 1].start_ns),

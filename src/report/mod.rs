@@ -6,6 +6,7 @@ pub mod axle_scenario;
 pub mod axle_sim;
 pub mod axle_validation;
 pub mod bode;
+pub mod contract;
 pub mod diagnosis;
 pub mod diagnosis_files;
 pub mod fleet_files;
@@ -13,6 +14,7 @@ pub mod fleet_html;
 mod ingest_summary;
 pub mod road_plot;
 pub mod road_spectra;
+pub mod sentences;
 pub mod spectrum;
 pub mod validation;
 

@@ -132,9 +132,14 @@ pub fn write_road_spectrum(
         message,
     })?;
     let fc = sp.filter.config;
-    let fp = format!(
-        "road-spectrum:v1 column={} step_m={} settings={settings:?} filter={fc:?}",
-        col.column, sp.step_m
+    let fp = crate::io::canonical(
+        "road-spectrum:v2",
+        &serde_json::json!({
+            "column": col.column,
+            "step_m": sp.step_m,
+            "settings": settings,
+            "filter": fc,
+        }),
     );
     let meta = TableMeta {
         table: "road_spectrum".into(),
@@ -252,8 +257,18 @@ pub fn write_study(
     })?;
     let rules_toml = cfg.rules.canonical_toml();
     let fp = format!(
-        "road-study:v1 {GENERATOR}\nroads={} seed={} length_m={} step_m={} spectrum={:?}\n{rules_toml}",
-        cfg.n_roads, cfg.seed, cfg.length_m, cfg.step_m, cfg.spectrum
+        "{}\n{rules_toml}",
+        crate::io::canonical(
+            "road-study:v2",
+            &serde_json::json!({
+                "generator": GENERATOR,
+                "roads": cfg.n_roads,
+                "seed": cfg.seed,
+                "length_m": cfg.length_m,
+                "step_m": cfg.step_m,
+                "spectrum": cfg.spectrum,
+            }),
+        )
     );
     let hash = config_hash(&[fp.as_bytes()]);
     let pct = |name: &str, p: &crate::road::study::Percentiles| {

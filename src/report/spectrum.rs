@@ -119,6 +119,26 @@ fn interpolation_of(column: &str) -> Interpolation {
         .map_or(Interpolation::Linear, |c| c.interpolation)
 }
 
+/// Canonical text of a spectrum's settings, for the config hash: the column, the segment length
+/// (`None`: the default), the confidence level and, for a spectrum of a road profile, the
+/// profile's grid step in m.
+pub fn fingerprint(
+    profile_step_m: Option<f64>,
+    column: &str,
+    nperseg: Option<usize>,
+    confidence: f64,
+) -> String {
+    crate::io::canonical(
+        "spectrum:v2",
+        &serde_json::json!({
+            "profile_step_m": profile_step_m,
+            "column": column,
+            "nperseg": nperseg,
+            "confidence": confidence,
+        }),
+    )
+}
+
 /// Spectrum of a column of a distance log (frequency in 1/m). Short gaps (those ingest accepted)
 /// are filled per the column's interpolation kind; a column without any value is an error.
 ///

@@ -23,7 +23,7 @@ use crate::table::DriveMeta;
 use thiserror::Error;
 
 /// Settings of a GNSS road profile; units in the names.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct GnssProfileConfig {
     /// Distance grid step, m.
     pub step_m: f64,
@@ -70,7 +70,7 @@ impl Default for GnssProfileConfig {
 impl GnssProfileConfig {
     /// Canonical text of the settings, for the output's config hash.
     pub fn fingerprint(&self) -> String {
-        format!("road_profile:gnss:v1 {self:?}")
+        crate::io::canonical("road_profile:gnss:v2", self)
     }
 
     pub(super) fn check(&self) -> Result<(), ProfileError> {

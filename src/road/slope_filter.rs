@@ -30,7 +30,7 @@ use serde::Deserialize;
 use thiserror::Error;
 
 /// Which edge treatment the zero-phase variant uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SlopeEdge {
     /// fleetdyn's matched edge treatment (default).
@@ -40,8 +40,18 @@ pub enum SlopeEdge {
     Scipy,
 }
 
+impl SlopeEdge {
+    /// The treatment's name as configuration files write it: `matched`, `scipy`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SlopeEdge::Matched => "matched",
+            SlopeEdge::Scipy => "scipy",
+        }
+    }
+}
+
 /// `[slope]` settings; units in the key names.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SlopeFilterConfig {
     /// Cut-off spatial frequency, 1/m.

@@ -39,7 +39,7 @@ use thiserror::Error;
 pub const MAX_ROADS: usize = 10_000;
 
 /// Welch settings for road spectra.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SpectrumSettings {
     /// Welch segment length, m (rounded to whole grid steps). The frequency resolution is its
     /// inverse: the default 16 384 m gives 6.1·10⁻⁵ 1/m, five bins below the highway knee of

@@ -19,7 +19,9 @@ pub enum Interpolation {
 }
 
 /// A processing stage that declares which drive-log columns it needs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize, serde::Serialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
     /// Ingest itself (needs only the `all` columns).

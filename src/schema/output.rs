@@ -94,6 +94,10 @@ const FILES: &[(&str, &str)] = &[
         "fleet_changes",
         include_str!("../../schemas/outputs/fleet-changes.toml"),
     ),
+    (
+        "fleet_trips",
+        include_str!("../../schemas/outputs/fleet-trips.toml"),
+    ),
 ];
 
 /// One column of an output table.

@@ -37,7 +37,7 @@ use std::borrow::Cow;
 use thiserror::Error;
 
 /// Where distance comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DistanceSource {
     /// Odometer if usable, else ∫v dt.
@@ -61,7 +61,7 @@ impl DistanceSource {
 }
 
 /// What to do with reverse motion.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ReversePolicy {
     /// Fail the drive at the first reverse sample.
@@ -72,7 +72,7 @@ pub enum ReversePolicy {
 }
 
 /// Distance-resampling settings.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ResampleConfig {
     /// Grid step, m.

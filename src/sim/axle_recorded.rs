@@ -78,7 +78,7 @@ use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
 
 /// Where the acceleration input comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum AccelSource {
     /// The IMU column when present, else the speed derivative.
     Auto,
@@ -89,7 +89,7 @@ pub enum AccelSource {
 }
 
 /// How a recording becomes axle-model inputs.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AxleRecordConfig {
     /// Acceleration source.
     pub accel: AccelSource,

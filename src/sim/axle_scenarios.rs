@@ -101,7 +101,7 @@ pub enum ScenarioError {
 /// Vehicle and driver figures of the scenarios. The axle-load thesis publishes none of them (it
 /// lumps air and rolling resistance as 10 % of the longitudinal force and gives no motor data), so
 /// the defaults are typical values for its 18.7 t electrified rigid truck, each stated below.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AxleScenarioConfig {
     /// Output and input sample rate, Hz. Default 100 Hz (10 ms, five times finer than the
     /// 2 Hz body modes' half period, and the rate recorded CAN signals are resampled to).

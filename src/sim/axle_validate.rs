@@ -20,7 +20,7 @@ use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
 
 /// Validation settings.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct AxleValidationConfig {
     /// Input construction.
     pub record: AxleRecordConfig,

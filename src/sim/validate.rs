@@ -28,7 +28,7 @@ use crate::table::DriveLog;
 use thiserror::Error;
 
 /// Validation settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ValidationConfig {
     /// Re-initialisation window, s.
     pub window_s: f64,
@@ -57,7 +57,7 @@ impl ValidationConfig {
         ratios: &[f64],
         slope_column: Option<&str>,
     ) -> String {
-        format!("shuffle:v1 {p:?} {ratios:?} {self:?} slope={slope_column:?}")
+        crate::io::canonical("shuffle:v2", &(p, ratios, self, slope_column))
     }
 
     /// Checks the settings: both steps positive, the fast-path step shorter than the window.

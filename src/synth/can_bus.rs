@@ -47,7 +47,7 @@ pub struct CanChannel {
 }
 
 /// Dropout process of a message (see the conventions of [`super::can_sample`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Dropouts {
     /// Probability, per scheduled message outside a gap, that a gap starts there.
     pub start_probability: f64,

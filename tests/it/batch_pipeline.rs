@@ -179,6 +179,8 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
     assert_eq!(rows("fleet_vehicles.parquet"), 4);
     assert!(rows("fleet_parameters.parquet") >= 4 * 8);
     assert_eq!(rows("fleet_changes.parquet"), 0);
+    // each 40 t drive informs its trip's mass: one row per drive, never pooled
+    assert_eq!(rows("fleet_trips.parquet"), 4);
     let html = std::fs::read_to_string(fleet.join("fleet.html")).unwrap();
     assert!(html.contains("TRK-0004") && !html.contains("SEED002-6X2"));
     assert!(

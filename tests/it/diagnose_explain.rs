@@ -26,6 +26,7 @@ use fleetdyn::model::catalogue::{Domain, Effect};
 use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::proof::noise_free_reference;
+use fleetdyn::report::sentences::{consistent_sentence, finding_sentence};
 use fleetdyn::synth::drive::{drive_truth, synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::EffectChoice;
 use std::collections::BTreeMap;
@@ -172,10 +173,10 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
     assert_eq!(a.id.as_deref(), Some(e.id()));
     let x = &r.x;
     for f in &x.findings {
-        eprintln!("{}: {}", e.id(), f.sentence);
+        eprintln!("{}: {}", e.id(), finding_sentence(f));
     }
     for c in &x.consistent {
-        eprintln!("{}: consistent: {}", e.id(), c.sentence);
+        eprintln!("{}: consistent: {}", e.id(), consistent_sentence(c));
     }
     eprintln!(
         "{}: {:.0} s drive explained in {:.1} s",
@@ -202,7 +203,7 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
         .first()
         .unwrap_or_else(|| panic!("{}: nothing accepted: {:#?}", e.id(), x.rounds));
     assert_eq!(f.effect, e.id(), "{:#?}", x.rounds);
-    assert_eq!(f.ambiguous_with, ambiguous, "{}", f.sentence);
+    assert_eq!(f.ambiguous_with, ambiguous, "{}", finding_sentence(f));
     let p = &f.parameters[e.parameter()];
     assert_eq!(p.unit, e.unit());
     assert!(
@@ -267,7 +268,8 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
         nf.heldout_before,
         nf.heldout_after
     );
-    assert!(f.sentence.contains(e.parameter()) && f.sentence.contains("held-out"));
+    let words = finding_sentence(f);
+    assert!(words.contains(e.parameter()) && words.contains("held-out"));
     assert_eq!(
         verdict(&x.findings, &x.consistent, true),
         Verdict::Explained
@@ -371,7 +373,10 @@ fn clean_drives_give_no_finding() {
             r.x.findings.is_empty(),
             "{}: {:?}",
             road.rules,
-            r.x.findings.iter().map(|f| &f.sentence).collect::<Vec<_>>()
+            r.x.findings
+                .iter()
+                .map(finding_sentence)
+                .collect::<Vec<_>>()
         );
         assert_eq!(
             verdict(&r.x.findings, &r.x.consistent, false),
@@ -485,7 +490,9 @@ fn results_do_not_depend_on_the_thread_count() {
     let v: serde_json::Value = serde_json::from_str(&one).unwrap();
     let f = &v["findings"][0];
     assert_eq!(f["effect"], "cg_position", "{one}");
-    assert!(f["ambiguous_with"].is_array() && f["sentence"].is_string());
+    assert!(f["ambiguous_with"].is_array());
+    // the contract's sentence is the report's words for the finding
+    assert!(finding_sentence(&x.findings[0]).contains("chassis_cg_shift_m"));
     let p = &f["parameters"]["chassis_cg_shift_m"];
     for k in ["value", "ci_low", "ci_high"] {
         assert!(p[k].is_f64(), "{k}");

@@ -17,6 +17,7 @@ use fleetdyn::diagnose::noise::{
 use fleetdyn::model::catalogue::Effect;
 use fleetdyn::model::extended_vehicle::ExtendedVehicle;
 use fleetdyn::model::vehicle::VehicleFile;
+use fleetdyn::report::sentences::statement_text;
 use fleetdyn::rng::Xoshiro256StarStar;
 use fleetdyn::synth::drive::{synth_drive, DriveConfig, HiddenEffect, SynthDrive};
 use fleetdyn::synth::effects::EffectChoice;
@@ -252,7 +253,8 @@ fn residual_growing_with_speed_squared_is_stated() {
     eprintln!("v² statements: {st:#?}");
     let best = st.iter().find(|s| s.best).expect("a statement");
     assert_eq!(best.shape, "speed_squared");
-    assert!(best.text.starts_with("grows with speed²"), "{}", best.text);
+    let words = statement_text(best);
+    assert!(words.starts_with("grows with speed²"), "{words}");
     assert!((best.coefficient - 4.0).abs() < 0.1, "{}", best.coefficient);
     assert!(!st.iter().any(|s| s.shape == "grade"));
 }
@@ -395,7 +397,7 @@ fn summary(label: &str, floors: &NoiseFloors, loc: &Location) {
             s.rms_residual / s.floor_rms,
             s.windows.iter().filter(|w| w.significant).count(),
             s.windows.len(),
-            s.statements.first().map(|x| &x.text)
+            s.statements.first().map(statement_text)
         );
     }
     for m in &loc.mismatch {

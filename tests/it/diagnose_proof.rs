@@ -33,8 +33,8 @@
 //! The mechanism pins below run their cases as the fixed-driving plan made them.
 
 use crate::common::fixture;
-use fleetdyn::diagnose::contract::Verdict;
 use fleetdyn::proof::{run_proof, CaseScore, Driving, ProofConfig, ProofRun};
+use fleetdyn::report::contract::Verdict;
 
 const IDENTIFIED: [&str; 13] = [
     "rolling_resistance",

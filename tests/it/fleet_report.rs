@@ -25,17 +25,31 @@ fn drive(vehicle: &str, i: usize, drag: f64) -> DriveEstimates {
             "no_significant_mismatch".into()
         },
         source: String::new(),
-        rows: vec![EstimateRow {
-            effect: "aero_drag".into(),
-            unit: "m^2".into(),
-            value: drag,
-            ci_low: drag - 0.4,
-            ci_high: drag + 0.4,
-            nominal: 5.6,
-            tolerance_low: 5.32,
-            tolerance_high: 5.88,
-            method: "linearised".into(),
-        }],
+        rows: vec![
+            EstimateRow {
+                effect: "aero_drag".into(),
+                unit: "m^2".into(),
+                value: drag,
+                ci_low: drag - 0.4,
+                ci_high: drag + 0.4,
+                nominal: 5.6,
+                tolerance_low: 5.32,
+                tolerance_high: 5.88,
+                method: "linearised".into(),
+            },
+            // the payload from trip to trip: 30 to 39 t
+            EstimateRow {
+                effect: "vehicle_mass".into(),
+                unit: "kg".into(),
+                value: 30_000.0 + 1_000.0 * (i % 10) as f64,
+                ci_low: 29_500.0 + 1_000.0 * (i % 10) as f64,
+                ci_high: 30_500.0 + 1_000.0 * (i % 10) as f64,
+                nominal: 40_000.0,
+                tolerance_low: 38_800.0,
+                tolerance_high: 41_200.0,
+                method: "linearised".into(),
+            },
+        ],
     }
 }
 
@@ -104,6 +118,11 @@ fn fleet_page_renders_in_a_headless_browser() {
         1,
         "one plot: the flagged parameter"
     );
+    assert_eq!(
+        html.matches("vehicle_mass: ").count(),
+        2,
+        "each vehicle's trips summarised once"
+    );
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fleet_report");
     std::fs::create_dir_all(&dir).unwrap();
     let page = dir.join("fleet.html");
@@ -131,6 +150,11 @@ fn fleet_page_renders_in_a_headless_browser() {
         "no sentence in the DOM"
     );
     assert!(dom.contains("TRK-0100") && dom.contains("TRK-0200"));
+    // the mass stays per trip: summarised in the vehicle table, never plotted or flagged
+    assert!(
+        dom.contains("vehicle_mass: 30000 to 39000 kg over 30 trips, median 34500 kg"),
+        "no per-trip mass in the DOM"
+    );
     assert_eq!(dom.matches("<circle").count(), 30, "one mark per drive");
     assert!(!dom.contains("parsererror"));
     let log = String::from_utf8_lossy(&o.stderr);

@@ -7,8 +7,8 @@
 //! the diagnosis does over whole plans is measured in docs/validation/proof.md.
 
 use crate::common::fixture;
-use fleetdyn::diagnose::contract::Verdict;
 use fleetdyn::proof::{plan, run_proof, Hidden, Outside, ProofConfig, TruthSource};
+use fleetdyn::report::contract::Verdict;
 
 #[test]
 fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {

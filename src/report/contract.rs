@@ -1,36 +1,21 @@
 //! The diagnosis output contract (docs/diagnosis/contract.md): `diagnosis.json` and the same
 //! content as two Parquet tables for fleet-wide queries (`mismatch.parquet`, `findings.parquet`,
-//! schemas/outputs/{mismatch,findings}.toml). Field names are part of the contract; units are SI
-//! and named in every parameter entry.
+//! schemas/outputs/{mismatch,findings}.toml), assembled from a diagnosis's structured result
+//! ([`assemble`]) with the plain sentences of [`super::sentences`]. Field names are part of the
+//! contract; units are SI and named in every parameter entry.
 
-use super::parameter_table::{parameter_columns, ParameterRow};
+use super::sentences::{consistent_sentence, finding_sentence};
+pub use crate::diagnose::explain::Verdict;
+use crate::diagnose::explain::{ConsistentEstimate, Finding};
+use crate::diagnose::locate::Mismatch;
+use crate::diagnose::parameter_table::{parameter_columns, ParameterRow};
+use crate::diagnose::reversal_channel;
+use crate::diagnose::run::Diagnosed;
 use crate::io::{config_hash, write_table, AtomicFile, OutColumn, OutData, OutputError, TableMeta};
+use crate::model::catalogue::Effect;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// The drive-level verdict.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Verdict {
-    /// A significant mismatch, explained by accepted findings.
-    Explained,
-    /// Nothing above the noise floor.
-    NoSignificantMismatch,
-    /// A significant mismatch that no catalogue effect explains.
-    Unexplained,
-}
-
-impl Verdict {
-    /// The contract's spelling.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Verdict::Explained => "explained",
-            Verdict::NoSignificantMismatch => "no_significant_mismatch",
-            Verdict::Unexplained => "unexplained",
-        }
-    }
-}
 
 /// One located mismatch: a stretch of one signal above its noise floor.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -350,12 +335,112 @@ type FindingRow<'a> = (
     &'a FitEntry,
 );
 
+/// The content of `diagnosis.json` for the diagnosis `d`: its verdict, noise floors, located
+/// mismatches, findings and estimates consistent with the vehicle file, each with its sentence.
+pub fn assemble(d: &Diagnosed) -> Diagnosis {
+    Diagnosis {
+        drive_id: d.drive_id.clone(),
+        verdict: d.verdict,
+        noise_floor: d.floors.summary(),
+        mismatch: d.location.mismatch.iter().map(mismatch_entry).collect(),
+        findings: d.explanation.findings.iter().map(finding_entry).collect(),
+        estimates: d
+            .explanation
+            .consistent
+            .iter()
+            .map(|c| {
+                let e = Effect::from_id(c.effect).expect("catalogue id");
+                EstimateEntry {
+                    effect: c.effect.to_string(),
+                    parameter: e.parameter().to_string(),
+                    value: c.estimate.value,
+                    ci_low: c.estimate.ci_low,
+                    ci_high: c.estimate.ci_high,
+                    unit: c.estimate.unit,
+                    nominal: c.nominal,
+                    tolerance_low: c.band_low,
+                    tolerance_high: c.band_high,
+                    consistent_with_file: true,
+                    ambiguous_with: c.ambiguous_with.iter().map(|a| a.to_string()).collect(),
+                    sentence: estimate_sentence(c),
+                }
+            })
+            .collect(),
+    }
+}
+
+/// The sentence of an estimate consistent with the vehicle file, with the effects the recorded
+/// signals cannot tell it from.
+fn estimate_sentence(c: &ConsistentEstimate) -> String {
+    let mut s = consistent_sentence(c);
+    if !c.ambiguous_with.is_empty() {
+        s.push_str(&format!(
+            "; the recorded signals cannot tell it from {}",
+            c.ambiguous_with.join(", ")
+        ));
+    }
+    s
+}
+
+fn mismatch_entry(m: &Mismatch) -> MismatchEntry {
+    MismatchEntry {
+        signal: m.signal.clone(),
+        start_s: m.start_s,
+        end_s: m.end_s,
+        start_m: m.start_m,
+        end_m: m.end_m,
+        band_hz: m.band_hz,
+        condition: m.condition.clone(),
+        rms_residual: m.rms_residual,
+        significance: m.significance,
+    }
+}
+
+fn finding_entry(f: &Finding) -> FindingEntry {
+    FindingEntry {
+        effect: f.effect.to_string(),
+        ambiguous_with: f.ambiguous_with.iter().map(|s| s.to_string()).collect(),
+        sentence: finding_sentence(f),
+        parameters: f
+            .parameters
+            .iter()
+            .map(|(k, p)| {
+                (
+                    k.clone(),
+                    ParameterEntry {
+                        value: p.value,
+                        ci_low: p.ci_low,
+                        ci_high: p.ci_high,
+                        unit: p.unit,
+                    },
+                )
+            })
+            .collect(),
+        fit: f
+            .fit
+            .iter()
+            .map(|(k, e)| {
+                (
+                    k.clone(),
+                    FitEntry {
+                        train_before: e.train_before,
+                        train_after: e.train_after,
+                        heldout_before: e.heldout_before,
+                        heldout_after: e.heldout_after,
+                        metric: e.metric,
+                    },
+                )
+            })
+            .collect(),
+    }
+}
+
 /// SI unit of a compared canonical signal.
 pub fn signal_unit(signal: &str) -> &'static str {
     match signal {
         "vehicle_speed" => "m/s",
         "engine_speed" => "rad/s",
-        super::reversal_channel::NAME => super::reversal_channel::UNIT,
+        reversal_channel::NAME => reversal_channel::UNIT,
         s if s.starts_with("bellow_pressure") => "Pa",
         s if s.starts_with("suspension_travel") => "m",
         _ => "1",

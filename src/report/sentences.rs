@@ -1,14 +1,15 @@
-//! The plain sentences of step 3 of the diagnosis, explain (docs/diagnosis/method.md): a
+//! The plain sentences of a diagnosis (docs/diagnosis/method.md, explain and locate): a
 //! finding's sentence (what is wrong by how much, its fingerprint, and the held-out error of the
-//! signal it improves most) and the sentence of an estimate consistent with the vehicle file.
+//! signal it improves most), the sentence of an estimate consistent with the vehicle file, and a
+//! located residual's shape in words.
 //!
-//! Numbers are written with three significant figures; parameters in the catalogue's SI units
-//! (angles in degrees and grades in % where the text says so).
+//! Numbers are written with three significant figures ([`sig3`]); parameters in the catalogue's
+//! SI units (angles in degrees and grades in % where the text says so).
 
-use super::explanation::ParameterEstimate;
-use super::signal_fits::SignalMetrics;
+use crate::diagnose::explain::{ConsistentEstimate, Finding};
+use crate::diagnose::location::Statement;
 use crate::model::catalogue::{Domain, Effect};
-use std::collections::BTreeMap;
+use crate::number_fmt::sig3 as num;
 
 fn signal_words(name: &str) -> &str {
     match name {
@@ -23,28 +24,12 @@ fn signal_words(name: &str) -> &str {
     }
 }
 
-/// `x` with three significant figures (no exponent between 1e-4 and 1e6).
-pub fn num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let mag = x.abs().log10().floor() as i32;
-    if !(-4..6).contains(&mag) {
-        return format!("{x:.2e}");
-    }
-    let decimals = (2 - mag).max(0) as usize;
-    format!("{x:.decimals$}")
-}
-
 /// The plain sentence of an estimate within the vehicle file's tolerance: "mass_kg = 40800 kg
 /// (95 % CI 40500 to 41100 kg), within the vehicle file's 40000 kg ± 3 %".
-pub(super) fn consistent_sentence(
-    e: Effect,
-    nominal: f64,
-    est: &ParameterEstimate,
-    tol: crate::model::catalogue::Tolerance,
-) -> String {
+pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
     use crate::model::catalogue::Tolerance;
+    let e = Effect::from_id(c.effect).expect("catalogue id");
+    let (nominal, est, tol) = (c.nominal, &c.estimate, c.file_tolerance);
     let unit = if e.unit() == "1" {
         String::new()
     } else {
@@ -79,14 +64,12 @@ pub(super) fn consistent_sentence(
 
 /// The plain sentence of a finding: what is wrong by how much, its fingerprint, and the
 /// held-out RMSE of the signal it improves most.
-pub(super) fn sentence(
-    e: Effect,
-    nominal: f64,
-    est: &ParameterEstimate,
-    met: &BTreeMap<String, SignalMetrics>,
-    ambiguous: &[&'static str],
-) -> String {
+pub fn finding_sentence(f: &Finding) -> String {
     use Effect::*;
+    let e = Effect::from_id(f.effect).expect("catalogue id");
+    let nominal = f.evidence.nominal;
+    let est = &f.parameters[e.parameter()];
+    let (met, ambiguous) = (&f.metrics, &f.ambiguous_with);
     let v = est.value;
     let unit = if e.unit() == "1" {
         String::new()
@@ -225,16 +208,52 @@ pub(super) fn sentence(
     s
 }
 
+/// A located residual's shape in words, with the share of the energy it explains: "grows with
+/// speed² (explains 64 % of the residual energy)"; indicators ("only while braking") speak of
+/// the excess energy above the noise floor.
+pub fn statement_text(s: &Statement) -> String {
+    let words = match s.shape.as_str() {
+        "constant" => "constant offset",
+        "speed" => "grows with speed",
+        "speed_squared" => "grows with speed²",
+        "acceleration" => "proportional to acceleration",
+        "grade" => "proportional to grade",
+        "engine_torque" => "proportional to engine torque",
+        "gear_ratio" => "proportional to the gear ratio",
+        "torque_sign_change" => "only at torque sign changes",
+        "clutch_actuated" => "only while the clutch is actuated",
+        "braking" => "only while braking",
+        "gear_shift" => "only at gear shifts",
+        other => other,
+    };
+    let what = if s.coefficient.is_nan() {
+        "of the excess residual energy"
+    } else {
+        "of the residual energy"
+    };
+    format!("{words} (explains {:.0} % {what})", 100.0 * s.share)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn numbers_have_three_significant_figures() {
-        assert_eq!(num(0.007548), "0.00755");
-        assert_eq!(num(21737.52), "21738");
-        assert_eq!(num(-94.47), "-94.5");
-        assert_eq!(num(1.5777), "1.58");
-        assert_eq!(num(2.5e-6), "2.50e-6");
+    fn statements_read_as_words_with_their_share() {
+        let st = |shape: &str, coefficient: f64| Statement {
+            shape: shape.into(),
+            share: 0.642,
+            coefficient,
+            p_value: 1e-6,
+            best: true,
+        };
+        assert_eq!(
+            statement_text(&st("speed_squared", 0.01)),
+            "grows with speed² (explains 64 % of the residual energy)"
+        );
+        assert_eq!(
+            statement_text(&st("braking", f64::NAN)),
+            "only while braking (explains 64 % of the excess residual energy)"
+        );
     }
 }
