@@ -218,7 +218,7 @@ impl Diagnosis {
         write_table(path, &self.meta("findings", vehicle_id, source, fp), &cols)
     }
 
-    /// Writes `parameter_estimates.parquet` from `rows` ([`super::parameter_table`]).
+    /// Writes `parameter_estimates.parquet` from `rows` ([`crate::diagnose::parameter_table`]).
     ///
     /// # Errors
     /// [`OutputError`].

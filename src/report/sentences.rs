@@ -3,7 +3,7 @@
 //! signal it improves most), the sentence of an estimate consistent with the vehicle file, and a
 //! located residual's shape in words.
 //!
-//! Numbers are written with three significant figures ([`sig3`]); parameters in the catalogue's
+//! Numbers are written with three significant figures ([`crate::number_fmt::sig3`]); parameters in the catalogue's
 //! SI units (angles in degrees and grades in % where the text says so).
 
 use crate::diagnose::explain::{ConsistentEstimate, Finding};
