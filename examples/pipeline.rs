@@ -6,9 +6,9 @@
 //! cargo run --release --example pipeline -- PIPELINE.toml
 //! ```
 //!
-//! Run it from the repository top: a pipeline file's relative paths (inputs, vehicle files,
-//! output folder) resolve against the current directory. The dataset goes to
-//! `out/examples/pipeline/` instead of the file's `output_dir`. Run it twice: the second run
+//! A pipeline file's relative paths (inputs, vehicle files, output folder) resolve against the
+//! file's own folder. The dataset goes to `out/examples/pipeline/` (relative to the current
+//! directory) instead of the file's `output_dir`. Run it twice: the second run
 //! reuses every drive whose input and configuration are unchanged.
 
 use fleetdyn::pipeline::run::{run_plan, DriveOutcome, DriveStatus, RunOptions};

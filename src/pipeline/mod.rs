@@ -11,6 +11,7 @@ pub mod drive_tables;
 pub mod fleet_stage;
 pub mod ingest_stage;
 pub mod inputs;
+pub mod paths;
 pub mod record;
 pub mod resample_stage;
 pub mod run;

@@ -149,7 +149,9 @@ impl Plan {
 }
 
 impl PipelineSpec {
-    /// Reads a pipeline file.
+    /// Reads a pipeline file; its relative paths (`inputs`, `output_dir`, `vehicle`,
+    /// `vehicle_dir`, `[vehicles]`, `[ingest] mapping`) resolve against the file's folder
+    /// ([`PipelineSpec::resolve_paths`]).
     ///
     /// # Errors
     /// [`PlanError`] for unreadable or malformed files (unknown keys included).
@@ -159,7 +161,21 @@ impl PipelineSpec {
             file: file.clone(),
             problems: vec![e.to_string()],
         })?;
-        Self::parse(&text, &file)
+        let mut spec = Self::parse(&text, &file)?;
+        spec.resolve_paths(path.parent().unwrap_or(Path::new("")));
+        Ok(spec)
+    }
+
+    /// Resolves the file's relative paths against the folder `base` (the pipeline file's own,
+    /// [`super::paths::resolve`]); absolute paths stay as they are.
+    pub fn resolve_paths(&mut self, base: &Path) {
+        let r = |p: &mut PathBuf| *p = super::paths::resolve(base, p);
+        self.inputs.iter_mut().for_each(r);
+        r(&mut self.output_dir);
+        self.vehicle.iter_mut().for_each(r);
+        self.vehicle_dir.iter_mut().for_each(r);
+        self.vehicles.values_mut().for_each(r);
+        self.ingest.mapping.iter_mut().for_each(r);
     }
 
     /// Parses pipeline-file text; `file` names it in errors.

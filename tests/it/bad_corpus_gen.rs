@@ -343,7 +343,10 @@ pub fn generate(dir: &Path) {
     );
 
     // ---- pipeline files -----------------------------------------------------------------------
-    let nightly = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
+    // its paths, relative to pipelines/, made relative to fixtures/bad/
+    let nightly = std::fs::read_to_string(fixture("pipelines/nightly.toml"))
+        .unwrap()
+        .replace("\"../", "\"../../");
     let edit = |from: &str, to: &str| edited(&nightly, from, to);
     write(
         dir,

@@ -354,16 +354,23 @@ pub fn assert_only_whole_files(root: &Path) {
     }
 }
 
+/// `pipelines/nightly.toml` moved to another folder: its paths (relative to its own folder)
+/// made absolute, so that the copy reads the same fixtures.
+pub fn nightly_elsewhere() -> String {
+    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
+    text.replace("\"../", &format!("\"{}/", fixture("").display()))
+}
+
 /// `pipelines/nightly.toml` with a default vehicle file (`truck-40t.toml`), written to
 /// `dir/name`: drives without a vehicle id then reach their own stages.
 pub fn nightly_with_default_vehicle(dir: &Path, name: &str) -> PathBuf {
-    let text = std::fs::read_to_string(fixture("pipelines/nightly.toml")).unwrap();
     let p = dir.join(name);
+    let vehicle = fixture("fixtures/vehicles/truck-40t.toml");
     std::fs::write(
         &p,
-        text.replace(
+        nightly_elsewhere().replace(
             "[vehicles]",
-            "vehicle = \"fixtures/vehicles/truck-40t.toml\"\n[vehicles]",
+            &format!("vehicle = {:?}\n[vehicles]", vehicle.display().to_string()),
         ),
     )
     .unwrap();
@@ -375,8 +382,9 @@ pub fn fleet_pipeline(dir: &Path, manifest: &Path) -> PathBuf {
     std::fs::write(
         &p,
         format!(
-            "name = \"fleet\"\nmodel_version = \"t1\"\nstages = [\"ingest\", \"resample\", \"slope\", \"shuffle\", \"spectrum\", \"validate\", \"write\"]\ninputs = [{:?}]\noutput_dir = \"unused\"\nvehicle = \"fixtures/vehicles/truck-40t.toml\"\n[spectrum]\nsegment_length_m = 1024.0\n",
-            manifest.display().to_string()
+            "name = \"fleet\"\nmodel_version = \"t1\"\nstages = [\"ingest\", \"resample\", \"slope\", \"shuffle\", \"spectrum\", \"validate\", \"write\"]\ninputs = [{:?}]\noutput_dir = \"unused\"\nvehicle = {:?}\n[spectrum]\nsegment_length_m = 1024.0\n",
+            manifest.display().to_string(),
+            fixture("fixtures/vehicles/truck-40t.toml").display().to_string()
         ),
     )
     .unwrap();
@@ -526,7 +534,7 @@ inputs = ["/nonexistent/*.mcap", {m:?}]
 output_dir = "o"
 vehicle_dir = "/nonexistent/vehicles"
 [vehicles]
-"TRK-0001" = "fixtures/vehicles/seed002-6x2.toml"
+"TRK-0001" = {v:?}
 [slope]
 cutoff_per_m = 0.7
 [axle]
@@ -536,7 +544,10 @@ window_s = 0.001
 [write]
 tables = ["axle_sim"]
 "#,
-            m = m.display().to_string()
+            m = m.display().to_string(),
+            v = fixture("fixtures/vehicles/seed002-6x2.toml")
+                .display()
+                .to_string()
         ),
     )
     .unwrap();

@@ -31,6 +31,7 @@ mod fleet_proof;
 mod fleet_report;
 mod ingest_errors;
 mod ingest_fixtures;
+mod pipeline_paths;
 mod proof_independent;
 mod real_data;
 mod resample_props;
