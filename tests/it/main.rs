@@ -13,6 +13,7 @@ mod bad_corpus_gen;
 mod batch_pipeline;
 mod can_ingest;
 mod common;
+mod deploy_manifests;
 mod diagnose_cli;
 mod diagnose_explain;
 mod diagnose_extended;
