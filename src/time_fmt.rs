@@ -5,7 +5,7 @@ use thiserror::Error;
 
 /// A time that is not `YYYY-MM-DDTHH:MM:SS[.fff…]Z` (UTC), or out of range.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]
-#[error("time {text:?}: {problem} (expected RFC 3339 in UTC, e.g. 2026-03-02T06:00:00Z)")]
+#[error("time `{text}`: {problem} (expected RFC 3339 in UTC, e.g. 2026-03-02T06:00:00Z)")]
 pub struct TimeParseError {
     /// The text given.
     pub text: String,

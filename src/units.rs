@@ -51,7 +51,7 @@ impl Conversion {
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum UnitError {
     /// The unit string is not one fleetdyn knows.
-    #[error("unknown unit {unit:?} for quantity {quantity:?} (known: {known})")]
+    #[error("unknown unit `{unit}` for quantity {quantity} (known: {known})")]
     Unknown {
         /// The unit as written.
         unit: String,

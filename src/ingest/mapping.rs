@@ -58,6 +58,19 @@ pub enum SourceFormat {
     CanDbc,
 }
 
+impl SourceFormat {
+    /// The format's name as mapping files write it: `parquet-wide`, `parquet-long`, `mcap-json`,
+    /// `can-dbc`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SourceFormat::ParquetWide => "parquet-wide",
+            SourceFormat::ParquetLong => "parquet-long",
+            SourceFormat::McapJson => "mcap-json",
+            SourceFormat::CanDbc => "can-dbc",
+        }
+    }
+}
+
 /// Time column settings.
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -251,7 +264,7 @@ impl Mapping {
             let spec = schema
                 .column(column)
                 .filter(|c| c.name != "timestamp")
-                .ok_or_else(|| err(format!("unknown canonical column {column:?}")))?;
+                .ok_or_else(|| err(format!("unknown canonical column `{column}`")))?;
             let deferred = self.format == SourceFormat::CanDbc
                 && src.reference_torque_from.is_some()
                 && src.reference_torque_nm.is_none();

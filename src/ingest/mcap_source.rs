@@ -94,7 +94,7 @@ pub fn read_mcap(path: &Path, mapping: &Mapping) -> Result<McapRead, IngestError
             return Err(IngestError::WrongDtype {
                 file: path.into(),
                 column: topic.into(),
-                found: format!("message encoding {:?}", msg.channel.message_encoding),
+                found: format!("message encoding `{}`", msg.channel.message_encoding),
                 expected: "json".into(),
             });
         }

@@ -152,8 +152,8 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
                 return Err(IngestError::Mapping {
                     mapping: m.origin.clone(),
                     message: format!(
-                        "is for {:?} sources but {} is {}",
-                        m.format,
+                        "is for {} sources but {} is {}",
+                        m.format.name(),
                         path.display(),
                         if is_mcap { "MCAP" } else { "Parquet" }
                     ),
@@ -326,14 +326,22 @@ fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestErr
         .into_iter()
         .find(|m| !m.detect_columns.is_empty() && m.detect_columns.iter().all(|c| has(c)))
         .map(Some)
-        .ok_or_else(|| IngestError::MissingColumn {
-            file: path.into(),
-            column: "timestamp".into(),
-            source_name: format!(
-                "not canonical and no bundled mapping fits the columns [{}]; pass --mapping",
-                names.join(", ")
-            ),
-            stage: "all".into(),
+        .ok_or_else(|| {
+            // the canonical column the file lacks: a canonical file needs both
+            let column = if has("timestamp") {
+                "vehicle_speed"
+            } else {
+                "timestamp"
+            };
+            IngestError::MissingColumn {
+                file: path.into(),
+                column: column.into(),
+                source_name: format!(
+                    "not canonical and no bundled mapping fits the columns [{}]; pass --mapping",
+                    names.join(", ")
+                ),
+                stage: "all".into(),
+            }
         })
 }
 

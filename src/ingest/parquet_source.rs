@@ -88,7 +88,7 @@ fn check_chunks(
                 return Err(format!(
                     "row group {r}, column {} ({}): chunk at byte {start}, length {len}, is outside the file ({file_len} bytes)",
                     c,
-                    col.column_path()
+                    col.column_path().string()
                 ));
             }
         }
@@ -210,7 +210,10 @@ fn time_to_ns(
                     return Err(IngestError::WrongDtype {
                         file: path.into(),
                         column: column.into(),
-                        found: format!("{dt} without a time unit ({other:?})"),
+                        found: format!(
+                            "{dt} without a time unit ({})",
+                            other.map_or("none given".to_string(), |u| format!("`{u}`"))
+                        ),
                         expected: "timestamp, or a numeric time with [time] unit = s|ms|us|ns"
                             .into(),
                     })

@@ -4,7 +4,8 @@
 //! - zstd compression (level 3), one row group per 1 Mi rows;
 //! - every field carries a `unit` metadata entry (SI units inside fleetdyn);
 //! - key–value metadata: `table` (output schema name), `drive_id`, `vehicle_id`,
-//!   `schema_version`, `source_file`, `fleetdyn_version`, `config_hash`, plus stage extras;
+//!   `schema_version`, `source_file`, `fleetdyn_version`, `config_hash`, `units` (every
+//!   column's unit as one JSON object), plus stage extras;
 //! - missing values are Parquet nulls (NaN inside fleetdyn ↔ null on disk);
 //! - the table is checked against its output schema (`schemas/outputs/`) before a byte is
 //!   written, and the file appears atomically (temporary name + rename) or not at all.
@@ -261,6 +262,24 @@ pub enum OutputError {
     },
 }
 
+/// The column units as one JSON object in column order, `{"timestamp":"ns","vehicle_speed":"m/s",
+/// …}`: the file-level `units` entry, for readers that show key–value metadata but not field
+/// metadata (DuckDB's `parquet_kv_metadata`, polars' `read_parquet_metadata`).
+fn units_json(fields: &[Field]) -> String {
+    let entries: Vec<String> = fields
+        .iter()
+        .map(|f| {
+            let unit = f.metadata().get("unit").map_or("", String::as_str);
+            format!(
+                "{}:{}",
+                serde_json::to_string(f.name()).expect("a string serialises"),
+                serde_json::to_string(unit).expect("a string serialises")
+            )
+        })
+        .collect();
+    format!("{{{}}}", entries.join(","))
+}
+
 /// Hex SHA-256 of configuration text (the canonical serialisation the caller chose), used in
 /// file metadata so results can be matched to the configuration that made them.
 pub fn config_hash(parts: &[&[u8]]) -> String {
@@ -294,7 +313,7 @@ fn check_drive_log(cols: &[(&str, Dtype, &str)]) -> Result<(), SchemaError> {
         match dl.column(name) {
             Some(c) if c.dtype != *dtype || c.unit != *unit => {
                 return Err(mismatch(format!(
-                    "{name} as {dtype:?} [{unit}], schema says {:?} [{}]",
+                    "{name} as {dtype} [{unit}], schema says {} [{}]",
                     c.dtype, c.unit
                 )))
             }
@@ -504,6 +523,7 @@ fn write_table_full(
     if let Some(v) = &meta.vehicle_id {
         kv.push(("vehicle_id", v.clone()));
     }
+    kv.push(("units", units_json(&fields)));
     let mut kv: Vec<KeyValue> = kv
         .into_iter()
         .map(|(k, v)| KeyValue::new(k.to_string(), v))

@@ -270,12 +270,16 @@ impl AxleParams {
                 if v[0] <= 0.0 || v.windows(2).any(|w| w[1] <= w[0]) {
                     return Err(problem(
                         &vk,
-                        format!("{v:?}"),
+                        crate::number_fmt::list(v),
                         "must be > 0 and increasing".into(),
                     ));
                 }
                 if f.windows(2).any(|w| w[1] < w[0]) {
-                    return Err(problem(&fk, format!("{f:?}"), "must not decrease".into()));
+                    return Err(problem(
+                        &fk,
+                        crate::number_fmt::list(f),
+                        "must not decrease".into(),
+                    ));
                 }
             }
         }

@@ -24,6 +24,17 @@ pub enum Shape {
     Curve,
 }
 
+impl std::fmt::Display for Shape {
+    /// As the schema writes it: `scalar`, `per_gear`, `curve`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Shape::Scalar => "scalar",
+            Shape::PerGear => "per_gear",
+            Shape::Curve => "curve",
+        })
+    }
+}
+
 /// One key of the vehicle-file schema.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,7 +121,7 @@ pub fn check_keys(
                 return Err(problem(
                     &spec.key,
                     other.to_string(),
-                    format!("must be {shape:?} numbers"),
+                    format!("must be {shape} numbers"),
                 ))
             }
         };
@@ -238,7 +249,7 @@ impl DrivelineParams {
         if p.engine_speed_rad_per_s.windows(2).any(|w| w[1] <= w[0]) {
             return Err(problem(
                 "engine_speed_rad_per_s",
-                format!("{:?}", p.engine_speed_rad_per_s),
+                crate::number_fmt::list(&p.engine_speed_rad_per_s),
                 "must increase".into(),
             ));
         }

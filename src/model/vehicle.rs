@@ -176,7 +176,7 @@ impl VehicleFile {
             {
                 return Err(range(
                     "gearbox.ratios",
-                    format!("{:?}", g.ratios),
+                    crate::number_fmt::list(&g.ratios),
                     "ratios must be positive and non-increasing from gear 1",
                 ));
             }

@@ -185,10 +185,14 @@ fn process_inner(
             id,
             fail(
                 ing_st,
-                format!(
-                    "{input}: no vehicle file for vehicle_id {:?} (pipeline [vehicles], vehicle_dir, vehicle)",
-                    log.meta.vehicle_id
-                ),
+                match &log.meta.vehicle_id {
+                    Some(id) => format!(
+                        "{input}: no vehicle file for vehicle_id {id} (pipeline [vehicles], vehicle_dir, vehicle)"
+                    ),
+                    None => format!(
+                        "{input}: the drive names no vehicle_id and the pipeline has no default vehicle file (pipeline vehicle, or a manifest's vehicle_id)"
+                    ),
+                },
             ),
         ));
     }

@@ -105,7 +105,7 @@ fn read_manifest(path: &Path, out: &mut Vec<InputItem>, problems: &mut Vec<Strin
         let at = || format!("manifest {} line {}", path.display(), i + 1);
         if fields.len() > 2 || fields[0].is_empty() {
             problems.push(format!(
-                "{}: expected `path,vehicle_id`, found {line:?}",
+                "{}: expected `path,vehicle_id`, found `{line}`",
                 at()
             ));
             continue;
@@ -193,10 +193,10 @@ pub fn list_inputs(patterns: &[PathBuf]) -> Result<Listing, String> {
     for w in l.items.windows(2) {
         if w[0].path == w[1].path {
             l.problems.push(format!(
-                "input {} is listed with vehicle ids {:?} and {:?}",
+                "input {} is listed with vehicle ids {} and {}",
                 w[0].path.display(),
-                w[0].vehicle_id,
-                w[1].vehicle_id
+                w[0].vehicle_id.as_deref().unwrap_or("(none)"),
+                w[1].vehicle_id.as_deref().unwrap_or("(none)")
             ));
         }
     }

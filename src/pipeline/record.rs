@@ -25,18 +25,18 @@ impl Shard {
     pub fn parse(s: &str) -> Result<Self, String> {
         let (i, n) = s
             .split_once('/')
-            .ok_or_else(|| format!("--shard {s:?}: expected I/N, e.g. 0/4"))?;
+            .ok_or_else(|| format!("--shard {s}: expected I/N, e.g. 0/4"))?;
         let index: usize = i
             .trim()
             .parse()
-            .map_err(|_| format!("--shard {s:?}: {i:?} is not a shard index"))?;
+            .map_err(|_| format!("--shard {s}: `{i}` is not a shard index"))?;
         let count: usize = n
             .trim()
             .parse()
-            .map_err(|_| format!("--shard {s:?}: {n:?} is not a shard count"))?;
+            .map_err(|_| format!("--shard {s}: `{n}` is not a shard count"))?;
         if count == 0 || index >= count {
             return Err(format!(
-                "--shard {s:?}: the index must lie in 0 … {}",
+                "--shard {s}: the index must lie in 0 … {}",
                 count.saturating_sub(1)
             ));
         }

@@ -739,9 +739,9 @@ fn summary_md(
                 .map_or((0, f64::NAN), |r| (r.metrics.rows, r.metrics.duration_s));
             let _ = writeln!(
                 s,
-                "| {} | {:?} | {:.3} | {} | {} | {} |",
+                "| {} | {} | {:.3} | {} | {} | {} |",
                 cell(&d.drive_id),
-                d.status,
+                d.status.name(),
                 d.elapsed_s,
                 rows,
                 if d.elapsed_s > 0.0 && rows > 0 {

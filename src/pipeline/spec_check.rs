@@ -49,7 +49,7 @@ impl PipelineSpec {
 
         if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
             problems.push(format!(
-                "name = {:?} must be a non-empty name without slashes",
+                "name = `{}` must be a non-empty name without slashes",
                 self.name
             ));
         }
@@ -60,7 +60,7 @@ impl PipelineSpec {
                 .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c))
         {
             problems.push(format!(
-                "model_version = {:?} must be non-empty letters, digits, '.', '_' or '-'",
+                "model_version = `{}` must be non-empty letters, digits, '.', '_' or '-'",
                 self.model_version
             ));
         }
@@ -238,7 +238,7 @@ impl PipelineSpec {
             }
             for (id, n) in unknown {
                 problems.push(format!(
-                    "manifest vehicle_id {id:?} ({n} drive(s)) has no vehicle file ([vehicles], vehicle_dir or vehicle)"
+                    "manifest vehicle_id {id} ({n} drive(s)) has no vehicle file ([vehicles], vehicle_dir or vehicle)"
                 ));
             }
         }
@@ -298,7 +298,7 @@ impl PipelineSpec {
             match PipelineStage::parse(s) {
                 Some(st) => stages.push(st),
                 None => problems.push(format!(
-                    "unknown stage {s:?} (stages: {})",
+                    "unknown stage `{s}` (stages: {})",
                     PipelineStage::ALL.map(PipelineStage::name).join(", ")
                 )),
             }

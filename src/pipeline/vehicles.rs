@@ -73,7 +73,7 @@ impl VehicleBook {
                             let id = v.file.vehicle_id.clone();
                             if let Some(prev) = by_id.insert(id.clone(), v) {
                                 problems.push(format!(
-                                    "vehicle_dir {}: vehicle_id {id:?} is declared by {} and {}",
+                                    "vehicle_dir {}: vehicle_id {id} is declared by {} and {}",
                                     d.display(),
                                     prev.path,
                                     p.display()

@@ -168,7 +168,7 @@ pub enum ProfileError {
         min_m: f64,
     },
     /// A pitch or elevation column in a unit that cannot be used.
-    #[error("{file}: column {column} has unit {unit:?}; expected {expected}")]
+    #[error("{file}: column {column} has unit `{unit}`; expected {expected}")]
     Unit {
         /// Source file.
         file: String,
@@ -199,7 +199,7 @@ pub enum ProfileError {
         source: SignalError,
     },
     /// A VECTO driving-cycle file that cannot be read.
-    #[error("{file}: line {line}, column {column}: {message} (value {value:?})")]
+    #[error("{file}: line {line}, column {column}: {message} (value `{value}`)")]
     Vdri {
         /// Source file.
         file: String,

@@ -157,10 +157,12 @@ pub fn read_profile_column(path: &Path, column: &str) -> Result<ProfileColumn, P
     let schema = builder.schema().clone();
     let kv = schema.metadata();
     if kv.get("table").map(String::as_str) != Some("road_profile") {
-        return Err(not(format!(
-            "table {:?}, expected road_profile (write one with `fleetdyn road profile`)",
-            kv.get("table")
-        )));
+        return Err(not(match kv.get("table") {
+            Some(t) => format!(
+                "table `{t}`, expected road_profile (write one with `fleetdyn road profile`)"
+            ),
+            None => "no table entry in its metadata, expected road_profile (write one with `fleetdyn road profile`)".to_string(),
+        }));
     }
     let unit_of = |name: &str| -> Result<String, ProfileError> {
         let field = schema.field_with_name(name).map_err(|_| {

@@ -124,7 +124,7 @@ pub enum RoadFileError {
         dtype: String,
     },
     /// A column whose `unit` metadata is not the one the analysis needs.
-    #[error("{file}: column {column} has unit {unit:?}, expected {expected:?}")]
+    #[error("{file}: column {column} has unit `{unit}`, expected `{expected}`")]
     WrongUnit {
         /// File.
         file: PathBuf,

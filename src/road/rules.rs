@@ -57,7 +57,7 @@ pub fn bundled_names() -> Vec<&'static str> {
 #[derive(Debug, Error)]
 pub enum RulesError {
     /// Neither a bundled name nor an existing file.
-    #[error("unknown rule set {given:?}: not a bundled one ({known}) nor a file")]
+    #[error("unknown rule set `{given}`: not a bundled one ({known}) nor a file")]
     UnknownRuleSet {
         /// What was asked for.
         given: String,

@@ -37,6 +37,27 @@ pub enum Dtype {
     Bool,
 }
 
+impl Dtype {
+    /// The type's name as the schema files write it: `timestamp_ns_utc`, `f64`, `i16`, `str`,
+    /// `u64`, `bool`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Dtype::TimestampNsUtc => "timestamp_ns_utc",
+            Dtype::F64 => "f64",
+            Dtype::I16 => "i16",
+            Dtype::Str => "str",
+            Dtype::U64 => "u64",
+            Dtype::Bool => "bool",
+        }
+    }
+}
+
+impl std::fmt::Display for Dtype {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// A schema file that does not parse or contradicts itself. These are build-time assets, so
 /// this only shows up if someone edits `schemas/` wrongly; the tests load every schema.
 #[derive(Debug, Error)]

@@ -162,7 +162,7 @@ impl OutputSchema {
             k += 1;
             if spec.name != *name || spec.dtype != *dtype {
                 return Err(mismatch(format!(
-                    "column {name} ({dtype:?}) where the schema has {} ({:?})",
+                    "column {name} ({dtype}) where the schema has {} ({})",
                     spec.name, spec.dtype
                 )));
             }
@@ -173,7 +173,7 @@ impl OutputSchema {
             };
             if !unit_ok {
                 return Err(mismatch(format!(
-                    "column {name} has unit {unit:?}, schema says {:?}",
+                    "column {name} has unit `{unit}`, schema says `{}`",
                     spec.unit
                 )));
             }
@@ -187,7 +187,7 @@ impl OutputSchema {
             match dl.column(name) {
                 Some(c) if c.dtype != *dtype || c.unit != *unit => {
                     return Err(mismatch(format!(
-                        "drive-log column {name} as {dtype:?} [{unit}], schema says {:?} [{}]",
+                        "drive-log column {name} as {dtype} [{unit}], schema says {} [{}]",
                         c.dtype, c.unit
                     )))
                 }

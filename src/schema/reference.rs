@@ -179,7 +179,11 @@ pub fn vehicle_section_markdown(vehicle_toml: &str, section: &str) -> Result<Str
             (s, p) => {
                 return Err(invalid(
                     NAME,
-                    format!("key {}: shape {s:?} with pair {p:?}", k.key),
+                    format!(
+                        "key {}: shape `{s}` with pair `{}`",
+                        k.key,
+                        p.as_deref().unwrap_or("(none)")
+                    ),
                 ))
             }
         };
@@ -235,7 +239,7 @@ fn dtype(name: &str, dtype: &str) -> Result<&'static str, SchemaError> {
         "str" => "string",
         "u64" => "u64",
         "bool" => "bool",
-        other => return Err(invalid(name, format!("unknown dtype {other:?}"))),
+        other => return Err(invalid(name, format!("unknown dtype `{other}`"))),
     })
 }
 
@@ -268,7 +272,7 @@ pub fn drive_log_markdown(drive_log_toml: &str) -> Result<String, SchemaError> {
             other => {
                 return Err(invalid(
                     NAME,
-                    format!("column {}: interpolation {other:?}", c.name),
+                    format!("column {}: interpolation `{other}`", c.name),
                 ))
             }
         };
@@ -502,7 +506,7 @@ pub fn mappings_markdown(files: &[(&str, &str)]) -> Result<String, SchemaError> 
             ("mcap-json", _) => "automatically, for MCAP with JSON topics".to_string(),
             ("can-dbc", _) => "with `--dbc` (raw CAN frames)".to_string(),
             ("parquet-wide" | "parquet-long", true) => "with `--mapping` only".to_string(),
-            (other, _) => return Err(invalid(file, format!("unknown format {other:?}"))),
+            (other, _) => return Err(invalid(file, format!("unknown format `{other}`"))),
         };
         out.push_str(&format!(
             "| {} | {} | {} | {} |\n",

@@ -134,7 +134,7 @@ pub enum ResampleError {
         min_m: f64,
     },
     /// Reverse motion with [`ReversePolicy::Error`].
-    #[error("{file}: reverse motion at row {row} ({}): vehicle_speed = {speed_mps} m/s; use reverse = \"exclude\" to collapse it", rfc3339_ns(*time_ns))]
+    #[error("{file}: reverse motion at row {row} ({}): vehicle_speed = {speed_mps} m/s; set reverse to exclude ([resample] reverse, or --reverse exclude) to collapse it", rfc3339_ns(*time_ns))]
     ReverseMotion {
         /// Source file.
         file: String,

@@ -81,7 +81,7 @@ impl FromStr for AxleScenario {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ScenarioError {
     /// A scenario name that is not one of [`AxleScenario::ALL`].
-    #[error("unknown axle scenario {0:?} (known: full-acceleration, aux-braking)")]
+    #[error("unknown axle scenario `{0}` (known: full-acceleration, aux-braking)")]
     Unknown(String),
     /// A configuration value out of its range.
     #[error("axle scenario config: {field} = {value}: {rule}")]

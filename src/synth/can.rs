@@ -59,7 +59,7 @@ pub fn write_can_drive(
             vehicle_id: log.meta.vehicle_id.clone(),
             source_file: log.meta.source_file.clone(),
             config_hash: config_hash(&[
-                format!("synth-can:v1 seed={} bus={bus:?}", opts.seed).as_bytes()
+                crate::io::canonical("synth-can:v2", &(opts.seed, bus)).as_bytes()
             ]),
             extra: vec![("synth_seed".into(), opts.seed.to_string())],
         };

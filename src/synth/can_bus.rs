@@ -13,7 +13,7 @@ use crate::schema::drive_log;
 use crate::units::{conversion, Conversion};
 
 /// Which reference torque a `%` torque channel is a percentage of.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum TorqueReference {
     /// Not a percent torque.
     None,
@@ -24,7 +24,7 @@ pub enum TorqueReference {
 }
 
 /// One signal field of a CAN message.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CanChannel {
     /// Canonical column (`schemas/drive-log.toml`).
     pub column: String,
@@ -64,7 +64,7 @@ impl Dropouts {
 }
 
 /// One CAN message group: an MCAP topic at its own rate, carrying one or more fields.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CanMessage {
     /// Message name (J1939 PG acronym, e.g. `EEC1`), used as the MCAP schema name.
     pub name: String,
@@ -81,7 +81,7 @@ pub struct CanMessage {
 }
 
 /// A CAN bus: message groups and the reference torques of its `%` torque channels.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CanBus {
     /// Message groups.
     pub messages: Vec<CanMessage>,

@@ -59,7 +59,7 @@ pub enum SynthError {
         value_nm: f64,
     },
     /// The same topic, field or column twice, or a column that is not canonical.
-    #[error("{what} {name:?}")]
+    #[error("{what} `{name}`")]
     BadName {
         /// What is wrong (`duplicate topic`, `unknown canonical column`, …).
         what: &'static str,

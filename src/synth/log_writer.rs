@@ -146,7 +146,7 @@ pub fn apply_dropouts(bus: &mut CanBus, spec: &DropoutSpec) -> Result<(), Export
             .iter_mut()
             .find(|m| m.channels.iter().any(|c| &c.column == col))
             .ok_or_else(|| ExportError::BadInput {
-                what: format!("dropouts: no message of the bus carries the column {col:?}"),
+                what: format!("dropouts: no message of the bus carries the column `{col}`"),
             })?;
         m.dropouts = spec.dropouts;
     }

@@ -85,7 +85,7 @@ pub enum RoadSourceError {
         dtype: String,
     },
     /// A column whose `unit` metadata is not the expected one.
-    #[error("{file}: column {column} has unit {unit:?}, expected {expected:?}")]
+    #[error("{file}: column {column} has unit `{unit}`, expected `{expected}`")]
     WrongUnit {
         /// File.
         file: PathBuf,

@@ -73,7 +73,7 @@ pub enum TruthError {
         vehicle_id: String,
     },
     /// An effect id outside the longitudinal catalogue.
-    #[error("unknown effect {id:?}; the truth plant conceals: {known}")]
+    #[error("unknown effect `{id}`; the truth plant conceals: {known}")]
     UnknownEffect {
         /// The id given.
         id: String,

@@ -95,6 +95,34 @@ fn bad_corpus_matches_its_generator() {
     }
 }
 
+/// Rust debug formatting in a user-facing message: `Some(…)`, `None`, or a `"…"`-quoted value as
+/// `{:?}` prints strings (messages quote values with backticks).
+fn debug_formatting(text: &str) -> Option<&'static str> {
+    if text.contains("Some(") {
+        Some("Some(")
+    } else if text
+        .split(|c: char| !c.is_alphanumeric())
+        .any(|w| w == "None")
+    {
+        Some("None")
+    } else if text.contains('"') {
+        Some("a \"quoted\" value")
+    } else {
+        None
+    }
+}
+
+#[test]
+fn debug_formatting_is_found() {
+    assert_eq!(debug_formatting("vehicle_id Some(\"TRK\")"), Some("Some("));
+    assert_eq!(debug_formatting("table None, expected"), Some("None"));
+    assert_eq!(
+        debug_formatting("unit \"km/h\""),
+        Some("a \"quoted\" value")
+    );
+    assert_eq!(debug_formatting("unit `km/h`; Nonesuch"), None);
+}
+
 fn assert_no_panic(what: &str, o: &Output) {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -140,6 +168,9 @@ fn every_bad_input_fails_clearly_through_the_cli() {
             if !stderr.contains(s.as_str()) {
                 problems.push(format!("{}: message lacks {s:?}: {stderr}", c.file));
             }
+        }
+        if let Some(d) = debug_formatting(&stderr) {
+            problems.push(format!("{}: debug formatting ({d}) in: {stderr}", c.file));
         }
         if c.exit != 0 {
             // the message names the file it is about (the corpus file, or the input it was
@@ -231,6 +262,9 @@ fn bad_drives_fail_alone_inside_a_batch() {
             if !err.contains(s.as_str()) {
                 problems.push(format!("{}: batch error lacks {s:?}: {err}", c.file));
             }
+        }
+        if let Some(d) = debug_formatting(err) {
+            problems.push(format!("{}: debug formatting ({d}) in: {err}", c.file));
         }
         // a failed drive writes no dataset file
         if let Some(f) = written

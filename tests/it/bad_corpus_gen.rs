@@ -308,6 +308,15 @@ pub fn generate(dir: &Path) {
         Arc::new(TimestampMillisecondArray::from(t_ms).with_timezone("UTC")),
         &dir.join("long-export-no-known-signal.parquet"),
     );
+    // a canonical-looking table without vehicle_speed: the message names that column
+    let d = Drive::new(ROWS);
+    write_with_units(
+        &dir.join("canonical-no-speed.parquet"),
+        vec![
+            ("timestamp", "ns", ts(&d.t_ns)),
+            ("road_slope", "1", f64_opt(&d.slope)),
+        ],
+    );
 
     // ---- vehicle files ------------------------------------------------------------------------
     let truck = std::fs::read_to_string(fixture("fixtures/vehicles/truck-40t.toml")).unwrap();

@@ -126,6 +126,19 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
     let m = kv(&p);
     assert_eq!(m["drive_id"], "truck-0001");
     assert_eq!(m["table"], "validation");
+    // every column's unit in the file-level metadata too, as JSON in column order
+    let dl = kv(&out.join(
+        "drive_log/model_version=2026.1/vehicle_id=TRK-0001/date=2026-03-02/truck-0001.parquet",
+    ));
+    let units: serde_json::Value = serde_json::from_str(&dl["units"]).unwrap();
+    assert_eq!(units["timestamp"], "ns");
+    assert_eq!(units["vehicle_speed"], "m/s");
+    assert_eq!(units["engine_torque"], "N*m");
+    assert!(
+        dl["units"].starts_with("{\"timestamp\":\"ns\""),
+        "{}",
+        dl["units"]
+    );
     assert!(out
         .join("axle_validation/model_version=2026.1/vehicle_id=SEED002-6X2/date=2026-05-12/truck-0005-axle.parquet")
         .is_file());

@@ -68,7 +68,10 @@ fn kubernetes_manifests_validate_against_the_api_schema() {
     let text = std::fs::read_to_string(&manifests[0]).unwrap();
     for (from, to) in [
         ("completions: 8", "completions: \"eight\""),
-        ("restartPolicy: Never", "restartPolicy: Never\n      restartPolicyy: Never"),
+        (
+            "restartPolicy: Never",
+            "restartPolicy: Never\n      restartPolicyy: Never",
+        ),
     ] {
         assert!(text.contains(from));
         let bad = dir.path().join("bad.yaml");
@@ -89,7 +92,10 @@ fn the_container_files_and_the_slurm_script_name_what_the_repository_has() {
         .unwrap()
         .trim_matches('"');
     assert!(cf.contains(&format!("rust:{msrv}-slim")), "{msrv}");
-    assert_eq!(cf.matches("\nFROM ").count() + usize::from(cf.starts_with("FROM")), 2);
+    assert_eq!(
+        cf.matches("\nFROM ").count() + usize::from(cf.starts_with("FROM")),
+        2
+    );
     assert!(cf.contains("USER 10001"));
     for copied in cf.lines().filter_map(|l| l.strip_prefix("COPY ")) {
         if copied.starts_with("--from") {
@@ -97,7 +103,10 @@ fn the_container_files_and_the_slurm_script_name_what_the_repository_has() {
         }
         let parts: Vec<&str> = copied.split_whitespace().collect();
         for src in &parts[..parts.len() - 1] {
-            assert!(fixture(src).exists(), "Containerfile copies {src}, not in the repository");
+            assert!(
+                fixture(src).exists(),
+                "Containerfile copies {src}, not in the repository"
+            );
         }
     }
     let local = std::fs::read_to_string(fixture("deploy/Containerfile.local")).unwrap();

@@ -34,6 +34,7 @@ mod ingest_errors;
 mod ingest_fixtures;
 mod pipeline_paths;
 mod proof_independent;
+mod readers;
 mod real_data;
 mod resample_props;
 mod resample_truth;

@@ -98,8 +98,8 @@ pub fn decode_channels(
         return Err(IngestError::Mapping {
             mapping: mapping.origin.clone(),
             message: format!(
-                "is a {:?} mapping; raw CAN logs need a can-dbc mapping",
-                mapping.format
+                "is a {} mapping; raw CAN logs need a can-dbc mapping",
+                mapping.format.name()
             ),
         });
     }

@@ -176,13 +176,13 @@ fn json_frame(data: &[u8], t_ns: i64) -> Result<Option<CanFrame>, JsonFrame> {
         Value::String(s) => {
             let s: String = s.chars().filter(|c| !c.is_whitespace()).collect();
             if !s.len().is_multiple_of(2) {
-                return Err(JsonFrame::Bad(format!("hex data {s:?} of odd length")));
+                return Err(JsonFrame::Bad(format!("hex data `{s}` of odd length")));
             }
             (0..s.len())
                 .step_by(2)
                 .map(|i| u8::from_str_radix(&s[i..i + 2], 16).ok())
                 .collect::<Option<_>>()
-                .ok_or_else(|| JsonFrame::Bad(format!("data {s:?} is not hex")))?
+                .ok_or_else(|| JsonFrame::Bad(format!("data `{s}` is not hex")))?
         }
         _ => {
             return Err(JsonFrame::Bad(

@@ -63,8 +63,8 @@ impl<'a> Reader<'a> {
                     0,
                     "ID",
                     format!(
-                        "not an MDF file (magic {:?})",
-                        String::from_utf8_lossy(magic)
+                        "not an MDF file (magic `{}`)",
+                        String::from_utf8_lossy(magic).escape_debug()
                     ),
                 ))
             }
@@ -111,7 +111,10 @@ impl<'a> Reader<'a> {
             return Err(self.err(
                 offset,
                 &name,
-                format!("found block {:?}", String::from_utf8_lossy(&id)),
+                format!(
+                    "found block `{}`",
+                    String::from_utf8_lossy(&id).escape_debug()
+                ),
             ));
         }
         let length = u64::from_le_bytes(h[8..16].try_into().expect("8 bytes"));
@@ -227,9 +230,9 @@ impl<'a> Reader<'a> {
                 b.offset,
                 "DZ",
                 format!(
-                    "holds a {:?} block where a {:?} block is expected",
-                    String::from_utf8_lossy(&d[0..2]),
-                    String::from_utf8_lossy(kind)
+                    "holds a `{}` block where a `{}` block is expected",
+                    String::from_utf8_lossy(&d[0..2]).escape_debug(),
+                    String::from_utf8_lossy(kind).escape_debug()
                 ),
             ));
         }
