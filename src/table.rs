@@ -92,6 +92,14 @@ impl DriveLog {
             .map(|s| s.values.as_slice())
     }
 
+    /// Values of a column to change in place, if present.
+    pub fn signal_mut(&mut self, name: &str) -> Option<&mut [f64]> {
+        self.signals
+            .iter_mut()
+            .find(|s| s.name == name)
+            .map(|s| s.values.as_mut_slice())
+    }
+
     /// Time of every row from the first, s (empty for an empty log).
     pub fn seconds_from_start(&self) -> Vec<f64> {
         let t0 = self.timestamp_ns.first().copied().unwrap_or(0);

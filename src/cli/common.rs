@@ -3,7 +3,7 @@
 
 use crate::commands::failure::{usage, usage_msg, Failure};
 use clap::{Args, ValueEnum};
-use fleetdyn::ingest::{IngestOptions, TimeRepair};
+use fleetdyn::ingest::{BadSamples, IngestOptions, TimeRepair};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::IngestConfig;
 use fleetdyn::schema::Stage;
@@ -29,6 +29,11 @@ pub struct IngestArgs {
     /// What to do when time goes backwards.
     #[arg(long, value_enum, default_value = "error")]
     pub time_repair: TimeRepairArg,
+    /// What to do with an isolated bad sample (not finite, outside the physical range, a speed
+    /// spike) or a timestamp repeated with another value: mask it (the later sample wins) and
+    /// count it, or fail the drive.
+    #[arg(long, value_enum, default_value = "mask")]
+    pub bad_samples: BadSamplesArg,
 }
 
 impl IngestArgs {
@@ -43,7 +48,7 @@ impl IngestArgs {
         for s in &self.stages {
             stages.push(Stage::parse(s).ok_or_else(|| {
                 usage_msg(format_args!(
-                    "unknown stage {s:?} (ingest, resample, slope, driveline, axle)"
+                    "unknown stage `{s}` (ingest, resample, slope, driveline, axle)"
                 ))
             })?);
         }
@@ -55,6 +60,10 @@ impl IngestArgs {
             time_repair: match self.time_repair {
                 TimeRepairArg::Error => TimeRepair::Error,
                 TimeRepairArg::Sort => TimeRepair::Sort,
+            },
+            bad_samples: match self.bad_samples {
+                BadSamplesArg::Mask => BadSamples::Mask,
+                BadSamplesArg::Error => BadSamples::Error,
             },
         };
         let opts = cfg.options(&stages, vehicle).map_err(usage)?;
@@ -91,6 +100,15 @@ pub enum TimeRepairArg {
     Error,
     /// Sort the samples by time.
     Sort,
+}
+
+/// What to do with bad samples.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum BadSamplesArg {
+    /// Make them missing and count them.
+    Mask,
+    /// Fail the drive.
+    Error,
 }
 
 /// The distance grid.

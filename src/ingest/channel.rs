@@ -2,8 +2,10 @@
 //!
 //! Checks done here, on source rows (so errors name the row a user can find in the file):
 //! exact duplicates (same time, same value) are dropped and counted; the same time with another
-//! value is an error; time going backwards is an error unless [`TimeRepair::Sort`]; values outside
-//! the schema's physical range are rejected.
+//! value keeps the later sample ([`BadSamples::Mask`], counted) or is an error
+//! ([`BadSamples::Error`]); time going backwards is an error unless [`TimeRepair::Sort`]; values
+//! that are not finite, outside the schema's physical range, or a speed spike no truck can make
+//! are masked to missing ([`BadSamples::Mask`], counted; [`mask_bad_samples`]) or rejected.
 
 use super::mapping::ResolvedSignal;
 use super::IngestError;
@@ -20,6 +22,27 @@ pub enum TimeRepair {
     /// Sort samples by time (stable), then apply the duplicate rules.
     Sort,
 }
+
+/// What to do with an isolated bad sample (not finite, outside the physical range, a speed spike)
+/// or a timestamp repeated with another value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BadSamples {
+    /// Make the sample missing (a repeated timestamp: the later sample wins) and count it
+    /// (default): a glitch costs that sample, not the drive. The gap limits still bound how
+    /// much may be missing.
+    #[default]
+    Mask,
+    /// Reject the drive, naming the sample.
+    Error,
+}
+
+/// Largest acceleration or deceleration of a truck, m/s²: a speed sample that departs from both
+/// neighbours by more than this over the sample interval, plus [`SPIKE_STEP_MPS`], in opposite
+/// directions, is a spike no truck can make (emergency braking reaches about 8 m/s²).
+pub const SPIKE_ACCEL_MPS2: f64 = 10.0;
+/// Margin of the spike test for the speed signal's own resolution and jitter, m/s.
+pub const SPIKE_STEP_MPS: f64 = 0.5;
 
 /// One signal at its own sample times, already converted to SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,12 +116,19 @@ impl Channel {
         *d.select_nth_unstable(mid).1
     }
 
-    /// Enforces time order and drops exact duplicates; returns how many were dropped.
+    /// Enforces time order and drops exact duplicates; a repeated time with another value keeps
+    /// the later sample under [`BadSamples::Mask`]. Returns (exact duplicates dropped, conflicting
+    /// samples replaced by a later one).
     ///
     /// # Errors
     /// [`IngestError::NonMonotonicTime`] (with [`TimeRepair::Error`]) and
-    /// [`IngestError::DuplicateTimestamp`].
-    pub fn order_and_dedup(&mut self, file: &Path, repair: TimeRepair) -> Result<u64, IngestError> {
+    /// [`IngestError::DuplicateTimestamp`] (with [`BadSamples::Error`]).
+    pub fn order_and_dedup(
+        &mut self,
+        file: &Path,
+        repair: TimeRepair,
+        bad: BadSamples,
+    ) -> Result<(u64, u64), IngestError> {
         if repair == TimeRepair::Sort && self.t_ns.windows(2).any(|w| w[1] < w[0]) {
             let mut idx: Vec<usize> = (0..self.len()).collect();
             idx.sort_by_key(|&i| self.t_ns[i]);
@@ -107,7 +137,7 @@ impl Channel {
             self.rows = idx.iter().map(|&i| self.rows[i]).collect();
         }
         let mut keep = 0usize;
-        let mut dropped = 0u64;
+        let (mut dropped, mut replaced) = (0u64, 0u64);
         for i in 0..self.len() {
             if keep > 0 {
                 let (tp, vp) = (self.t_ns[keep - 1], self.values[keep - 1]);
@@ -124,6 +154,13 @@ impl Channel {
                 if t == tp {
                     if v == vp || (v.is_nan() && vp.is_nan()) {
                         dropped += 1;
+                        continue;
+                    }
+                    if bad == BadSamples::Mask {
+                        // the later message wins
+                        self.values[keep - 1] = v;
+                        self.rows[keep - 1] = self.rows[i];
+                        replaced += 1;
                         continue;
                     }
                     return Err(IngestError::DuplicateTimestamp {
@@ -144,11 +181,66 @@ impl Channel {
         self.t_ns.truncate(keep);
         self.values.truncate(keep);
         self.rows.truncate(keep);
-        Ok(dropped)
+        Ok((dropped, replaced))
+    }
+
+    /// Drops the samples at the positions `masked` marks (a channel's missing value is an absent
+    /// sample, so the gap limits see the hole).
+    pub fn drop_samples(&mut self, masked: &[bool]) {
+        let mut keep = 0;
+        for (i, &bad) in masked.iter().enumerate().take(self.len()) {
+            if !bad {
+                self.t_ns[keep] = self.t_ns[i];
+                self.values[keep] = self.values[i];
+                self.rows[keep] = self.rows[i];
+                keep += 1;
+            }
+        }
+        self.t_ns.truncate(keep);
+        self.values.truncate(keep);
+        self.rows.truncate(keep);
     }
 }
 
+/// The samples of `column` that are bad: not finite (±∞; NaN is missing, not bad), outside
+/// `[min, max]`, or, for `vehicle_speed`, a spike (module documentation, [`SPIKE_ACCEL_MPS2`]).
+/// `t_ns` are the sample times.
+pub fn bad_samples(column: &str, t_ns: &[i64], values: &[f64], min: f64, max: f64) -> Vec<bool> {
+    let mut bad: Vec<bool> = values
+        .iter()
+        .map(|v| !(v.is_nan() || (v.is_finite() && (min..=max).contains(v))))
+        .collect();
+    if column == "vehicle_speed" {
+        let ok = |i: usize| values[i].is_finite() && !bad[i];
+        let limit = |a: usize, b: usize| {
+            SPIKE_ACCEL_MPS2 * (t_ns[b].saturating_sub(t_ns[a]) as f64 * 1e-9) + SPIKE_STEP_MPS
+        };
+        let mut spikes = Vec::new();
+        for i in 1..values.len().saturating_sub(1) {
+            // the nearest good neighbours on either side
+            let Some(p) = (0..i).rev().find(|&k| ok(k)) else {
+                continue;
+            };
+            let Some(n) = (i + 1..values.len()).find(|&k| ok(k)) else {
+                continue;
+            };
+            if !ok(i) {
+                continue;
+            }
+            let (d1, d2) = (values[i] - values[p], values[n] - values[i]);
+            if d1.abs() > limit(p, i) && d2.abs() > limit(i, n) && d1.signum() != d2.signum() {
+                spikes.push(i);
+            }
+        }
+        for i in spikes {
+            bad[i] = true;
+        }
+    }
+    bad
+}
+
 /// Range check over parallel slices; `rows` maps positions to source rows (identity if `None`).
+/// Non-finite values are out of any range.
 ///
 /// # Errors
 /// [`IngestError::OutOfRange`] for the first offending value.
@@ -165,7 +257,7 @@ pub fn check_range(
 ) -> Result<(), IngestError> {
     if let Some(i) = values
         .iter()
-        .position(|v| !v.is_nan() && !(min..=max).contains(v))
+        .position(|v| !(v.is_nan() || (v.is_finite() && (min..=max).contains(v))))
     {
         return Err(IngestError::OutOfRange {
             file: file.into(),
@@ -197,9 +289,9 @@ mod tests {
     fn exact_duplicates_are_dropped_and_counted() {
         let mut c = ch(&[0, 1, 1, 2, 2, 3], &[0.0, 1.0, 1.0, 2.0, 2.0, 3.0]);
         assert_eq!(
-            c.order_and_dedup(Path::new("f"), TimeRepair::Error)
+            c.order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Error)
                 .unwrap(),
-            2
+            (2, 0)
         );
         assert_eq!(c.t_ns, [0, 1, 2, 3]);
         assert_eq!(c.rows, [10, 11, 13, 15]);
@@ -208,12 +300,12 @@ mod tests {
     #[test]
     fn conflicting_duplicate_and_backwards_time_name_the_row() {
         let mut c = ch(&[0, 1, 1], &[0.0, 1.0, 1.5]);
-        match c.order_and_dedup(Path::new("f"), TimeRepair::Error) {
+        match c.order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Error) {
             Err(IngestError::DuplicateTimestamp { row, .. }) => assert_eq!(row, 12),
             other => panic!("{other:?}"),
         }
         let mut c = ch(&[0, 5, 3], &[0.0, 1.0, 2.0]);
-        match c.order_and_dedup(Path::new("f"), TimeRepair::Error) {
+        match c.order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Mask) {
             Err(IngestError::NonMonotonicTime {
                 row,
                 time_ns,
@@ -225,8 +317,41 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let mut c = ch(&[0, 5, 3], &[0.0, 1.0, 2.0]);
-        c.order_and_dedup(Path::new("f"), TimeRepair::Sort).unwrap();
+        c.order_and_dedup(Path::new("f"), TimeRepair::Sort, BadSamples::Error)
+            .unwrap();
         assert_eq!(c.t_ns, [0, 3, 5]);
         assert_eq!(c.values, [0.0, 2.0, 1.0]);
+    }
+
+    #[test]
+    fn a_conflicting_duplicate_keeps_the_later_sample_when_masking() {
+        let mut c = ch(&[0, 1, 1, 2], &[0.0, 1.0, 1.5, 2.0]);
+        let n = c
+            .order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Mask)
+            .unwrap();
+        assert_eq!(n, (0, 1));
+        assert_eq!(c.t_ns, [0, 1, 2]);
+        assert_eq!(c.values, [0.0, 1.5, 2.0]);
+        assert_eq!(c.rows, [10, 12, 13]);
+    }
+
+    #[test]
+    fn infinities_ranges_and_speed_spikes_are_bad_samples() {
+        let t: Vec<i64> = (0..8).map(|k| k * 100_000_000).collect(); // 10 Hz
+        let v = [15.0, 15.1, f64::INFINITY, 15.2, 250.0, 15.3, f64::NAN, 15.4];
+        let bad = bad_samples("vehicle_speed", &t, &v, -2.0, 70.0);
+        assert_eq!(bad, [false, false, true, false, true, false, false, false]);
+        // a one-sample spike of 6 m/s in 0.1 s (60 m/s²) is bad; a braking step of 1 m/s per
+        // sample (10 m/s² plus the margin) is not
+        let v = [15.0, 15.0, 21.0, 15.0, 14.0, 13.0, 12.0, 11.0];
+        let bad = bad_samples("vehicle_speed", &t, &v, -2.0, 70.0);
+        assert_eq!(bad.iter().filter(|b| **b).count(), 1);
+        assert!(bad[2]);
+        // other columns: range and finiteness only
+        let s = [0.01, 0.5, 0.01, f64::NEG_INFINITY];
+        assert_eq!(
+            bad_samples("road_slope", &t[..4], &s, -0.3, 0.3),
+            [false, true, false, true]
+        );
     }
 }

@@ -28,13 +28,14 @@ mod mcap_source;
 mod parquet_source;
 
 pub use align::TimeBase;
-pub use channel::TimeRepair;
+pub use channel::{BadSamples, TimeRepair};
 pub use error::IngestError;
 pub use mapping::{Mapping, SourceFormat};
 
 use crate::schema::{drive_log, Stage};
 use crate::table::{DriveLog, DriveMeta, Signal};
-use channel::{check_range, Channel};
+use channel::{bad_samples, check_range, Channel};
+use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -53,6 +54,8 @@ pub struct IngestOptions {
     pub gear_range: Option<(i16, i16)>,
     /// Backwards time handling.
     pub time_repair: TimeRepair,
+    /// Isolated bad samples and conflicting repeated timestamps: masked (default) or an error.
+    pub bad_samples: BadSamples,
     /// Drive id override (default: the source's metadata — Parquet key–value `drive_id`, MCAP
     /// metadata record entry `drive_id` — else the file stem).
     pub drive_id: Option<String>,
@@ -69,6 +72,7 @@ impl Default for IngestOptions {
             max_nan_run_s: 2.0,
             gear_range: None,
             time_repair: TimeRepair::Error,
+            bad_samples: BadSamples::Mask,
             drive_id: None,
             vehicle_id: None,
         }
@@ -86,6 +90,12 @@ pub struct IngestReport {
     pub source_rows: u64,
     /// Exact duplicates dropped (all channels).
     pub duplicates_dropped: u64,
+    /// Samples replaced by a later one with the same time and another value (all channels;
+    /// [`BadSamples::Mask`]).
+    pub conflicts_resolved: u64,
+    /// Per column, samples masked to missing: not finite, outside the physical range, or a speed
+    /// spike ([`BadSamples::Mask`]).
+    pub masked: BTreeMap<String, u64>,
     /// Per mapped channel: (column, samples, median rate Hz) — multi-rate sources only.
     pub channel_rates: Vec<(String, usize, f64)>,
     /// Rate of the aligned time base, Hz (multi-rate sources only).
@@ -210,9 +220,22 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
                     });
                 }
             }
-            report.duplicates_dropped = parquet_source::order_wide(path, &mut w, opts.time_repair)?;
-            for (name, unit, values) in &w.columns {
-                range_check(path, name, unit, &w.t_ns, values, Some(&w.rows), opts)?;
+            let (dropped, replaced) =
+                parquet_source::order_wide(path, &mut w, opts.time_repair, opts.bad_samples)?;
+            report.duplicates_dropped = dropped;
+            report.conflicts_resolved = replaced;
+            for (name, unit, values) in &mut w.columns {
+                let bad = screen(path, name, unit, &w.t_ns, values, Some(&w.rows), opts)?;
+                let mut n = 0;
+                for (v, b) in values.iter_mut().zip(&bad) {
+                    if *b {
+                        *v = f64::NAN;
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    report.masked.insert(name.clone(), n);
+                }
             }
             let signals = w
                 .columns
@@ -345,7 +368,9 @@ fn auto_mapping(path: &Path, is_mcap: bool) -> Result<Option<Mapping>, IngestErr
         })
 }
 
-fn range_check(
+/// The bad samples of a column ([`bad_samples`]) to mask, per `opts.bad_samples`: with
+/// [`BadSamples::Error`] the first one is an error and nothing is masked.
+fn screen(
     path: &Path,
     name: &str,
     unit: &str,
@@ -353,9 +378,9 @@ fn range_check(
     values: &[f64],
     rows: Option<&[u64]>,
     opts: &IngestOptions,
-) -> Result<(), IngestError> {
+) -> Result<Vec<bool>, IngestError> {
     let Some(spec) = drive_log().column(name) else {
-        return Ok(());
+        return Ok(vec![false; values.len()]);
     };
     let (mut lo, mut hi) = (
         spec.valid_min.unwrap_or(f64::NEG_INFINITY),
@@ -365,7 +390,13 @@ fn range_check(
         lo = f64::from(g0);
         hi = f64::from(g1);
     }
-    check_range(path, name, unit, t_ns, values, rows, lo, hi)
+    match opts.bad_samples {
+        BadSamples::Error => {
+            check_range(path, name, unit, t_ns, values, rows, lo, hi)?;
+            Ok(vec![false; values.len()])
+        }
+        BadSamples::Mask => Ok(bad_samples(name, t_ns, values, lo, hi)),
+    }
 }
 
 pub(crate) fn align_channels(
@@ -377,8 +408,10 @@ pub(crate) fn align_channels(
     report: &mut IngestReport,
 ) -> Result<(Vec<i64>, Vec<Signal>), IngestError> {
     for c in &mut channels {
-        report.duplicates_dropped += c.order_and_dedup(path, opts.time_repair)?;
-        range_check(
+        let (dropped, replaced) = c.order_and_dedup(path, opts.time_repair, opts.bad_samples)?;
+        report.duplicates_dropped += dropped;
+        report.conflicts_resolved += replaced;
+        let bad = screen(
             path,
             &c.column,
             &c.unit,
@@ -387,6 +420,11 @@ pub(crate) fn align_channels(
             Some(&c.rows),
             opts,
         )?;
+        let n = bad.iter().filter(|b| **b).count() as u64;
+        if n > 0 {
+            c.drop_samples(&bad);
+            *report.masked.entry(c.column.clone()).or_default() += n;
+        }
     }
     for (col, stage) in required {
         let present = channels
@@ -452,8 +490,12 @@ fn check_row_gaps(
     Ok(())
 }
 
-/// Rejects runs of missing values in required columns longer than `limit_s`.
-pub(crate) fn check_nan_runs(
+/// Rejects runs of missing values in the `required` columns (column, stage) longer than
+/// `limit_s`.
+///
+/// # Errors
+/// [`IngestError::NanRun`] naming the column, the first row of the run and its length.
+pub fn check_nan_runs(
     path: &Path,
     t_ns: &[i64],
     signals: &[Signal],

@@ -4,7 +4,7 @@
 //! the columns the mapping asks for (long layout: only the rows of mapped signals), converted to
 //! SI as they arrive — never the source file as a whole.
 
-use super::channel::{Channel, TimeRepair};
+use super::channel::{BadSamples, Channel, TimeRepair};
 use super::mapping::{Mapping, ResolvedSignal, SourceFormat};
 use super::IngestError;
 use crate::schema::drive_log;
@@ -531,12 +531,19 @@ fn kv_metadata(builder: &ParquetRecordBatchReaderBuilder<File>) -> HashMap<Strin
         .unwrap_or_default()
 }
 
-/// Drops exact duplicate rows of a wide table and enforces increasing time.
+/// Drops exact duplicate rows of a wide table and enforces increasing time; a repeated time with
+/// other values keeps the later row under [`BadSamples::Mask`]. Returns (exact duplicates
+/// dropped, rows replaced by a later one).
 ///
 /// # Errors
-/// [`IngestError::NonMonotonicTime`] (unless `repair` sorts) and
+/// [`IngestError::NonMonotonicTime`] (unless `repair` sorts) and, with [`BadSamples::Error`],
 /// [`IngestError::DuplicateTimestamp`] naming the first column that differs.
-pub fn order_wide(path: &Path, w: &mut WideTable, repair: TimeRepair) -> Result<u64, IngestError> {
+pub fn order_wide(
+    path: &Path,
+    w: &mut WideTable,
+    repair: TimeRepair,
+    bad: BadSamples,
+) -> Result<(u64, u64), IngestError> {
     if repair == TimeRepair::Sort && w.t_ns.windows(2).any(|p| p[1] < p[0]) {
         let mut idx: Vec<usize> = (0..w.t_ns.len()).collect();
         idx.sort_by_key(|&i| w.t_ns[i]);
@@ -548,11 +555,11 @@ pub fn order_wide(path: &Path, w: &mut WideTable, repair: TimeRepair) -> Result<
     }
     // the usual case, strictly increasing times: nothing to check further or to move
     if w.t_ns.windows(2).all(|p| p[1] > p[0]) {
-        return Ok(0);
+        return Ok((0, 0));
     }
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
     let mut keep = 0usize;
-    let mut dropped = 0;
+    let (mut dropped, mut replaced) = (0, 0);
     for i in 0..w.t_ns.len() {
         if keep > 0 {
             let (tp, t) = (w.t_ns[keep - 1], w.t_ns[i]);
@@ -566,6 +573,16 @@ pub fn order_wide(path: &Path, w: &mut WideTable, repair: TimeRepair) -> Result<
                 });
             }
             if t == tp {
+                let differs = w.columns.iter().any(|c| !same(c.2[i], c.2[keep - 1]));
+                if differs && bad == BadSamples::Mask {
+                    // the later row wins
+                    w.rows[keep - 1] = w.rows[i];
+                    for c in &mut w.columns {
+                        c.2[keep - 1] = c.2[i];
+                    }
+                    replaced += 1;
+                    continue;
+                }
                 if let Some(c) = w.columns.iter().find(|c| !same(c.2[i], c.2[keep - 1])) {
                     return Err(IngestError::DuplicateTimestamp {
                         file: path.into(),
@@ -592,5 +609,5 @@ pub fn order_wide(path: &Path, w: &mut WideTable, repair: TimeRepair) -> Result<
     for c in &mut w.columns {
         c.2.truncate(keep);
     }
-    Ok(dropped)
+    Ok((dropped, replaced))
 }

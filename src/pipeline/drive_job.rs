@@ -20,6 +20,7 @@ use super::spec_sections::{DatasetTable, PipelineStage};
 use super::vehicles::LoadedVehicle;
 use super::{resample_stage, slope_stage};
 use crate::diagnose::parameter_table::parameter_columns;
+use crate::ingest::BadSamples;
 use crate::io::{
     config_hash, write_column_refs_with_constants, AtomicFile, ColumnRef, OutColumn, TableMeta,
 };
@@ -58,18 +59,44 @@ fn needs_vehicle(plan: &Plan) -> bool {
         || plan.has(PipelineStage::Diagnose)
 }
 
-fn check_gears(log: &DriveLog, v: &LoadedVehicle) -> Result<(), String> {
-    let Some(g) = log.signal("gear") else {
+/// Checks the gear column against the vehicle's gearbox (known only once the drive names its
+/// vehicle): a gear outside it is masked to missing and counted in `masked` with
+/// [`BadSamples::Mask`] (the run of missing values then bounded by `max_nan_run_s`), an error with
+/// [`BadSamples::Error`].
+fn check_gears(
+    log: &mut DriveLog,
+    v: &LoadedVehicle,
+    opts: &crate::ingest::IngestOptions,
+    masked: &mut std::collections::BTreeMap<String, u64>,
+) -> Result<(), String> {
+    let source = log.meta.source_file.clone();
+    let Some(g) = log.signal_mut("gear") else {
         return Ok(());
     };
     let (lo, hi) = v.file.gear_range();
-    for (i, &x) in g.iter().enumerate() {
-        if x.is_finite() && (x < f64::from(lo) || x > f64::from(hi)) {
-            return Err(format!(
-                "{}: column gear row {i}: value {x} outside the gearbox of {} ({lo} … {hi})",
-                log.meta.source_file, v.path
-            ));
+    let mut n = 0;
+    for (i, x) in g.iter_mut().enumerate() {
+        if x.is_finite() && (*x < f64::from(lo) || *x > f64::from(hi)) {
+            if opts.bad_samples == BadSamples::Error {
+                return Err(format!(
+                    "{source}: column gear row {i}: value {x} outside the gearbox of {} ({lo} … {hi})",
+                    v.path
+                ));
+            }
+            *x = f64::NAN;
+            n += 1;
         }
+    }
+    if n > 0 {
+        *masked.entry("gear".into()).or_default() += n;
+        crate::ingest::check_nan_runs(
+            std::path::Path::new(&source),
+            &log.timestamp_ns,
+            &log.signals,
+            &[("gear", "ingest")],
+            opts.max_nan_run_s,
+        )
+        .map_err(|e| e.to_string())?;
     }
     Ok(())
 }
@@ -174,7 +201,7 @@ fn process_inner(
     opts.vehicle_id = item.vehicle_id.clone();
     opts.gear_range = manifest_vehicle.map(|v| v.file.gear_range());
     let ing = super::ingest_stage::run(&item.path, &opts).map_err(|e| (None, fail(ing_st, e)))?;
-    let log = ing.log;
+    let (mut log, mut ing_report) = (ing.log, ing.report);
     let id = Some(log.meta.drive_id.clone());
     let vehicle = plan
         .vehicles
@@ -197,7 +224,8 @@ fn process_inner(
         ));
     }
     if let (Some(v), None) = (&vehicle, manifest_vehicle) {
-        check_gears(&log, v).map_err(|e| (id.clone(), fail(ing_st, e)))?;
+        check_gears(&mut log, v, &opts, &mut ing_report.masked)
+            .map_err(|e| (id.clone(), fail(ing_st, e)))?;
     }
     {
         let mut claims = ctx.claims.lock().unwrap_or_else(|p| p.into_inner());
@@ -220,7 +248,9 @@ fn process_inner(
         }
     }
     let hash = drive_config_hash(plan, vehicle.as_deref(), item.vehicle_id.as_deref());
-    let c = compute(plan, log, vehicle.as_deref()).map_err(|f| (id.clone(), f))?;
+    let mut c = compute(plan, log, vehicle.as_deref()).map_err(|f| (id.clone(), f))?;
+    c.0.masked = ing_report.masked;
+    c.0.conflicts_resolved = ing_report.conflicts_resolved;
     let rec = write_drive(
         ctx,
         &c,

@@ -244,6 +244,10 @@ pub(super) struct Computed {
     pub(super) spectrum: Option<RoadSpectrum>,
     pub(super) diagnosis: Option<Diagnosed>,
     pub(super) gravity: f64,
+    /// Per column, samples ingest masked to missing.
+    pub(super) masked: std::collections::BTreeMap<String, u64>,
+    /// Samples ingest replaced by a later one at the same time.
+    pub(super) conflicts_resolved: u64,
 }
 
 pub(super) fn compute(
@@ -333,6 +337,8 @@ pub(super) fn compute(
             spectrum,
             diagnosis,
             gravity,
+            masked: Default::default(),
+            conflicts_resolved: 0,
         },
         notes,
     ))

@@ -93,6 +93,20 @@ pub fn summary_columns(r: &DriveRecord) -> Vec<OutColumn> {
             unit: "1".into(),
             data: OutData::U64(vec![m.rows]),
         },
+        OutColumn {
+            name: "masked_samples".into(),
+            unit: "1".into(),
+            data: OutData::U64(vec![m.masked_samples.values().sum()]),
+        },
+        str_col(
+            "masked_by_column",
+            serde_json::to_string(&m.masked_samples).expect("a map of counts serialises"),
+        ),
+        OutColumn {
+            name: "conflicts_resolved".into(),
+            unit: "1".into(),
+            data: OutData::U64(vec![m.conflicts_resolved]),
+        },
         opt_col("distance", "m", m.distance_m),
         opt_col("slope_quantization_step", "1", m.slope_quantization_step),
         opt_col("vehicle_speed_rmse", "m/s", m.vehicle_speed_rmse_mps),
@@ -161,6 +175,8 @@ pub(super) fn metrics_of(c: &Computed) -> DriveMetrics {
     let log = &c.log;
     let mut m = DriveMetrics {
         rows: log.len() as u64,
+        masked_samples: c.masked.clone(),
+        conflicts_resolved: c.conflicts_resolved,
         start_ns: log.timestamp_ns[0],
         duration_s: log.duration_s(),
         distance_m: c.dist.as_ref().map(|d| d.map.total_m()),

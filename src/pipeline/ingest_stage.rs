@@ -1,7 +1,7 @@
 //! The `ingest` stage: a file becomes the canonical drive log (`drive_log.parquet`).
 
 use crate::ingest::{
-    ingest_file, IngestError, IngestOptions, Ingested, Mapping, TimeBase, TimeRepair,
+    ingest_file, BadSamples, IngestError, IngestOptions, Ingested, Mapping, TimeBase, TimeRepair,
 };
 use crate::io::{config_hash, drive_log_columns, write_table, OutputError, TableMeta};
 use crate::model::vehicle::VehicleFile;
@@ -22,6 +22,9 @@ pub struct IngestConfig {
     pub max_nan_run_s: f64,
     /// `error` (default) or `sort` for time going backwards.
     pub time_repair: TimeRepair,
+    /// `mask` (default) or `error` for isolated bad samples (not finite, outside the physical
+    /// range, a speed spike) and timestamps repeated with another value.
+    pub bad_samples: BadSamples,
 }
 
 impl Default for IngestConfig {
@@ -31,6 +34,7 @@ impl Default for IngestConfig {
             time_base_hz: None,
             max_nan_run_s: 2.0,
             time_repair: TimeRepair::Error,
+            bad_samples: BadSamples::Mask,
         }
     }
 }
@@ -71,6 +75,7 @@ impl IngestConfig {
             max_nan_run_s: self.max_nan_run_s,
             gear_range: vehicle.map(VehicleFile::gear_range),
             time_repair: self.time_repair,
+            bad_samples: self.bad_samples,
             drive_id: None,
             vehicle_id: None,
         })
@@ -87,6 +92,7 @@ impl IngestConfig {
                 "time_base_hz": self.time_base_hz,
                 "max_nan_run_s": self.max_nan_run_s,
                 "time_repair": self.time_repair,
+                "bad_samples": self.bad_samples,
                 "stages": opts.stages,
                 "gears": opts.gear_range,
             }),

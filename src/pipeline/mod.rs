@@ -16,6 +16,7 @@ pub mod record;
 pub mod resample_stage;
 pub mod run;
 pub mod run_report;
+mod run_summary;
 pub mod slope_stage;
 pub mod spec;
 pub mod spec_check;

@@ -5,7 +5,12 @@
 
 use crate::io::{config_hash, OutputError};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
 use thiserror::Error;
 
 /// One shard of a split run: inputs whose path hash is `index` modulo `count`.
@@ -68,6 +73,13 @@ pub struct StageNote {
 pub struct DriveMetrics {
     /// Rows of the canonical drive log.
     pub rows: u64,
+    /// Per column, samples ingest masked to missing (not finite, outside the physical range, a
+    /// speed spike).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub masked_samples: BTreeMap<String, u64>,
+    /// Samples ingest replaced by a later one at the same time with another value.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub conflicts_resolved: u64,
     /// Time of the first sample, ns since the Unix epoch.
     pub start_ns: i64,
     /// Duration, s.

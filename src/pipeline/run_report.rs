@@ -26,7 +26,6 @@ use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
 use crate::road::study::{filter_response, percentile_sorted};
 use crate::signal::{cumulative_power, knee_frequency};
 use plotters::prelude::*;
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// A fleet metric: column name, unit, accessor.
@@ -72,7 +71,7 @@ pub const METRICS: [MetricDef; 17] = [
 ];
 
 /// A metric's distribution: name, unit, and `drives, mean, min, p05, p50, p95, max`.
-type Distribution = (&'static str, &'static str, [f64; 7]);
+pub(super) type Distribution = (&'static str, &'static str, [f64; 7]);
 
 const STATISTICS: [&str; 7] = ["drives", "mean", "min", "p05", "p50", "p95", "max"];
 
@@ -427,21 +426,6 @@ fn ecdf_svg(title: &str, series: &[(&str, Vec<f64>)]) -> Result<String, String> 
     Ok(svg)
 }
 
-fn fmt_val(x: f64) -> String {
-    if !x.is_finite() {
-        "–".into()
-    } else if x != 0.0 && (x.abs() < 1e-2 || x.abs() >= 1e5) {
-        format!("{x:.3e}")
-    } else {
-        format!("{x:.3}")
-    }
-}
-
-/// Markdown-safe cell text.
-fn cell(s: &str) -> String {
-    s.replace('|', "\\|").replace('\n', " ")
-}
-
 /// Writes every file of the run report into `dir` (see the module doc).
 ///
 /// # Errors
@@ -588,7 +572,7 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
         }
     }
 
-    let md = summary_md(plan, report, &dist, &plots, spectrum_line.as_deref());
+    let md = super::run_summary::summary_md(plan, report, &dist, &plots, spectrum_line.as_deref());
     let p = dir.join("summary.md");
     AtomicFile::write_all(&p, md.as_bytes()).map_err(io_err(&p))?;
     written.push("summary.md");
@@ -609,181 +593,4 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
         }
     }
     Ok(())
-}
-
-fn summary_md(
-    plan: &Plan,
-    report: &RunReport,
-    dist: &[Distribution],
-    plots: &[(&str, &str)],
-    spectrum_line: Option<&str>,
-) -> String {
-    let mut s = String::new();
-    let drive_h: f64 = report
-        .drives
-        .iter()
-        .filter(|d| d.status == DriveStatus::Ok)
-        .filter_map(|d| d.record.as_ref())
-        .map(|r| r.metrics.duration_s)
-        .sum::<f64>()
-        / 3600.0;
-    let _ = writeln!(
-        s,
-        "# Run report: {} (model {})\n",
-        report.pipeline, report.model_version
-    );
-    let _ = writeln!(
-        s,
-        "Pipeline file `{}`, fleetdyn {}, stages {}.{}\n",
-        report.pipeline_file,
-        report.fleetdyn_version,
-        plan.stages
-            .iter()
-            .map(|s| s.name())
-            .collect::<Vec<_>>()
-            .join(" → "),
-        report.shard.map_or(String::new(), |s| format!(
-            " Shard {}/{}.",
-            s.index, s.count
-        ))
-    );
-    let _ = writeln!(
-        s,
-        "| inputs in this run | processed | reused (up to date) | failed | wall time | jobs | drives in flight | drive-hours processed | drive-hours per core-hour |"
-    );
-    let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let core_h = report.elapsed_s * report.jobs as f64 / 3600.0;
-    let _ = writeln!(
-        s,
-        "| {} | {} | {} | {} | {:.2} s | {} | {} | {:.3} | {} |\n",
-        report.drives.len(),
-        report.ok,
-        report.reused,
-        report.failed,
-        report.elapsed_s,
-        report.jobs,
-        report.max_drives_in_flight,
-        drive_h,
-        if core_h > 0.0 && report.ok > 0 {
-            format!("{:.0}", drive_h / core_h)
-        } else {
-            "–".into()
-        }
-    );
-    let failed: Vec<&DriveOutcome> = report
-        .drives
-        .iter()
-        .filter(|d| d.status == DriveStatus::Failed)
-        .collect();
-    let _ = writeln!(s, "## Failures ({})\n", failed.len());
-    if failed.is_empty() {
-        let _ = writeln!(s, "None.\n");
-    } else {
-        let _ = writeln!(
-            s,
-            "| drive | input | stage | error |\n| --- | --- | --- | --- |"
-        );
-        for d in failed {
-            let _ = writeln!(
-                s,
-                "| {} | `{}` | {} | {} |",
-                cell(&d.drive_id),
-                cell(&d.input),
-                d.failed_stage.unwrap_or("?"),
-                cell(d.error.as_deref().unwrap_or(""))
-            );
-        }
-        let _ = writeln!(s);
-    }
-    let skipped: Vec<(&str, &str, &str)> = report
-        .drives
-        .iter()
-        .filter_map(|d| d.record.as_ref())
-        .flat_map(|r| {
-            r.stages.iter().filter_map(move |n| {
-                n.reason
-                    .as_deref()
-                    .map(|why| (r.drive_id.as_str(), n.stage.as_str(), why))
-            })
-        })
-        .collect();
-    let _ = writeln!(s, "## Stages skipped for a drive ({})\n", skipped.len());
-    if skipped.is_empty() {
-        let _ = writeln!(s, "None.\n");
-    } else {
-        let _ = writeln!(s, "| drive | stage | reason |\n| --- | --- | --- |");
-        for (d, st, why) in skipped {
-            let _ = writeln!(s, "| {} | {st} | {} |", cell(d), cell(why));
-        }
-        let _ = writeln!(s);
-    }
-    let mut slow: Vec<&DriveOutcome> = report
-        .drives
-        .iter()
-        .filter(|d| d.status != DriveStatus::Reused)
-        .collect();
-    slow.sort_by(|a, b| b.elapsed_s.total_cmp(&a.elapsed_s));
-    slow.truncate(plan.spec.report.slowest_drives);
-    let _ = writeln!(s, "## Slowest drives (processed in this run)\n");
-    if slow.is_empty() {
-        let _ = writeln!(s, "None: every drive was up to date.\n");
-    } else {
-        let _ = writeln!(
-            s,
-            "| drive | status | wall time [s] | rows | rows/s | drive duration [s] |\n| --- | --- | --- | --- | --- | --- |"
-        );
-        for d in slow {
-            let (rows, dur) = d
-                .record
-                .as_ref()
-                .map_or((0, f64::NAN), |r| (r.metrics.rows, r.metrics.duration_s));
-            let _ = writeln!(
-                s,
-                "| {} | {} | {:.3} | {} | {} | {} |",
-                cell(&d.drive_id),
-                d.status.name(),
-                d.elapsed_s,
-                rows,
-                if d.elapsed_s > 0.0 && rows > 0 {
-                    format!("{:.0}", rows as f64 / d.elapsed_s)
-                } else {
-                    "–".into()
-                },
-                fmt_val(dur)
-            );
-        }
-        let _ = writeln!(s);
-    }
-    let _ = writeln!(
-        s,
-        "## Error metrics across the fleet (`fleet_validation.parquet`)\n\n| metric | unit | drives | mean | min | p05 | p50 | p95 | max |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
-    );
-    for (name, unit, d) in dist {
-        if d[0] > 0.0 {
-            let _ = writeln!(
-                s,
-                "| {name} | {unit} | {} | {} | {} | {} | {} | {} | {} |",
-                d[0],
-                fmt_val(d[1]),
-                fmt_val(d[2]),
-                fmt_val(d[3]),
-                fmt_val(d[4]),
-                fmt_val(d[5]),
-                fmt_val(d[6])
-            );
-        }
-    }
-    let _ = writeln!(s);
-    if let Some(l) = spectrum_line {
-        let _ = writeln!(s, "{l}\n");
-    }
-    for (file, title) in plots {
-        let _ = writeln!(s, "## {title}\n\n![{title}]({file})\n");
-    }
-    let _ = writeln!(
-        s,
-        "Per-drive rows: `drive_validation.parquet`; every table of the dataset reads as one hive-partitioned table under `{}`.",
-        report.output_dir
-    );
-    s
 }

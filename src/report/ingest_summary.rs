@@ -36,6 +36,10 @@ pub struct IngestSummary {
     pub channel_rates: Vec<(String, usize, f64)>,
     /// Exact duplicates dropped.
     pub duplicates_dropped: u64,
+    /// Samples replaced by a later one at the same time with another value.
+    pub conflicts_resolved: u64,
+    /// Samples masked to missing, per column (not finite, outside the range, a speed spike).
+    pub masked: Vec<(String, u64)>,
     /// Missing values per column.
     pub nan_counts: Vec<(String, usize)>,
     /// Column units, in column order.
@@ -75,6 +79,13 @@ impl IngestSummary {
             time_base_hz: ing.report.time_base_hz,
             channel_rates: ing.report.channel_rates.clone(),
             duplicates_dropped: ing.report.duplicates_dropped,
+            conflicts_resolved: ing.report.conflicts_resolved,
+            masked: ing
+                .report
+                .masked
+                .iter()
+                .map(|(c, n)| (c.clone(), *n))
+                .collect(),
             nan_counts: nan_counts(log),
             units: log
                 .signals
@@ -129,6 +140,25 @@ impl fmt::Display for IngestSummary {
                 f,
                 "dropped   {} exact duplicate samples",
                 self.duplicates_dropped
+            )?;
+        }
+        if self.conflicts_resolved > 0 {
+            writeln!(
+                f,
+                "replaced  {} samples by a later one at the same time with another value",
+                self.conflicts_resolved
+            )?;
+        }
+        if !self.masked.is_empty() {
+            let list: Vec<String> = self
+                .masked
+                .iter()
+                .map(|(c, n)| format!("{c} {n}"))
+                .collect();
+            writeln!(
+                f,
+                "masked    bad samples made missing: {} (not finite, outside the physical range, or a speed spike)",
+                list.join(", ")
             )?;
         }
         if !self.channel_rates.is_empty() {

@@ -155,6 +155,7 @@ fn every_bad_input_fails_clearly_through_the_cli() {
         let o = fleetdyn(&args);
         assert_no_panic(&c.file, &o);
         let stderr = String::from_utf8_lossy(&o.stderr);
+        let said = format!("{stderr}{}", String::from_utf8_lossy(&o.stdout));
         if o.status.code() != Some(c.exit) {
             problems.push(format!(
                 "{}: exit {:?}, expected {}: {stderr}",
@@ -165,8 +166,8 @@ fn every_bad_input_fails_clearly_through_the_cli() {
             continue;
         }
         for s in &c.message {
-            if !stderr.contains(s.as_str()) {
-                problems.push(format!("{}: message lacks {s:?}: {stderr}", c.file));
+            if !said.contains(s.as_str()) {
+                problems.push(format!("{}: message lacks {s:?}: {said}", c.file));
             }
         }
         if let Some(d) = debug_formatting(&stderr) {
@@ -250,6 +251,14 @@ fn bad_drives_fail_alone_inside_a_batch() {
         if stage == "ok" {
             if r["status"] == "failed" {
                 problems.push(format!("control {} failed: {r}", c.file));
+            }
+            // a glitch went through masked, and the run report counts it
+            let m = &r["record"]["metrics"];
+            if c.file.starts_with("glitch-")
+                && m["masked_samples"].as_object().is_none_or(|o| o.is_empty())
+                && m["conflicts_resolved"].as_u64().unwrap_or(0) == 0
+            {
+                problems.push(format!("{}: nothing counted as masked: {r}", c.file));
             }
             continue;
         }

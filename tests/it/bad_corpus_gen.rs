@@ -263,6 +263,17 @@ pub fn generate(dir: &Path) {
     drive_file(dir, "absurd-slope.parquet", |d| d.slope[17] = Some(0.45));
     drive_file(dir, "absurd-speed.parquet", |d| d.speed[9] = Some(250.0));
     drive_file(dir, "gear-beyond-gearbox.parquet", |d| d.gear[40] = 14);
+    // isolated glitches a real logger produces, masked by default
+    drive_file(dir, "glitch-inf-speed.parquet", |d| {
+        d.speed[25] = Some(f64::INFINITY)
+    });
+    drive_file(dir, "glitch-speed-spike.parquet", |d| {
+        d.speed[33] = Some(41.0)
+    });
+    drive_file(dir, "glitch-repeated-timestamp.parquet", |d| {
+        d.t_ns[44] = d.t_ns[43];
+        d.speed[44] = Some(15.2);
+    });
     // times near the end of i64 nanoseconds (year 2262): grid arithmetic must not overflow
     drive_file(dir, "timestamps-at-i64-max.parquet", |d| {
         for (k, t) in d.t_ns.iter_mut().enumerate() {

@@ -489,7 +489,7 @@ fn a_corrupt_drive_fails_alone_with_its_stage_and_exit_1() {
     assert!(by("parked")["error"]
         .as_str()
         .unwrap()
-        .contains("no vehicle file"));
+        .contains("names no vehicle_id and the pipeline has no default vehicle file"));
     // failed drives leave no output; the good one has all of its tables
     let files: Vec<String> = walk(&out)
         .iter()

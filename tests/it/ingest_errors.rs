@@ -2,15 +2,18 @@
 //! or a partial output file.
 
 use crate::common::*;
-use fleetdyn::ingest::{ingest_file, IngestError, IngestOptions, Mapping, TimeRepair};
+use fleetdyn::ingest::{ingest_file, BadSamples, IngestError, IngestOptions, Mapping, TimeRepair};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig, ResampleError};
 use std::path::Path;
 use std::process::Command;
 
+/// Options for the slope stage that reject bad samples (the errors under test; the default
+/// masks isolated ones, `isolated_glitches_are_masked_and_counted_by_default`).
 fn slope_opts() -> IngestOptions {
     IngestOptions {
         stages: vec![Stage::Slope],
+        bad_samples: BadSamples::Error,
         ..Default::default()
     }
 }
@@ -349,6 +352,43 @@ fn a_drive_that_never_moves() {
 }
 
 #[test]
+fn isolated_glitches_are_masked_and_counted_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("glitches.parquet");
+    let mut d = Drive::new(50);
+    d.slope[17] = Some(0.45); // outside the physical range
+    d.speed[9] = Some(f64::INFINITY); // not finite
+    d.speed[30] = Some(40.0); // a 25 m/s spike in 0.1 s
+    d.t_ns[41] = d.t_ns[40]; // a repeated timestamp with another value: the later row wins
+    d.speed[41] = Some(15.3);
+    d.write(&p);
+    let opts = IngestOptions {
+        stages: vec![Stage::Slope],
+        ..Default::default()
+    };
+    assert_eq!(opts.bad_samples, BadSamples::Mask);
+    let ing = ingest_file(&p, &opts).unwrap();
+    assert_eq!(ing.report.masked["road_slope"], 1);
+    assert_eq!(ing.report.masked["vehicle_speed"], 2);
+    assert_eq!(ing.report.conflicts_resolved, 1);
+    let v = ing.log.signal("vehicle_speed").unwrap();
+    assert_eq!(ing.log.len(), 49);
+    assert!(v[9].is_nan() && v[30].is_nan());
+    assert_eq!(v[40], 15.3, "the later sample of the repeated time");
+    assert!(ing.log.signal("road_slope").unwrap()[17].is_nan());
+    // masking is bounded by the gap limit: 30 bad samples in a row (3 s) fail the drive
+    let mut d = Drive::new(100);
+    for k in 20..50 {
+        d.slope[k] = Some(0.9);
+    }
+    d.write(&p);
+    match ingest_file(&p, &opts) {
+        Err(IngestError::NanRun { column, .. }) => assert_eq!(column, "road_slope"),
+        other => panic!("{:?}", other.map(|i| i.report)),
+    }
+}
+
+#[test]
 fn cli_failure_leaves_no_output_and_exits_1() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("absurd.parquet");
@@ -361,7 +401,7 @@ fn cli_failure_leaves_no_output_and_exits_1() {
         let out = Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
             .args([sub, bad.to_str().unwrap(), "-o"])
             .arg(out_dir.join("x.parquet"))
-            .args(["--stages", "slope"])
+            .args(["--stages", "slope", "--bad-samples", "error"])
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(1), "{sub}");
