@@ -545,7 +545,7 @@ fn bad_input_is_a_clear_error_with_exit_2_and_no_output() {
     .unwrap();
     assert_refused(
         &p,
-        &["bad.vdri", "line 4", "<grad>", "\"abc\"", "not a number"],
+        &["bad.vdri", "line 4", "<grad>", "`abc`", "not a number"],
     );
     let e = read_vdri(&p).unwrap_err();
     assert!(
