@@ -211,29 +211,19 @@ pub fn bad_samples(column: &str, t_ns: &[i64], values: &[f64], min: f64, max: f6
         .map(|v| !(v.is_nan() || (v.is_finite() && (min..=max).contains(v))))
         .collect();
     if column == "vehicle_speed" {
-        let ok = |i: usize| values[i].is_finite() && !bad[i];
+        // each good sample against its nearest good neighbours (one pass over the good ones)
+        let good: Vec<usize> = (0..values.len())
+            .filter(|&i| values[i].is_finite() && !bad[i])
+            .collect();
         let limit = |a: usize, b: usize| {
             SPIKE_ACCEL_MPS2 * (t_ns[b].saturating_sub(t_ns[a]) as f64 * 1e-9) + SPIKE_STEP_MPS
         };
-        let mut spikes = Vec::new();
-        for i in 1..values.len().saturating_sub(1) {
-            // the nearest good neighbours on either side
-            let Some(p) = (0..i).rev().find(|&k| ok(k)) else {
-                continue;
-            };
-            let Some(n) = (i + 1..values.len()).find(|&k| ok(k)) else {
-                continue;
-            };
-            if !ok(i) {
-                continue;
-            }
+        for w in good.windows(3) {
+            let (p, i, n) = (w[0], w[1], w[2]);
             let (d1, d2) = (values[i] - values[p], values[n] - values[i]);
             if d1.abs() > limit(p, i) && d2.abs() > limit(i, n) && d1.signum() != d2.signum() {
-                spikes.push(i);
+                bad[i] = true;
             }
-        }
-        for i in spikes {
-            bad[i] = true;
         }
     }
     bad
