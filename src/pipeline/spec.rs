@@ -178,7 +178,8 @@ impl PipelineSpec {
         self.ingest.mapping.iter_mut().for_each(r);
     }
 
-    /// Parses pipeline-file text; `file` names it in errors.
+    /// Parses pipeline-file text; `file` names it in errors. Relative paths stay as written
+    /// (relative to the current directory) until [`PipelineSpec::resolve_paths`] is called.
     ///
     /// # Errors
     /// [`PlanError`] for malformed text (unknown keys included).
