@@ -120,8 +120,6 @@ sinfo -h -o %T | grep -qE '^(idle|mixed|allocated)' ||
 echo "single-node cluster up: $(sinfo -h -o '%P %D %T %c')"
 
 # ---- helpers ------------------------------------------------------------------------------------
-# job states of an array (one line per task: "<id>_<task> <state>")
-states() { scontrol show job "$1" 2>/dev/null | awk '/JobId=/ {id=$0} /JobState=/ {for (i=1;i<=NF;i++) if ($i ~ /^JobState=/) {split($i,a,"="); st=a[2]} ; match(id, /ArrayTaskId=[0-9]+/); print substr(id, RSTART+12, RLENGTH-12), st}'; }
 wait_done() { # job id: every task of it in a final state, bounded
     local deadline=$(($(date +%s) + timeout_s))
     while [ "$(date +%s)" -lt "$deadline" ]; do

@@ -173,15 +173,25 @@ impl Channel {
                     });
                 }
             }
-            self.t_ns[keep] = self.t_ns[i];
-            self.values[keep] = self.values[i];
-            self.rows[keep] = self.rows[i];
+            self.move_sample(i, keep);
             keep += 1;
         }
-        self.t_ns.truncate(keep);
-        self.values.truncate(keep);
-        self.rows.truncate(keep);
+        self.truncate(keep);
         Ok((dropped, replaced))
+    }
+
+    /// Copies sample `from` to position `to` (compaction, `to ≤ from`).
+    fn move_sample(&mut self, from: usize, to: usize) {
+        self.t_ns[to] = self.t_ns[from];
+        self.values[to] = self.values[from];
+        self.rows[to] = self.rows[from];
+    }
+
+    /// Keeps the first `n` samples.
+    fn truncate(&mut self, n: usize) {
+        self.t_ns.truncate(n);
+        self.values.truncate(n);
+        self.rows.truncate(n);
     }
 
     /// Drops the samples at the positions `masked` marks (a channel's missing value is an absent
@@ -190,15 +200,11 @@ impl Channel {
         let mut keep = 0;
         for (i, &bad) in masked.iter().enumerate().take(self.len()) {
             if !bad {
-                self.t_ns[keep] = self.t_ns[i];
-                self.values[keep] = self.values[i];
-                self.rows[keep] = self.rows[i];
+                self.move_sample(i, keep);
                 keep += 1;
             }
         }
-        self.t_ns.truncate(keep);
-        self.values.truncate(keep);
-        self.rows.truncate(keep);
+        self.truncate(keep);
     }
 }
 
