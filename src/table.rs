@@ -15,6 +15,42 @@ pub struct DriveMeta {
     pub vehicle_id: Option<String>,
     /// Path of the source file as given.
     pub source_file: String,
+    /// Where the drive sits in its recording, when the recording was split at logger pauses.
+    pub segment: Option<Segment>,
+}
+
+/// Where a drive sits in the recording it was split from (Parquet key–value metadata
+/// `segment` = `k/N`, `recording_drive_id`, `segment_start`, `segment_end`).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Segment {
+    /// Number of the segment, 1-based, in time order.
+    pub index: usize,
+    /// Segments the recording was split into (skipped ones included).
+    pub count: usize,
+    /// Drive id of the whole recording.
+    pub recording_drive_id: String,
+    /// First sample, ns since the Unix epoch.
+    pub start_ns: i64,
+    /// Last sample, ns since the Unix epoch.
+    pub end_ns: i64,
+}
+
+impl Segment {
+    /// Key–value metadata entries of the segment (times RFC 3339, UTC).
+    pub fn kv(&self) -> Vec<(String, String)> {
+        vec![
+            ("segment".into(), format!("{}/{}", self.index, self.count)),
+            ("recording_drive_id".into(), self.recording_drive_id.clone()),
+            (
+                "segment_start".into(),
+                crate::time_fmt::rfc3339_ns(self.start_ns),
+            ),
+            (
+                "segment_end".into(),
+                crate::time_fmt::rfc3339_ns(self.end_ns),
+            ),
+        ]
+    }
 }
 
 /// One signal column.

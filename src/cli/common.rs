@@ -3,7 +3,9 @@
 
 use crate::commands::failure::{usage, usage_msg, Failure};
 use clap::{Args, ValueEnum};
-use fleetdyn::ingest::{BadSamples, IngestOptions, TimeRepair};
+use fleetdyn::ingest::{
+    BadSamples, IngestOptions, OnGap, TimeRepair, DEFAULT_MIN_SEGMENT_M, DEFAULT_MIN_SEGMENT_S,
+};
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::IngestConfig;
 use fleetdyn::schema::Stage;
@@ -34,6 +36,17 @@ pub struct IngestArgs {
     /// count it, or fail the drive.
     #[arg(long, value_enum, default_value = "mask")]
     pub bad_samples: BadSamplesArg,
+    /// What to do when a required signal stops for longer than --max-nan-run-s (a logger
+    /// pause): split the recording there into drives of their own (`<drive_id>-s<k>`), or
+    /// fail it.
+    #[arg(long, value_enum, default_value = "split")]
+    pub on_gap: OnGapArg,
+    /// Segments of a split recording shorter than this are skipped, s.
+    #[arg(long, default_value_t = DEFAULT_MIN_SEGMENT_S)]
+    pub min_segment_s: f64,
+    /// Segments of a split recording in which the vehicle travels less are skipped, m.
+    #[arg(long, default_value_t = DEFAULT_MIN_SEGMENT_M)]
+    pub min_segment_m: f64,
 }
 
 impl IngestArgs {
@@ -65,6 +78,12 @@ impl IngestArgs {
                 BadSamplesArg::Mask => BadSamples::Mask,
                 BadSamplesArg::Error => BadSamples::Error,
             },
+            on_gap: match self.on_gap {
+                OnGapArg::Split => OnGap::Split,
+                OnGapArg::Error => OnGap::Error,
+            },
+            min_segment_s: self.min_segment_s,
+            min_segment_m: self.min_segment_m,
         };
         let opts = cfg.options(&stages, vehicle).map_err(usage)?;
         Ok((cfg, opts))
@@ -108,6 +127,15 @@ pub enum BadSamplesArg {
     /// Make them missing and count them.
     Mask,
     /// Fail the drive.
+    Error,
+}
+
+/// What to do at a logger pause.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum OnGapArg {
+    /// Split the recording into drives of their own.
+    Split,
+    /// Fail the recording.
     Error,
 }
 

@@ -117,8 +117,8 @@ impl Channel {
     }
 
     /// Enforces time order and drops exact duplicates; a repeated time with another value keeps
-    /// the later sample under [`BadSamples::Mask`]. Returns (exact duplicates dropped, conflicting
-    /// samples replaced by a later one).
+    /// the later sample under [`BadSamples::Mask`]. Returns the number of exact duplicates
+    /// dropped and the times of the samples replaced by a later one.
     ///
     /// # Errors
     /// [`IngestError::NonMonotonicTime`] (with [`TimeRepair::Error`]) and
@@ -128,7 +128,7 @@ impl Channel {
         file: &Path,
         repair: TimeRepair,
         bad: BadSamples,
-    ) -> Result<(u64, u64), IngestError> {
+    ) -> Result<(u64, Vec<i64>), IngestError> {
         if repair == TimeRepair::Sort && self.t_ns.windows(2).any(|w| w[1] < w[0]) {
             let mut idx: Vec<usize> = (0..self.len()).collect();
             idx.sort_by_key(|&i| self.t_ns[i]);
@@ -137,7 +137,7 @@ impl Channel {
             self.rows = idx.iter().map(|&i| self.rows[i]).collect();
         }
         let mut keep = 0usize;
-        let (mut dropped, mut replaced) = (0u64, 0u64);
+        let (mut dropped, mut replaced) = (0u64, Vec::new());
         for i in 0..self.len() {
             if keep > 0 {
                 let (tp, vp) = (self.t_ns[keep - 1], self.values[keep - 1]);
@@ -160,7 +160,7 @@ impl Channel {
                         // the later message wins
                         self.values[keep - 1] = v;
                         self.rows[keep - 1] = self.rows[i];
-                        replaced += 1;
+                        replaced.push(t);
                         continue;
                     }
                     return Err(IngestError::DuplicateTimestamp {
@@ -185,6 +185,20 @@ impl Channel {
         self.t_ns[to] = self.t_ns[from];
         self.values[to] = self.values[from];
         self.rows[to] = self.rows[from];
+    }
+
+    /// A copy holding the samples with times in `[lo, hi]` (ns).
+    pub fn window(&self, lo: i64, hi: i64) -> Channel {
+        let a = self.t_ns.partition_point(|&t| t < lo);
+        let b = self.t_ns.partition_point(|&t| t <= hi);
+        Channel {
+            column: self.column.clone(),
+            unit: self.unit.clone(),
+            interpolation: self.interpolation,
+            t_ns: self.t_ns[a..b].to_vec(),
+            values: self.values[a..b].to_vec(),
+            rows: self.rows[a..b].to_vec(),
+        }
     }
 
     /// Keeps the first `n` samples.
@@ -287,7 +301,7 @@ mod tests {
         assert_eq!(
             c.order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Error)
                 .unwrap(),
-            (2, 0)
+            (2, vec![])
         );
         assert_eq!(c.t_ns, [0, 1, 2, 3]);
         assert_eq!(c.rows, [10, 11, 13, 15]);
@@ -325,7 +339,7 @@ mod tests {
         let n = c
             .order_and_dedup(Path::new("f"), TimeRepair::Error, BadSamples::Mask)
             .unwrap();
-        assert_eq!(n, (0, 1));
+        assert_eq!(n, (0, vec![1]));
         assert_eq!(c.t_ns, [0, 1, 2]);
         assert_eq!(c.values, [0.0, 1.5, 2.0]);
         assert_eq!(c.rows, [10, 12, 13]);

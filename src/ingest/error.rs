@@ -237,6 +237,28 @@ pub enum IngestError {
         /// Largest grid accepted for that many samples.
         limit: u64,
     },
+    /// A single-drive command given a recording that splits at logger pauses into several drives.
+    #[error("{file}: the recording splits into {drives} drives at pauses in its signals ({pauses}); `fleetdyn ingest --output` writes each, a pipeline runs each, or set on_gap = \"error\" (--on-gap error)")]
+    Segmented {
+        /// Input file.
+        file: PathBuf,
+        /// Drives it splits into.
+        drives: usize,
+        /// Start and length of each pause.
+        pauses: String,
+    },
+    /// Every segment of a recording split at pauses is too short to be a drive.
+    #[error("{file}: no usable segment among {found} (split at {pauses}): {reasons}")]
+    NoUsableSegment {
+        /// Input file.
+        file: PathBuf,
+        /// Segments found.
+        found: usize,
+        /// Start and length of each pause.
+        pauses: String,
+        /// Why each was skipped.
+        reasons: String,
+    },
     /// Nothing usable in the file.
     #[error("{file}: {what}")]
     NoData {

@@ -18,6 +18,10 @@
 //! Identification: `drive_id` and `vehicle_id` come from the source's metadata (Parquet
 //! key–value metadata; MCAP metadata records), else the drive id is the file stem; explicit
 //! options override both.
+//!
+//! Logger pauses: a recording whose required signals stop for longer than the missing-value
+//! limit is split into drives of their own, `<drive_id>-s<k>` ([`segment`], [`OnGap`]);
+//! [`ingest`] returns them all, [`ingest_file`] the one drive a single-drive command works on.
 
 pub mod align;
 pub mod can;
@@ -26,16 +30,21 @@ mod error;
 pub mod mapping;
 mod mcap_source;
 mod parquet_source;
+mod recording;
+pub mod segment;
 
 pub use align::TimeBase;
 pub use channel::{BadSamples, TimeRepair};
 pub use error::IngestError;
 pub use mapping::{Mapping, SourceFormat};
+pub(crate) use recording::{drives, split_table, Marks, Pieces};
+pub use recording::{single, IngestReport, Ingested, Recording};
+use segment::check_row_gaps;
+pub use segment::{check_nan_runs, OnGap, Pause, SkippedSegment};
 
 use crate::schema::{drive_log, Stage};
 use crate::table::{DriveLog, DriveMeta, Signal};
 use channel::{bad_samples, check_range, Channel};
-use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -56,6 +65,13 @@ pub struct IngestOptions {
     pub time_repair: TimeRepair,
     /// Isolated bad samples and conflicting repeated timestamps: masked (default) or an error.
     pub bad_samples: BadSamples,
+    /// A required signal stopping for longer than `max_nan_run_s`: split the recording there
+    /// (default) or an error ([`segment`]).
+    pub on_gap: OnGap,
+    /// Segments of a split recording shorter than this are skipped, s.
+    pub min_segment_s: f64,
+    /// Segments of a split recording in which the vehicle travels less are skipped, m.
+    pub min_segment_m: f64,
     /// Drive id override (default: the source's metadata — Parquet key–value `drive_id`, MCAP
     /// metadata record entry `drive_id` — else the file stem).
     pub drive_id: Option<String>,
@@ -73,52 +89,37 @@ impl Default for IngestOptions {
             gear_range: None,
             time_repair: TimeRepair::Error,
             bad_samples: BadSamples::Mask,
+            on_gap: OnGap::Split,
+            min_segment_s: DEFAULT_MIN_SEGMENT_S,
+            min_segment_m: DEFAULT_MIN_SEGMENT_M,
             drive_id: None,
             vehicle_id: None,
         }
     }
 }
 
-/// Facts about one ingest, for the summary and the run report.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct IngestReport {
-    /// `parquet-wide`, `parquet-long`, `mcap-json`, or for raw CAN sessions `mdf4-can` / `mcap-can`.
-    pub format: String,
-    /// Mapping used (`canonical` for the canonical layout).
-    pub mapping: String,
-    /// Rows (Parquet) or messages (MCAP) in the source.
-    pub source_rows: u64,
-    /// Exact duplicates dropped (all channels).
-    pub duplicates_dropped: u64,
-    /// Samples replaced by a later one with the same time and another value (all channels;
-    /// [`BadSamples::Mask`]).
-    pub conflicts_resolved: u64,
-    /// Per column, samples masked to missing: not finite, outside the physical range, or a speed
-    /// spike ([`BadSamples::Mask`]).
-    pub masked: BTreeMap<String, u64>,
-    /// Per mapped channel: (column, samples, median rate Hz) — multi-rate sources only.
-    pub channel_rates: Vec<(String, usize, f64)>,
-    /// Rate of the aligned time base, Hz (multi-rate sources only).
-    pub time_base_hz: Option<f64>,
-    /// Non-canonical columns kept.
-    pub passthrough: Vec<String>,
-    /// Columns, signals or topics not used.
-    pub ignored: Vec<String>,
-}
-
-/// A drive in canonical form, with what happened on the way.
-#[derive(Debug, Clone)]
-pub struct Ingested {
-    /// The canonical table.
-    pub log: DriveLog,
-    /// Ingest facts.
-    pub report: IngestReport,
-}
+/// Default shortest segment of a split recording kept as a drive, s: a minute holds a few
+/// shuffle periods and a launch, less is a logger waking for a moment.
+pub const DEFAULT_MIN_SEGMENT_S: f64 = 60.0;
+/// Default least distance a segment of a split recording must cover, m: a hundred metres is ten
+/// 10 m slope-grid samples, less is a truck manoeuvring at a rest stop.
+pub const DEFAULT_MIN_SEGMENT_M: f64 = 100.0;
 
 const PARQUET_MAGIC: &[u8] = b"PAR1";
 const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
-/// Reads one file into the canonical drive log.
+/// Reads one file into the canonical drive log: the single drive of a recording that does not
+/// split at pauses, or that keeps one segment (see [`ingest`]).
+///
+/// # Errors
+/// Any [`IngestError`] of [`ingest`], and [`IngestError::Segmented`] when the recording splits
+/// into several drives.
+pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, IngestError> {
+    single(path, ingest(path, opts)?)
+}
+
+/// Reads one file into the canonical drive log, split at pauses into drives of their own
+/// ([`segment`]).
 ///
 /// Mapping selection when `opts.mapping` is `None`: a Parquet file with `timestamp` and
 /// `vehicle_speed` columns is canonical; otherwise the first embedded mapping whose
@@ -126,8 +127,8 @@ const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 ///
 /// # Errors
 /// Any [`IngestError`]; the message names the file and, where it applies, column, row, time
-/// and value.
-pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, IngestError> {
+/// and value. [`IngestError::NoUsableSegment`] when every segment is skipped.
+pub fn ingest(path: &Path, opts: &IngestOptions) -> Result<Recording, IngestError> {
     let mut head = [0u8; 8];
     let n = std::fs::File::open(path)
         .and_then(|mut f| f.read(&mut head))
@@ -195,8 +196,8 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
     }
 
     let kv;
-    let mut wide_rows: Option<Vec<u64>> = None;
-    let (t_ns, signals) = match mapping.as_ref().map(|m| m.format) {
+    let mut marks = Marks::default();
+    let pieces = match mapping.as_ref().map(|m| m.format) {
         None | Some(SourceFormat::ParquetWide) => {
             report.format = "parquet-wide".into();
             let mut read = parquet_source::read_wide(path, mapping.as_ref())?;
@@ -223,27 +224,32 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             let (dropped, replaced) =
                 parquet_source::order_wide(path, &mut w, opts.time_repair, opts.bad_samples)?;
             report.duplicates_dropped = dropped;
-            report.conflicts_resolved = replaced;
+            marks.conflicts(replaced);
             for (name, unit, values) in &mut w.columns {
                 let bad = screen(path, name, unit, &w.t_ns, values, Some(&w.rows), opts)?;
-                let mut n = 0;
-                for (v, b) in values.iter_mut().zip(&bad) {
+                let mut at = Vec::new();
+                for ((v, b), t) in values.iter_mut().zip(&bad).zip(&w.t_ns) {
                     if *b {
                         *v = f64::NAN;
-                        n += 1;
+                        at.push(*t);
                     }
                 }
-                if n > 0 {
-                    report.masked.insert(name.clone(), n);
+                if !at.is_empty() {
+                    marks.masked.insert(name.clone(), at);
                 }
             }
-            let signals = w
+            let signals: Vec<Signal> = w
                 .columns
                 .into_iter()
                 .map(|(name, unit, values)| Signal { name, unit, values })
                 .collect();
-            wide_rows = Some(w.rows);
-            (w.t_ns, signals)
+            if w.t_ns.is_empty() {
+                return Err(IngestError::NoData {
+                    file: path.into(),
+                    what: "no rows: the source holds no samples".into(),
+                });
+            }
+            wide_pieces(path, w.t_ns, signals, &w.rows, &required, opts)?
         }
         Some(fmt) => {
             let m = mapping.as_ref().expect("mapped format");
@@ -260,20 +266,9 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             };
             report.source_rows = rows;
             report.ignored = ignored;
-            align_channels(path, channels, &required, opts, m, &mut report)?
+            align_channels(path, channels, &required, opts, m, &mut report, &mut marks)?
         }
     };
-
-    if t_ns.is_empty() {
-        return Err(IngestError::NoData {
-            file: path.into(),
-            what: "no rows: the source holds no samples".into(),
-        });
-    }
-    check_nan_runs(path, &t_ns, &signals, &required, opts.max_nan_run_s)?;
-    if let (Some(rows), false) = (&wide_rows, required.is_empty()) {
-        check_row_gaps(path, &t_ns, rows, opts.max_nan_run_s)?;
-    }
     let file_stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -290,26 +285,39 @@ pub fn ingest_file(path: &Path, opts: &IngestOptions) -> Result<Ingested, Ingest
             .or_else(|| kv.get("vehicle_id").cloned())
             .or_else(|| mapping.as_ref().and_then(|m| m.vehicle_id.clone())),
         source_file: path.display().to_string(),
+        segment: None,
     };
-    Ok(assemble(meta, t_ns, signals, report))
+    drives(
+        path,
+        meta,
+        report,
+        pieces,
+        &marks,
+        (opts.min_segment_s, opts.min_segment_m),
+    )
 }
 
-/// The canonical log from aligned signals: unnamed (unmapped) signals dropped, columns in
-/// schema order.
-pub(crate) fn assemble(
-    meta: DriveMeta,
-    timestamp_ns: Vec<i64>,
-    mut signals: Vec<Signal>,
-    report: IngestReport,
-) -> Ingested {
-    signals.retain(|s| !s.name.is_empty());
-    let mut log = DriveLog {
-        meta,
-        timestamp_ns,
-        signals,
-    };
-    log.sort_columns();
-    Ingested { log, report }
+/// The wide table's pieces: the whole table after the gap checks ([`OnGap::Error`]), or its
+/// segments ([`segment::split_rows`]).
+fn wide_pieces(
+    path: &Path,
+    t_ns: Vec<i64>,
+    signals: Vec<Signal>,
+    rows: &[u64],
+    required: &[(&str, &str)],
+    opts: &IngestOptions,
+) -> Result<Pieces, IngestError> {
+    if opts.on_gap == OnGap::Error || required.is_empty() {
+        check_nan_runs(path, &t_ns, &signals, required, opts.max_nan_run_s)?;
+        if !required.is_empty() {
+            check_row_gaps(path, &t_ns, rows, opts.max_nan_run_s)?;
+        }
+        return Ok(Pieces {
+            tables: vec![(t_ns, signals)],
+            pauses: Vec::new(),
+        });
+    }
+    split_table(path, t_ns, signals, required, opts.max_nan_run_s)
 }
 
 /// (column, stage) of every column the stages require.
@@ -399,6 +407,9 @@ fn screen(
     }
 }
 
+/// Checks and aligns multi-rate channels: the aligned table after the gap checks
+/// ([`OnGap::Error`]), or the aligned segments (cut at the channels' holes, each piece aligned and
+/// split again at its aligned rows' holes).
 pub(crate) fn align_channels(
     path: &Path,
     mut channels: Vec<Channel>,
@@ -406,11 +417,12 @@ pub(crate) fn align_channels(
     opts: &IngestOptions,
     mapping: &Mapping,
     report: &mut IngestReport,
-) -> Result<(Vec<i64>, Vec<Signal>), IngestError> {
+    marks: &mut Marks,
+) -> Result<Pieces, IngestError> {
     for c in &mut channels {
         let (dropped, replaced) = c.order_and_dedup(path, opts.time_repair, opts.bad_samples)?;
         report.duplicates_dropped += dropped;
-        report.conflicts_resolved += replaced;
+        marks.conflicts(replaced);
         let bad = screen(
             path,
             &c.column,
@@ -420,10 +432,16 @@ pub(crate) fn align_channels(
             Some(&c.rows),
             opts,
         )?;
-        let n = bad.iter().filter(|b| **b).count() as u64;
-        if n > 0 {
+        let at: Vec<i64> = c
+            .t_ns
+            .iter()
+            .zip(&bad)
+            .filter(|(_, b)| **b)
+            .map(|(t, _)| *t)
+            .collect();
+        if !at.is_empty() {
             c.drop_samples(&bad);
-            *report.masked.entry(c.column.clone()).or_default() += n;
+            marks.masked.entry(c.column.clone()).or_default().extend(at);
         }
     }
     for (col, stage) in required {
@@ -458,83 +476,38 @@ pub(crate) fn align_channels(
         })
         .collect();
     let req: Vec<&str> = required.iter().map(|r| r.0).collect();
-    align::check_gaps(path, &channels, &req, opts.max_nan_run_s)?;
-    let a = align::align(path, &channels, &req, opts.time_base)?;
-    report.time_base_hz = Some(1e9 / a.period_ns as f64);
-    Ok((a.t_ns, a.signals))
-}
-
-/// Rejects a wide table whose consecutive rows are more than `limit_s` apart: every column is
-/// missing over such a hole, as in a NaN run, and distance resampling must not integrate speed
-/// across it (a year between two rows would make a year of distance grid).
-fn check_row_gaps(
-    path: &Path,
-    t_ns: &[i64],
-    rows: &[u64],
-    limit_s: f64,
-) -> Result<(), IngestError> {
-    for (k, w) in t_ns.windows(2).enumerate() {
-        let seconds = w[1].saturating_sub(w[0]) as f64 * 1e-9;
-        if seconds > limit_s {
-            return Err(IngestError::TimeGap {
-                file: path.into(),
-                column: "timestamp".into(),
-                row: rows[k + 1],
-                time_ns: w[1],
-                previous_ns: w[0],
-                seconds,
-                limit_s,
-            });
-        }
+    if opts.on_gap == OnGap::Error {
+        align::check_gaps(path, &channels, &req, opts.max_nan_run_s)?;
+        let a = align::align(path, &channels, &req, opts.time_base)?;
+        report.time_base_hz = Some(1e9 / a.period_ns as f64);
+        check_nan_runs(path, &a.t_ns, &a.signals, required, opts.max_nan_run_s)?;
+        return Ok(Pieces {
+            tables: vec![(a.t_ns, a.signals)],
+            pauses: Vec::new(),
+        });
     }
-    Ok(())
-}
-
-/// Rejects runs of missing values in the `required` columns (column, stage) longer than
-/// `limit_s`.
-///
-/// # Errors
-/// [`IngestError::NanRun`] naming the column, the first row of the run and its length.
-pub fn check_nan_runs(
-    path: &Path,
-    t_ns: &[i64],
-    signals: &[Signal],
-    required: &[(&str, &str)],
-    limit_s: f64,
-) -> Result<(), IngestError> {
-    for s in signals {
-        if !required.iter().any(|r| r.0 == s.name) {
-            continue;
-        }
-        let mut i = 0;
-        while i < s.values.len() {
-            if !s.values[i].is_nan() {
-                i += 1;
-                continue;
-            }
-            let start = i;
-            while i < s.values.len() && s.values[i].is_nan() {
-                i += 1;
-            }
-            // A run lasts from the last valid sample before it to the first valid one after
-            // (from / to the table's edge when it touches one).
-            let before = t_ns[start.saturating_sub(1)];
-            let after = t_ns[i.min(t_ns.len() - 1)];
-            let seconds = (after - before) as f64 * 1e-9;
-            if seconds > limit_s {
-                return Err(IngestError::NanRun {
-                    file: path.into(),
-                    column: s.name.clone(),
-                    row: start as u64,
-                    time_ns: t_ns[start],
-                    samples: (i - start) as u64,
-                    seconds,
-                    limit_s,
-                });
-            }
-        }
+    let span = align::span(path, &channels, &req)?;
+    let (windows, mut pauses) = segment::channel_windows(&channels, &req, opts.max_nan_run_s, span);
+    let mut tables = Vec::new();
+    for (lo, hi) in windows {
+        let part: Vec<Channel> = if pauses.is_empty() {
+            std::mem::take(&mut channels)
+        } else {
+            channels.iter().map(|c| c.window(lo, hi)).collect()
+        };
+        let a = match align::align(path, &part, &req, opts.time_base) {
+            Ok(a) => a,
+            // a sliver between two holes where the required signals do not overlap
+            Err(IngestError::NoData { .. }) if !pauses.is_empty() => continue,
+            Err(e) => return Err(e),
+        };
+        report.time_base_hz.get_or_insert(1e9 / a.period_ns as f64);
+        let p = split_table(path, a.t_ns, a.signals, required, opts.max_nan_run_s)?;
+        tables.extend(p.tables);
+        pauses.extend(p.pauses);
     }
-    Ok(())
+    pauses.sort_by_key(|p| p.start_ns);
+    Ok(Pieces { tables, pauses })
 }
 
 /// Missing values per column, in column order.

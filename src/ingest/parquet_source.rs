@@ -532,8 +532,8 @@ fn kv_metadata(builder: &ParquetRecordBatchReaderBuilder<File>) -> HashMap<Strin
 }
 
 /// Drops exact duplicate rows of a wide table and enforces increasing time; a repeated time with
-/// other values keeps the later row under [`BadSamples::Mask`]. Returns (exact duplicates
-/// dropped, rows replaced by a later one).
+/// other values keeps the later row under [`BadSamples::Mask`]. Returns the number of exact
+/// duplicates dropped and the times of the rows replaced by a later one.
 ///
 /// # Errors
 /// [`IngestError::NonMonotonicTime`] (unless `repair` sorts) and, with [`BadSamples::Error`],
@@ -543,7 +543,7 @@ pub fn order_wide(
     w: &mut WideTable,
     repair: TimeRepair,
     bad: BadSamples,
-) -> Result<(u64, u64), IngestError> {
+) -> Result<(u64, Vec<i64>), IngestError> {
     if repair == TimeRepair::Sort && w.t_ns.windows(2).any(|p| p[1] < p[0]) {
         let mut idx: Vec<usize> = (0..w.t_ns.len()).collect();
         idx.sort_by_key(|&i| w.t_ns[i]);
@@ -555,11 +555,11 @@ pub fn order_wide(
     }
     // the usual case, strictly increasing times: nothing to check further or to move
     if w.t_ns.windows(2).all(|p| p[1] > p[0]) {
-        return Ok((0, 0));
+        return Ok((0, Vec::new()));
     }
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
     let mut keep = 0usize;
-    let (mut dropped, mut replaced) = (0, 0);
+    let (mut dropped, mut replaced) = (0, Vec::new());
     for i in 0..w.t_ns.len() {
         if keep > 0 {
             let (tp, t) = (w.t_ns[keep - 1], w.t_ns[i]);
@@ -580,7 +580,7 @@ pub fn order_wide(
                     for c in &mut w.columns {
                         c.2[keep - 1] = c.2[i];
                     }
-                    replaced += 1;
+                    replaced.push(t);
                     continue;
                 }
                 if let Some(c) = w.columns.iter().find(|c| !same(c.2[i], c.2[keep - 1])) {

@@ -20,7 +20,7 @@ use super::spec_sections::{DatasetTable, PipelineStage};
 use super::vehicles::LoadedVehicle;
 use super::{resample_stage, slope_stage};
 use crate::diagnose::parameter_table::parameter_columns;
-use crate::ingest::BadSamples;
+use crate::ingest::{BadSamples, SkippedSegment};
 use crate::io::{
     config_hash, write_column_refs_with_constants, AtomicFile, ColumnRef, OutColumn, TableMeta,
 };
@@ -109,11 +109,18 @@ pub(super) struct Ctx<'a> {
     pub(super) claims: Mutex<HashMap<String, usize>>,
 }
 
+/// What one input gave: its drives' outcomes (one per segment when it was split at pauses) and
+/// the segments skipped.
+pub(super) struct InputOutcome {
+    pub(super) drives: Vec<DriveOutcome>,
+    pub(super) skipped: Vec<SkippedSegment>,
+}
+
 pub(super) fn process(
     ctx: &Ctx<'_>,
     index: usize,
     item: &super::inputs::InputItem,
-) -> DriveOutcome {
+) -> InputOutcome {
     let t0 = Instant::now();
     let input = item.path.display().to_string();
     let stem = item
@@ -124,27 +131,10 @@ pub(super) fn process(
     let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         process_inner(ctx, index, item, &input)
     }));
-    let result = match caught {
-        Ok(r) => r,
-        Err(p) => {
-            let msg = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            Err((
-                None,
-                Fail(
-                    PipelineStage::Ingest,
-                    format!("internal error (panic): {msg}"),
-                ),
-            ))
-        }
-    };
-    let elapsed_s = t0.elapsed().as_secs_f64();
-    match result {
+    let result = caught.unwrap_or_else(|p| Err((None, panicked(p.as_ref()))));
+    let outcome = |r: One, elapsed_s: f64| match r {
         Ok((status, record)) => DriveOutcome {
-            input,
+            input: input.clone(),
             drive_id: record.drive_id.clone(),
             status,
             failed_stage: None,
@@ -153,18 +143,82 @@ pub(super) fn process(
             record: Some(record),
         },
         Err((id, Fail(stage, e))) => DriveOutcome {
-            input,
-            drive_id: id.unwrap_or(stem),
+            input: input.clone(),
+            drive_id: id.unwrap_or_else(|| stem.clone()),
             status: DriveStatus::Failed,
             failed_stage: Some(stage.name()),
             error: Some(e),
             elapsed_s,
             record: None,
         },
+    };
+    match result {
+        Ok((drives, skipped)) => InputOutcome {
+            drives: drives
+                .into_iter()
+                .map(|(r, elapsed)| outcome(r, elapsed))
+                .collect(),
+            skipped,
+        },
+        Err(e) => InputOutcome {
+            drives: vec![outcome(Err(e), t0.elapsed().as_secs_f64())],
+            skipped: Vec::new(),
+        },
     }
 }
 
-type Processed = Result<(DriveStatus, DriveRecord), (Option<String>, Fail)>;
+/// A panic as a drive failure (the stage is not known; it is reported as ingest).
+fn panicked(p: &(dyn std::any::Any + Send)) -> Fail {
+    let msg = p
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_default();
+    Fail(
+        PipelineStage::Ingest,
+        format!("internal error (panic): {msg}"),
+    )
+}
+
+/// One drive's result.
+type One = Result<(DriveStatus, DriveRecord), (Option<String>, Fail)>;
+/// An input's drives (each with its wall time, s) and skipped segments, or its failure.
+type Processed = Result<(Vec<(One, f64)>, Vec<SkippedSegment>), (Option<String>, Fail)>;
+
+/// Marker key of an input's `j`-th drive (0-based): the input's key for the first, so a
+/// recording that is one drive has one marker under its input's key.
+fn drive_key(input_key: &str, j: usize) -> String {
+    if j == 0 {
+        input_key.to_string()
+    } else {
+        config_hash(&[input_key.as_bytes(), format!("drive {j}").as_bytes()])
+    }
+}
+
+/// The input's drives from an earlier run, when all are up to date (same configuration, every
+/// output present).
+fn up_to_date(
+    ctx: &Ctx<'_>,
+    item: &super::inputs::InputItem,
+    key: &str,
+    first: &DriveRecord,
+) -> Option<Vec<DriveRecord>> {
+    let plan = ctx.plan;
+    let mut recs = vec![first.clone()];
+    for j in 1..first.input_drives {
+        recs.push(ctx.ds.read_marker(&drive_key(key, j))?);
+    }
+    for rec in &recs {
+        let vid = (rec.vehicle_id != UNKNOWN_VEHICLE).then_some(rec.vehicle_id.as_str());
+        let v = plan.vehicles.resolve(item.vehicle_id.as_deref().or(vid));
+        let expected = drive_config_hash(plan, v.map(|v| &**v), item.vehicle_id.as_deref());
+        let complete = rec.outputs.iter().all(|o| ctx.ds.root.join(o).is_file());
+        if rec.config_hash != expected || !complete {
+            return None;
+        }
+    }
+    Some(recs)
+}
 
 fn process_inner(
     ctx: &Ctx<'_>,
@@ -172,27 +226,31 @@ fn process_inner(
     item: &super::inputs::InputItem,
     input: &str,
 ) -> Processed {
+    let t0 = Instant::now();
     let plan = ctx.plan;
     let ing_st = PipelineStage::Ingest;
     let sha = file_sha256(&item.path)
         .map_err(|e| (None, fail(ing_st, format!("{input}: reading: {e}"))))?;
-    // one marker per input file: its content and its path as listed (two files with the same
-    // bytes are two drives when their ids come from their names)
+    // one marker per input file and drive: its content and its path as listed (two files with
+    // the same bytes are two drives when their ids come from their names)
     let key = config_hash(&[sha.as_bytes(), input.as_bytes()]);
     let prev = ctx.ds.read_marker(&key);
-    if let (false, Some(rec)) = (ctx.force, &prev) {
-        let vid = (rec.vehicle_id != UNKNOWN_VEHICLE).then_some(rec.vehicle_id.as_str());
-        let v = plan.vehicles.resolve(item.vehicle_id.as_deref().or(vid));
-        let expected = drive_config_hash(plan, v.map(|v| &**v), item.vehicle_id.as_deref());
-        let complete = rec.outputs.iter().all(|o| ctx.ds.root.join(o).is_file());
-        if rec.config_hash == expected && complete {
-            let mut rec = rec.clone();
-            rec.input = input.to_string();
-            return Ok((DriveStatus::Reused, rec));
+    if let (false, Some(first)) = (ctx.force, &prev) {
+        if let Some(recs) = up_to_date(ctx, item, &key, first) {
+            let skipped = first.skipped_segments.clone();
+            let elapsed = t0.elapsed().as_secs_f64() / recs.len() as f64;
+            let drives = recs
+                .into_iter()
+                .map(|mut rec| {
+                    rec.input = input.to_string();
+                    (Ok((DriveStatus::Reused, rec)), elapsed)
+                })
+                .collect();
+            return Ok((drives, skipped));
         }
     }
 
-    // ingest
+    // ingest: the recording's drives, split at logger pauses
     let manifest_vehicle = item
         .vehicle_id
         .as_deref()
@@ -200,7 +258,83 @@ fn process_inner(
     let mut opts = plan.ingest.clone();
     opts.vehicle_id = item.vehicle_id.clone();
     opts.gear_range = manifest_vehicle.map(|v| v.file.gear_range());
-    let ing = super::ingest_stage::run(&item.path, &opts).map_err(|e| (None, fail(ing_st, e)))?;
+    let rec = super::ingest_stage::run_recording(&item.path, &opts)
+        .map_err(|e| (None, fail(ing_st, e)))?;
+    let n = rec.drives.len();
+    let ingest_s = t0.elapsed().as_secs_f64() / n as f64;
+    let mut drives = Vec::with_capacity(n);
+    for (j, ing) in rec.drives.into_iter().enumerate() {
+        let t = Instant::now();
+        let dkey = drive_key(&key, j);
+        let prev_j = if j == 0 {
+            prev.clone()
+        } else {
+            ctx.ds.read_marker(&dkey)
+        };
+        let skipped = if j == 0 {
+            rec.skipped.clone()
+        } else {
+            Vec::new()
+        };
+        let input_drive = InputDrive {
+            index,
+            item,
+            input,
+            sha: &sha,
+            key: &dkey,
+            drives: n,
+            skipped,
+            prev: prev_j.as_ref(),
+        };
+        let id = ing.log.meta.drive_id.clone();
+        // a panic costs this drive, not the input's other drives
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            process_drive(ctx, &input_drive, ing, manifest_vehicle, &opts)
+        }))
+        .unwrap_or_else(|p| Err((Some(id), panicked(p.as_ref()))));
+        drives.push((r, ingest_s + t.elapsed().as_secs_f64()));
+    }
+    // drives an earlier run made from this input beyond those it gives now
+    if let Some(first) = &prev {
+        for j in n..first.input_drives {
+            let k = drive_key(&key, j);
+            if let Some(old) = ctx.ds.read_marker(&k) {
+                for o in &old.outputs {
+                    let _ = std::fs::remove_file(ctx.ds.root.join(o));
+                }
+                let _ = std::fs::remove_file(ctx.ds.root.join(ctx.ds.marker_rel(&k)));
+            }
+        }
+    }
+    Ok((drives, rec.skipped))
+}
+
+/// Which input a drive comes from, and its place among the input's drives.
+struct InputDrive<'a> {
+    index: usize,
+    item: &'a super::inputs::InputItem,
+    input: &'a str,
+    sha: &'a str,
+    /// The drive's marker key.
+    key: &'a str,
+    /// Drives the input gave.
+    drives: usize,
+    /// Segments of the input skipped (recorded on its first drive).
+    skipped: Vec<SkippedSegment>,
+    /// The drive's marker from an earlier run.
+    prev: Option<&'a DriveRecord>,
+}
+
+fn process_drive(
+    ctx: &Ctx<'_>,
+    from: &InputDrive<'_>,
+    ing: crate::ingest::Ingested,
+    manifest_vehicle: Option<&std::sync::Arc<LoadedVehicle>>,
+    opts: &crate::ingest::IngestOptions,
+) -> One {
+    let plan = ctx.plan;
+    let ing_st = PipelineStage::Ingest;
+    let input = from.input;
     let (mut log, mut ing_report) = (ing.log, ing.report);
     let id = Some(log.meta.drive_id.clone());
     let vehicle = plan
@@ -224,13 +358,13 @@ fn process_inner(
         ));
     }
     if let (Some(v), None) = (&vehicle, manifest_vehicle) {
-        check_gears(&mut log, v, &opts, &mut ing_report.masked)
+        check_gears(&mut log, v, opts, &mut ing_report.masked)
             .map_err(|e| (id.clone(), fail(ing_st, e)))?;
     }
     {
         let mut claims = ctx.claims.lock().unwrap_or_else(|p| p.into_inner());
         match claims.get(&log.meta.drive_id) {
-            Some(&other) if other != index => {
+            Some(&other) if other != from.index => {
                 return Err((
                     id,
                     fail(
@@ -243,36 +377,26 @@ fn process_inner(
                 ))
             }
             _ => {
-                claims.insert(log.meta.drive_id.clone(), index);
+                claims.insert(log.meta.drive_id.clone(), from.index);
             }
         }
     }
-    let hash = drive_config_hash(plan, vehicle.as_deref(), item.vehicle_id.as_deref());
+    let hash = drive_config_hash(plan, vehicle.as_deref(), from.item.vehicle_id.as_deref());
     let mut c = compute(plan, log, vehicle.as_deref()).map_err(|f| (id.clone(), f))?;
     c.0.masked = ing_report.masked;
     c.0.conflicts_resolved = ing_report.conflicts_resolved;
-    let rec = write_drive(
-        ctx,
-        &c,
-        (&sha, &key),
-        &hash,
-        input,
-        vehicle.as_deref(),
-        prev.as_ref(),
-    )
-    .map_err(|f| (id, f))?;
+    let rec = write_drive(ctx, &c, from, &hash, vehicle.as_deref()).map_err(|f| (id, f))?;
     Ok((DriveStatus::Ok, rec))
 }
 
 fn write_drive(
     ctx: &Ctx<'_>,
     computed: &(Computed, Vec<StageNote>),
-    (sha, key): (&str, &str),
+    from: &InputDrive<'_>,
     hash: &str,
-    input: &str,
     vehicle: Option<&LoadedVehicle>,
-    prev: Option<&DriveRecord>,
 ) -> Result<DriveRecord, Fail> {
+    let (sha, key, input, prev) = (from.sha, from.key, from.input, from.prev);
     let (c, notes) = computed;
     let plan = ctx.plan;
     let log = &c.log;
@@ -292,6 +416,9 @@ fn write_drive(
         stages: notes.clone(),
         outputs: Vec::new(),
         metrics: metrics_of(c),
+        segment: log.meta.segment.clone(),
+        input_drives: from.drives,
+        skipped_segments: from.skipped.clone(),
     };
     let meta = |t: &str| base_meta(t, log, hash, &vehicle_id);
     // Each table is built just before it is written and dropped after: one table's columns
@@ -428,10 +555,17 @@ fn write_drive(
             }
         }
     }
+    let segment_kv = log
+        .meta
+        .segment
+        .as_ref()
+        .map(|s| s.kv())
+        .unwrap_or_default();
     for &t in &plan.tables {
-        let Some((m, cols)) = build(t) else {
+        let Some((mut m, cols)) = build(t) else {
             continue;
         };
+        m.extra.extend(segment_kv.iter().cloned());
         let rel = ctx
             .ds
             .table_rel(t.name(), &vehicle_id, &rec.date, &rec.drive_id);

@@ -16,6 +16,7 @@ use crate::road::study::{slope_spectrum, RoadSpectrum, StudyError};
 use crate::schema::{drive_log, Stage};
 use crate::signal::distance::{resample_to_distance, DistanceLog};
 use crate::sim::axle_validate::{require_pressures, AxleValidation};
+use crate::sim::slope_shuffle::{self, GearShuffle};
 use crate::sim::validate::{validate_shuffle, ShuffleValidation};
 use crate::table::{DriveLog, Signal};
 
@@ -75,6 +76,8 @@ pub(super) fn mean_square(v: &[f64]) -> Option<f64> {
 pub(super) struct ShuffleOut {
     pub(super) val: ShuffleValidation,
     pub(super) ms_raw: Option<f64>,
+    /// Per gear, the shuffle the slope filter removes (empty without a raw-slope run).
+    pub(super) slope_by_gear: Vec<GearShuffle>,
 }
 
 fn run_shuffle(
@@ -101,22 +104,30 @@ fn run_shuffle(
     }
     let cfg = spec.validation();
     let ratios = &vehicle.file.gearbox.ratios;
-    // The raw-slope run first: only its mean-square shuffle is kept, so its trajectories are
-    // freed before the run whose outputs are written (a 10-hour drive: ~170 MB less at peak).
-    let raw_ms = if spec.compare_raw_slope && slope_col.is_some() {
+    // The raw-slope run first: only its shuffle indicator is kept, so its other trajectories
+    // are freed before the run whose outputs are written (a 10-hour drive: ~140 MB less at peak).
+    let raw_indicator = if spec.compare_raw_slope && slope_col.is_some() {
         let raw = validate_shuffle(log, p, ratios, None, &cfg).map_err(|e| fail(st, e))?;
-        Some(mean_square(&raw.shuffle_indicator))
+        Some(raw.shuffle_indicator)
     } else {
         None
     };
     let val = validate_shuffle(log, p, ratios, slope_col, &cfg).map_err(|e| fail(st, e))?;
-    let ms_raw = match raw_ms {
-        Some(ms) => ms,
-        None if slope_col.is_none() => mean_square(&val.shuffle_indicator),
-        None => None,
+    let (ms_raw, slope_by_gear) = match (&raw_indicator, log.signal("gear")) {
+        (Some(raw), Some(gear)) => (
+            mean_square(raw),
+            slope_shuffle::by_gear(raw, &val.shuffle_indicator, gear),
+        ),
+        (Some(raw), None) => (mean_square(raw), Vec::new()),
+        (None, _) if slope_col.is_none() => (mean_square(&val.shuffle_indicator), Vec::new()),
+        (None, _) => (None, Vec::new()),
     };
     notes.push(ran(st));
-    Ok(Some(ShuffleOut { val, ms_raw }))
+    Ok(Some(ShuffleOut {
+        val,
+        ms_raw,
+        slope_by_gear,
+    }))
 }
 
 fn run_axle(

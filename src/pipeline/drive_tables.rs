@@ -107,6 +107,22 @@ pub fn summary_columns(r: &DriveRecord) -> Vec<OutColumn> {
             unit: "1".into(),
             data: OutData::U64(vec![m.conflicts_resolved]),
         },
+        str_col(
+            "recording_drive_id",
+            r.segment
+                .as_ref()
+                .map_or(r.drive_id.as_str(), |g| g.recording_drive_id.as_str()),
+        ),
+        OutColumn {
+            name: "segment".into(),
+            unit: "1".into(),
+            data: OutData::U64(vec![r.segment.as_ref().map_or(1, |g| g.index as u64)]),
+        },
+        OutColumn {
+            name: "segments".into(),
+            unit: "1".into(),
+            data: OutData::U64(vec![r.segment.as_ref().map_or(1, |g| g.count as u64)]),
+        },
         opt_col("distance", "m", m.distance_m),
         opt_col("slope_quantization_step", "1", m.slope_quantization_step),
         opt_col("vehicle_speed_rmse", "m/s", m.vehicle_speed_rmse_mps),
@@ -203,6 +219,7 @@ pub(super) fn metrics_of(c: &Computed) -> DriveMetrics {
         }
         m.shuffle_ms_m2_per_s2 = mean_square(&s.val.shuffle_indicator);
         m.shuffle_ms_raw_slope_m2_per_s2 = s.ms_raw;
+        m.slope_shuffle_by_gear = s.slope_by_gear.clone();
     }
     if let Some(a) = &c.axle {
         for (i, axle) in Axle::ALL.into_iter().enumerate() {

@@ -1,7 +1,8 @@
 //! The `ingest` stage: a file becomes the canonical drive log (`drive_log.parquet`).
 
 use crate::ingest::{
-    ingest_file, BadSamples, IngestError, IngestOptions, Ingested, Mapping, TimeBase, TimeRepair,
+    ingest, ingest_file, BadSamples, IngestError, IngestOptions, Ingested, Mapping, OnGap,
+    Recording, TimeBase, TimeRepair, DEFAULT_MIN_SEGMENT_M, DEFAULT_MIN_SEGMENT_S,
 };
 use crate::io::{config_hash, drive_log_columns, write_table, OutputError, TableMeta};
 use crate::model::vehicle::VehicleFile;
@@ -25,6 +26,13 @@ pub struct IngestConfig {
     /// `mask` (default) or `error` for isolated bad samples (not finite, outside the physical
     /// range, a speed spike) and timestamps repeated with another value.
     pub bad_samples: BadSamples,
+    /// `split` (default) or `error` when a required signal stops for longer than
+    /// `max_nan_run_s` (a logger pause): the recording becomes one drive per segment.
+    pub on_gap: OnGap,
+    /// Segments of a split recording shorter than this are skipped, s.
+    pub min_segment_s: f64,
+    /// Segments of a split recording in which the vehicle travels less are skipped, m.
+    pub min_segment_m: f64,
 }
 
 impl Default for IngestConfig {
@@ -35,6 +43,9 @@ impl Default for IngestConfig {
             max_nan_run_s: 2.0,
             time_repair: TimeRepair::Error,
             bad_samples: BadSamples::Mask,
+            on_gap: OnGap::Split,
+            min_segment_s: DEFAULT_MIN_SEGMENT_S,
+            min_segment_m: DEFAULT_MIN_SEGMENT_M,
         }
     }
 }
@@ -59,8 +70,14 @@ impl IngestConfig {
                 return Err(setting("time_base_hz", hz, "must be a positive rate"));
             }
         }
-        if self.max_nan_run_s.is_nan() || self.max_nan_run_s < 0.0 {
-            return Err(setting("max_nan_run_s", self.max_nan_run_s, "must be >= 0"));
+        for (key, v) in [
+            ("max_nan_run_s", self.max_nan_run_s),
+            ("min_segment_s", self.min_segment_s),
+            ("min_segment_m", self.min_segment_m),
+        ] {
+            if v.is_nan() || v < 0.0 {
+                return Err(setting(key, v, "must be >= 0"));
+            }
         }
         let mapping = match &self.mapping {
             Some(p) => Some(Mapping::load(p)?),
@@ -76,6 +93,9 @@ impl IngestConfig {
             gear_range: vehicle.map(VehicleFile::gear_range),
             time_repair: self.time_repair,
             bad_samples: self.bad_samples,
+            on_gap: self.on_gap,
+            min_segment_s: self.min_segment_s,
+            min_segment_m: self.min_segment_m,
             drive_id: None,
             vehicle_id: None,
         })
@@ -86,13 +106,16 @@ impl IngestConfig {
     /// the binary, whose version every output records.
     pub fn fingerprint(&self, opts: &IngestOptions) -> String {
         crate::io::canonical(
-            "ingest:v2",
+            "ingest:v3",
             &serde_json::json!({
                 "mapping": opts.mapping.as_ref().map(|m| (&m.name, &m.text_sha256)),
                 "time_base_hz": self.time_base_hz,
                 "max_nan_run_s": self.max_nan_run_s,
                 "time_repair": self.time_repair,
                 "bad_samples": self.bad_samples,
+                "on_gap": self.on_gap,
+                "min_segment_s": self.min_segment_s,
+                "min_segment_m": self.min_segment_m,
                 "stages": opts.stages,
                 "gears": opts.gear_range,
             }),
@@ -100,12 +123,20 @@ impl IngestConfig {
     }
 }
 
-/// Ingests `input` with `opts`.
+/// Ingests `input` with `opts` as one drive (single-drive commands).
 ///
 /// # Errors
 /// See [`ingest_file`].
 pub fn run(input: &Path, opts: &IngestOptions) -> Result<Ingested, IngestError> {
     ingest_file(input, opts)
+}
+
+/// Ingests `input` with `opts`: its drives, split at logger pauses.
+///
+/// # Errors
+/// See [`ingest`].
+pub fn run_recording(input: &Path, opts: &IngestOptions) -> Result<Recording, IngestError> {
+    ingest(input, opts)
 }
 
 /// Writes the canonical drive log as Parquet (atomically, with units and metadata).
@@ -119,7 +150,12 @@ pub fn write(path: &Path, log: &DriveLog, config_fingerprint: &str) -> Result<()
         vehicle_id: log.meta.vehicle_id.clone(),
         source_file: log.meta.source_file.clone(),
         config_hash: config_hash(&[config_fingerprint.as_bytes()]),
-        extra: Vec::new(),
+        extra: log
+            .meta
+            .segment
+            .as_ref()
+            .map(|s| s.kv())
+            .unwrap_or_default(),
     };
     write_table(path, &meta, &drive_log_columns(log))
 }

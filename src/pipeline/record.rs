@@ -11,6 +11,14 @@ use std::path::{Path, PathBuf};
 fn is_zero(n: &u64) -> bool {
     *n == 0
 }
+fn one() -> usize {
+    1
+}
+fn is_one(n: &usize) -> bool {
+    *n == 1
+}
+use crate::ingest::SkippedSegment;
+use crate::table::Segment;
 use thiserror::Error;
 
 /// One shard of a split run: inputs whose path hash is `index` modulo `count`.
@@ -100,6 +108,10 @@ pub struct DriveMetrics {
     pub shuffle_ms_m2_per_s2: Option<f64>,
     /// Mean square shuffle indicator with the raw sensor slope, m²/s².
     pub shuffle_ms_raw_slope_m2_per_s2: Option<f64>,
+    /// Per gear, the shuffle the slope filter removes and the total with the raw slope
+    /// ([`crate::sim::slope_shuffle`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slope_shuffle_by_gear: Vec<crate::sim::slope_shuffle::GearShuffle>,
     /// Axle model: bellow pressure MAE, front / rear / tag, Pa.
     pub bellow_pressure_mae_pa: [Option<f64>; 3],
     /// Bellow pressure fit, front / rear / tag, %.
@@ -139,6 +151,15 @@ pub struct DriveRecord {
     pub outputs: Vec<String>,
     /// Validation summary.
     pub metrics: DriveMetrics,
+    /// Where the drive sits in its recording, when that was split at pauses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segment: Option<Segment>,
+    /// Drives the input file gave (more than one when it was split at pauses).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub input_drives: usize,
+    /// Segments of the input not kept as drives (on the input's first drive only).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skipped_segments: Vec<SkippedSegment>,
 }
 
 /// `ok` (processed now), `reused` (up to date from an earlier run) or `failed`.
@@ -183,6 +204,16 @@ pub struct DriveOutcome {
     pub record: Option<DriveRecord>,
 }
 
+/// A segment of an input not kept as a drive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkippedInput {
+    /// Input file.
+    pub input: String,
+    /// The segment and why it was skipped.
+    #[serde(flatten)]
+    pub segment: SkippedSegment,
+}
+
 /// What the fleet stage ([`super::fleet_stage`]) wrote.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FleetSummary {
@@ -225,6 +256,8 @@ pub struct RunReport {
     pub reused: usize,
     /// Drives that failed.
     pub failed: usize,
+    /// Segments of split recordings not kept as drives, with the input and the reason.
+    pub skipped_segments: Vec<SkippedInput>,
     /// Wall time of the run, s.
     pub elapsed_s: f64,
     /// Output root of the dataset.

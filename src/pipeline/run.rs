@@ -8,18 +8,21 @@
 //! every output is a function of its input and the configuration alone, and reports list drives
 //! in input order.
 //!
-//! **Drives.** Each drive runs on its own ([`super::drive_job`]): failures isolated, outputs
-//! reused when up to date.
+//! **Drives.** Each input gives one drive, or one per segment when its recording is split at
+//! logger pauses ([`crate::ingest::segment`]); each drive runs on its own
+//! ([`super::drive_job`]): failures isolated, outputs reused when up to date. Reports list drives
+//! in input order, an input's segments in time order.
 //!
 //! **Sharding.** `--shard i/N` keeps the inputs whose path hashes to `i` modulo `N` (SHA-256 of
 //! the path as listed): stable when other files come or go, the same in every process.
 
 use super::dataset::{escape, Dataset};
 pub use super::drive_job::UNKNOWN_VEHICLE;
-use super::drive_job::{process, Ctx};
+use super::drive_job::{process, Ctx, InputOutcome};
 pub use super::drive_tables::summary_columns;
 pub use super::record::{
-    DriveMetrics, DriveOutcome, DriveRecord, DriveStatus, RunError, RunReport, Shard, StageNote,
+    DriveMetrics, DriveOutcome, DriveRecord, DriveStatus, RunError, RunReport, Shard, SkippedInput,
+    StageNote,
 };
 use super::spec::Plan;
 use std::collections::HashMap;
@@ -85,7 +88,8 @@ pub fn run_plan(
         .build()
         .map_err(|e| RunError::Pool(e.to_string()))?;
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<DriveOutcome>>> = Mutex::new(vec![None; items.len()]);
+    let results: Mutex<Vec<Option<InputOutcome>>> =
+        Mutex::new((0..items.len()).map(|_| None).collect());
     pool.scope(|s| {
         for _ in 0..in_flight {
             s.spawn(|_| loop {
@@ -94,17 +98,28 @@ pub fn run_plan(
                     break;
                 };
                 let o = process(&ctx, i, item);
-                on_drive(&o);
+                for d in &o.drives {
+                    on_drive(d);
+                }
                 results.lock().unwrap_or_else(|p| p.into_inner())[i] = Some(o);
             });
         }
     });
-    let drives: Vec<DriveOutcome> = results
+    let mut drives: Vec<DriveOutcome> = Vec::new();
+    let mut skipped_segments = Vec::new();
+    for (o, item) in results
         .into_inner()
         .unwrap_or_else(|p| p.into_inner())
         .into_iter()
-        .map(|o| o.expect("every input processed"))
-        .collect();
+        .zip(&items)
+    {
+        let o = o.expect("every input processed");
+        drives.extend(o.drives);
+        skipped_segments.extend(o.skipped.into_iter().map(|segment| SkippedInput {
+            input: item.path.display().to_string(),
+            segment,
+        }));
+    }
     let count = |s: DriveStatus| drives.iter().filter(|d| d.status == s).count();
     let shard = opts.shard.map(|s| (s.index, s.count));
     let report_dir = ctx.ds.report_dir(&plan.spec.name, shard);
@@ -124,6 +139,7 @@ pub fn run_plan(
         ok: count(DriveStatus::Ok),
         reused: count(DriveStatus::Reused),
         failed: count(DriveStatus::Failed),
+        skipped_segments,
         elapsed_s: t0.elapsed().as_secs_f64(),
         output_dir: opts.out_root.display().to_string(),
         report_dir: report_dir.display().to_string(),

@@ -9,6 +9,9 @@
 //! - `fleet_spectrum.parquet` and `fleet_spectrum.svg` (with the `spectrum` stage): the `road
 //!   study` analysis over the fleet's recorded roads — PSD percentile bands across drives, the
 //!   mean PSD and its knees, the slope filter's response (schema `road_study_psd`);
+//! - `slope_shuffle_by_gear.svg`: per gear, all drives pooled, the shuffle the slope filter
+//!   removes (raw-slope minus filtered-slope simulation, [`crate::sim::slope_shuffle`]) beside
+//!   all shuffle with the raw slope;
 //! - `shuffle_energy.svg`: per drive, the mean square shuffle indicator with the raw sensor slope
 //!   and with the filtered slope (Myklebust & Eriksson (2012), §3 and §5: quantisation steps
 //!   excite spurious shuffle);
@@ -21,10 +24,12 @@
 //! and `run_report.json` also hold wall-clock timings.
 
 use super::record::{DriveMetrics, DriveOutcome, DriveStatus, RunError, RunReport};
+use super::run_summary::Distribution;
 use super::spec::{PipelineStage, Plan};
 use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
 use crate::road::study::{filter_response, percentile_sorted};
 use crate::signal::{cumulative_power, knee_frequency};
+use crate::sim::slope_shuffle::pool;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -69,9 +74,6 @@ pub const METRICS: [MetricDef; 17] = [
     ("slope_knee_90", "1/m", |m| m.slope_knee_90_per_m),
     ("slope_knee_99", "1/m", |m| m.slope_knee_99_per_m),
 ];
-
-/// A metric's distribution: name, unit, and `drives, mean, min, p05, p50, p95, max`.
-pub(super) type Distribution = (&'static str, &'static str, [f64; 7]);
 
 const STATISTICS: [&str; 7] = ["drives", "mean", "min", "p05", "p50", "p95", "max"];
 
@@ -488,6 +490,34 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
             plots.push(("shuffle_energy.svg", "Shuffle before/after slope filtering"));
         }
     }
+    let by_gear = pool(recs.iter().map(|m| m.slope_shuffle_by_gear.as_slice()));
+    if !by_gear.is_empty() {
+        let gears: Vec<String> = by_gear.iter().map(|g| format!("gear {}", g.gear)).collect();
+        let svg = per_drive_svg(
+            "Shuffle the slope filter removes, per gear: 1-5 Hz mean square of raw-slope minus filtered-slope simulated speed",
+            "mean square shuffle indicator [m²/s²]",
+            &gears,
+            &[
+                (
+                    "removed by the filter (raw - filtered slope run)",
+                    by_gear.iter().map(|g| Some(g.ms_slope_m2_per_s2)).collect(),
+                ),
+                (
+                    "all shuffle, raw sensor slope",
+                    by_gear.iter().map(|g| Some(g.ms_total_m2_per_s2)).collect(),
+                ),
+            ],
+        );
+        if let Ok(svg) = svg {
+            let p = dir.join("slope_shuffle_by_gear.svg");
+            AtomicFile::write_all(&p, svg.as_bytes()).map_err(io_err(&p))?;
+            written.push("slope_shuffle_by_gear.svg");
+            plots.push((
+                "slope_shuffle_by_gear.svg",
+                "Shuffle the slope filter removes, per gear",
+            ));
+        }
+    }
     let fits: Vec<(&str, Vec<f64>)> = [
         ("vehicle speed fit", 4usize),
         ("engine speed fit", 6),
@@ -584,6 +614,7 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
     // plots of an earlier run of this report folder that this run did not make
     for stale in [
         "shuffle_energy.svg",
+        "slope_shuffle_by_gear.svg",
         "error_metrics.svg",
         "fleet_spectrum.svg",
         "fleet_spectrum.parquet",

@@ -3,9 +3,11 @@
 //! error metrics across the fleet and the plots beside it.
 
 use super::record::{DriveOutcome, DriveStatus, RunReport};
-use super::run_report::Distribution;
 use super::spec::Plan;
 use std::fmt::Write as _;
+
+/// A metric's distribution: name, unit, and `drives, mean, min, p05, p50, p95, max`.
+pub(super) type Distribution = (&'static str, &'static str, [f64; 7]);
 
 fn fmt_val(x: f64) -> String {
     if !x.is_finite() {
@@ -20,6 +22,94 @@ fn fmt_val(x: f64) -> String {
 /// Markdown-safe cell text.
 fn cell(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
+}
+
+/// Per gear, the shuffle the slope filter removes, all drives pooled (the `shuffle` stage with
+/// `compare_raw_slope`).
+fn slope_shuffle_section(s: &mut String, report: &RunReport) {
+    let pooled = crate::sim::slope_shuffle::pool(
+        report
+            .drives
+            .iter()
+            .filter_map(|d| d.record.as_ref())
+            .map(|r| r.metrics.slope_shuffle_by_gear.as_slice()),
+    );
+    if pooled.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "## Shuffle the slope filter removes, per gear\n\nMean square of the 1–5 Hz shuffle indicator of the simulated speed: the raw-slope run minus the filtered-slope run (the shuffle the slope content removed by the filter excites), beside all shuffle with the raw slope; all drives pooled, weighted by samples.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| gear | samples | removed by the filter [m²/s²] | all shuffle, raw slope [m²/s²] | removed / all |\n| --- | --- | --- | --- | --- |"
+    );
+    for g in &pooled {
+        let share = if g.ms_total_m2_per_s2 > 0.0 {
+            format!(
+                "{:.1} %",
+                100.0 * g.ms_slope_m2_per_s2 / g.ms_total_m2_per_s2
+            )
+        } else {
+            "–".into()
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {share} |",
+            g.gear,
+            g.samples,
+            fmt_val(g.ms_slope_m2_per_s2),
+            fmt_val(g.ms_total_m2_per_s2)
+        );
+    }
+    let _ = writeln!(s);
+}
+
+/// Recordings split at logger pauses: each drive's segment and the segments skipped.
+fn split_section(s: &mut String, report: &RunReport) {
+    let split: Vec<(&str, &crate::table::Segment)> = report
+        .drives
+        .iter()
+        .filter_map(|d| d.record.as_ref())
+        .filter_map(|r| r.segment.as_ref().map(|g| (r.drive_id.as_str(), g)))
+        .collect();
+    let n = split.len() + report.skipped_segments.len();
+    let _ = writeln!(s, "## Recordings split at pauses ({n} segments)\n");
+    if n == 0 {
+        let _ = writeln!(s, "None.\n");
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "| recording | segment | drive | start | duration | outcome |\n| --- | --- | --- | --- | --- | --- |"
+    );
+    for (id, g) in split {
+        let _ = writeln!(
+            s,
+            "| {} | {} of {} | {} | {} | {:.0} s | drive |",
+            cell(&g.recording_drive_id),
+            g.index,
+            g.count,
+            cell(id),
+            crate::time_fmt::rfc3339_ns(g.start_ns),
+            (g.end_ns - g.start_ns) as f64 * 1e-9
+        );
+    }
+    for k in &report.skipped_segments {
+        let g = &k.segment;
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {} | {} | {:.0} s | skipped: {} |",
+            cell(&k.input),
+            g.index,
+            cell(&g.drive_id),
+            crate::time_fmt::rfc3339_ns(g.start_ns),
+            g.duration_s,
+            cell(&g.reason)
+        );
+    }
+    let _ = writeln!(s);
 }
 
 pub(super) fn summary_md(
@@ -60,7 +150,7 @@ pub(super) fn summary_md(
     );
     let _ = writeln!(
         s,
-        "| inputs in this run | processed | reused (up to date) | failed | wall time | jobs | drives in flight | drive-hours processed | drive-hours per core-hour |"
+        "| drives in this run | processed | reused (up to date) | failed | wall time | jobs | drives in flight | drive-hours processed | drive-hours per core-hour |"
     );
     let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let core_h = report.elapsed_s * report.jobs as f64 / 3600.0;
@@ -106,6 +196,7 @@ pub(super) fn summary_md(
         }
         let _ = writeln!(s);
     }
+    split_section(&mut s, report);
     let skipped: Vec<(&str, &str, &str)> = report
         .drives
         .iter()
@@ -167,6 +258,7 @@ pub(super) fn summary_md(
         .collect();
     slow.sort_by(|a, b| b.elapsed_s.total_cmp(&a.elapsed_s));
     slow.truncate(plan.spec.report.slowest_drives);
+    slope_shuffle_section(&mut s, report);
     let _ = writeln!(s, "## Slowest drives (processed in this run)\n");
     if slow.is_empty() {
         let _ = writeln!(s, "None: every drive was up to date.\n");

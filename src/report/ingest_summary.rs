@@ -1,9 +1,10 @@
 //! The summary `fleetdyn ingest` prints: what was read, how long and far the drive is, what is
 //! missing, and the slope sensor's resolution.
 
-use crate::ingest::{nan_counts, Ingested};
+use crate::ingest::{nan_counts, Ingested, Recording};
 use crate::signal::distance::{DistanceMap, ResampleConfig};
 use crate::signal::quantization::{estimate_quantization, Quantization};
+use crate::table::Segment;
 use crate::time_fmt::rfc3339_ns;
 use std::fmt;
 
@@ -14,6 +15,8 @@ pub struct IngestSummary {
     pub drive_id: String,
     /// Vehicle id.
     pub vehicle_id: Option<String>,
+    /// Where the drive sits in its recording, when that was split at pauses.
+    pub segment: Option<Segment>,
     /// Source file.
     pub source_file: String,
     /// Detected format.
@@ -68,6 +71,7 @@ impl IngestSummary {
         Self {
             drive_id: log.meta.drive_id.clone(),
             vehicle_id: log.meta.vehicle_id.clone(),
+            segment: log.meta.segment.clone(),
             source_file: log.meta.source_file.clone(),
             format: ing.report.format.clone(),
             mapping: ing.report.mapping.clone(),
@@ -107,6 +111,13 @@ impl fmt::Display for IngestSummary {
             self.drive_id,
             self.vehicle_id.as_deref().unwrap_or("unknown")
         )?;
+        if let Some(s) = &self.segment {
+            writeln!(
+                f,
+                "segment   {} of {} of recording {}",
+                s.index, s.count, s.recording_drive_id
+            )?;
+        }
         writeln!(
             f,
             "source    {} [{}, mapping {}], {} source rows",
@@ -179,4 +190,42 @@ impl fmt::Display for IngestSummary {
         }
         Ok(())
     }
+}
+
+/// The lines `fleetdyn ingest` prints about a recording's pauses and skipped segments (empty when
+/// it is one drive without holes).
+pub fn split_lines(rec: &Recording) -> String {
+    let mut out = String::new();
+    for p in &rec.pauses {
+        let what = match &p.column {
+            None => "no samples (logger pause)".to_string(),
+            Some(c) => format!("no valid {c}"),
+        };
+        out.push_str(&format!(
+            "pause     {} for {:.1} s: {what}\n",
+            rfc3339_ns(p.start_ns),
+            p.seconds()
+        ));
+    }
+    for s in &rec.skipped {
+        out.push_str(&format!(
+            "skipped   segment {} ({}, {}): {}\n",
+            s.index,
+            s.drive_id,
+            rfc3339_ns(s.start_ns),
+            s.reason
+        ));
+    }
+    if rec.drives.len() > 1 {
+        out.push_str(&format!(
+            "split     {} drives: {}\n",
+            rec.drives.len(),
+            rec.drives
+                .iter()
+                .map(|d| d.log.meta.drive_id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    out
 }

@@ -11,7 +11,7 @@ pub mod diagnosis;
 pub mod diagnosis_files;
 pub mod fleet_files;
 pub mod fleet_html;
-mod ingest_summary;
+pub mod ingest_summary;
 pub mod road_plot;
 pub mod road_spectra;
 pub mod sentences;

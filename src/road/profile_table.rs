@@ -215,6 +215,7 @@ pub fn read_profile_column(path: &Path, column: &str) -> Result<ProfileColumn, P
             drive_id: kv.get("drive_id").cloned().unwrap_or_default(),
             vehicle_id: kv.get("vehicle_id").cloned(),
             source_file: file.clone(),
+            segment: None,
         },
         step_m,
         column: column.into(),

@@ -268,6 +268,7 @@ pub fn cycle_profile(c: &VectoCycle, step_m: f64) -> Result<RoadProfile, Profile
             drive_id: stem,
             vehicle_id: None,
             source_file: c.file.clone(),
+            segment: None,
         },
         source: ProfileSource::Vdri(VdriFacts {
             rows: n,

@@ -544,6 +544,7 @@ mod tests {
                 drive_id: "d".into(),
                 vehicle_id: None,
                 source_file: "test".into(),
+                segment: None,
             },
             timestamp_ns: t_s.iter().map(|t| (t * 1e9) as i64).collect(),
             signals: vec![

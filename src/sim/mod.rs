@@ -13,4 +13,5 @@ pub mod hybrid;
 pub mod inputs;
 pub mod recorded;
 pub mod scenarios;
+pub mod slope_shuffle;
 pub mod validate;

@@ -259,6 +259,7 @@ mod tests {
                 drive_id: "d".into(),
                 vehicle_id: None,
                 source_file: "f".into(),
+                segment: None,
             },
             timestamp_ns: (0..n as i64).map(|k| k * 10_000_000).collect(),
             signals: vec![

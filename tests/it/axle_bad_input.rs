@@ -106,6 +106,7 @@ fn validation_without_pressure_channels_is_a_clear_error() {
         meta: DriveMeta {
             drive_id: "d".into(),
             source_file: "drive.parquet".into(),
+            segment: None,
             ..Default::default()
         },
         timestamp_ns: (0..n).map(|k| k as i64 * 100_000_000).collect(),

@@ -5,9 +5,9 @@
 
 use crate::bad_corpus_gen::generate;
 use crate::batch_pipeline::{nightly_with_default_vehicle, walk};
-use crate::common::fixture;
+use crate::common::{fixture, fleetdyn_at_top};
 use serde::Deserialize;
-use std::process::{Command, Output};
+use std::process::Output;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -30,8 +30,12 @@ struct Case {
     #[serde(default)]
     message: Vec<String>,
     /// For drive inputs: the stage the drive must fail at inside a `fleetdyn run` batch
-    /// (`"ok"` for the controls); the run report's error must contain `message` as well.
+    /// (`"ok"` for the controls, `"split"` for a recording that must become several drives, all
+    /// ok); the run report's error must contain `message` as well, or `batch_message` when given
+    /// (the pipeline's ingest settings differ from the case's flags).
     batch: Option<String>,
+    /// What the batch error must contain instead of `message`.
+    batch_message: Option<Vec<String>>,
 }
 
 fn manifest() -> Manifest {
@@ -40,11 +44,7 @@ fn manifest() -> Manifest {
 }
 
 fn fleetdyn(args: &[String]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
-        .current_dir(fixture(""))
-        .args(args)
-        .output()
-        .unwrap()
+    fleetdyn_at_top(args)
 }
 
 #[test]
@@ -247,6 +247,33 @@ fn bad_drives_fail_alone_inside_a_batch() {
     for c in &drives {
         let r = by_input(&c.file);
         let stage = c.batch.as_deref().unwrap();
+        if stage == "split" {
+            let mine: Vec<&serde_json::Value> = rows
+                .iter()
+                .filter(|r| r["input"].as_str().is_some_and(|s| s.ends_with(&c.file)))
+                .collect();
+            let stem = c.file.rsplit_once('.').map_or(c.file.as_str(), |p| p.0);
+            if mine.len() < 2 {
+                problems.push(format!("{}: not split: {mine:?}", c.file));
+            }
+            for (k, d) in mine.iter().enumerate() {
+                let id = format!("{stem}-s{}", k + 1);
+                if d["status"] == "failed" || d["drive_id"] != id.as_str() {
+                    problems.push(format!(
+                        "{}: segment {k} is not drive {id}, ok: {d}",
+                        c.file
+                    ));
+                }
+                let n = written
+                    .iter()
+                    .filter(|f| f.ends_with(&format!("/{id}.parquet")))
+                    .count();
+                if n < 5 {
+                    problems.push(format!("{}: drive {id}: {n} tables written", c.file));
+                }
+            }
+            continue;
+        }
         let id = r["drive_id"].as_str().unwrap();
         if stage == "ok" {
             if r["status"] == "failed" {
@@ -267,7 +294,7 @@ fn bad_drives_fail_alone_inside_a_batch() {
             continue;
         }
         let err = r["error"].as_str().unwrap_or_default();
-        for s in &c.message {
+        for s in c.batch_message.as_ref().unwrap_or(&c.message) {
             if !err.contains(s.as_str()) {
                 problems.push(format!("{}: batch error lacks {s:?}: {err}", c.file));
             }

@@ -274,6 +274,36 @@ pub fn generate(dir: &Path) {
         d.t_ns[44] = d.t_ns[43];
         d.speed[44] = Some(15.2);
     });
+    // a driver's rest with the logger asleep: two hours without a row between two 2-minute
+    // stretches (1.8 km each); split into two drives
+    const HOUR_NS: i64 = 3_600_000_000_000;
+    let mut r = Drive::new(4 * ROWS);
+    for t in &mut r.t_ns[2 * ROWS..] {
+        *t += 2 * HOUR_NS;
+    }
+    r.write(&dir.join("rest-stop-pause.parquet"));
+    // the same, then half an hour later a 30 s wake-up: a third segment too short to keep
+    let mut r = Drive::new(4 * ROWS);
+    for t in &mut r.t_ns[2 * ROWS..] {
+        *t += 2 * HOUR_NS;
+    }
+    for t in &mut r.t_ns[3 * ROWS + ROWS / 2..] {
+        *t += HOUR_NS / 2;
+    }
+    r.write(&dir.join("rest-stop-short-wake.parquet"));
+    // the slope sensor silent for five minutes while the truck drives on (its other signals
+    // continue): the drive is split around the hole
+    let mut r = Drive::new(12 * ROWS);
+    for s in &mut r.slope[3 * ROWS..8 * ROWS] {
+        *s = None;
+    }
+    r.write(&dir.join("slope-sensor-silent.parquet"));
+    // a rest stop in a multi-rate MCAP recording: every topic stops for two hours
+    let half = 3 * ROWS as i64 / 2;
+    let m = mcap_messages_at(
+        (0..2 * half).map(|k| T0_NS + k * 100_000_000 + if k >= half { 2 * HOUR_NS } else { 0 }),
+    );
+    write_mcap(&dir.join("mcap-rest-stop-pause.mcap"), &m, None);
     // times near the end of i64 nanoseconds (year 2262): grid arithmetic must not overflow
     drive_file(dir, "timestamps-at-i64-max.parquet", |d| {
         for (k, t) in d.t_ns.iter_mut().enumerate() {

@@ -82,14 +82,7 @@ fn run_ok(args: &[&str], out: &Path) -> Output {
 }
 
 fn kv(path: &Path) -> std::collections::HashMap<String, String> {
-    let r = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
-    r.metadata()
-        .file_metadata()
-        .key_value_metadata()
-        .unwrap()
-        .iter()
-        .map(|e| (e.key.clone(), e.value.clone().unwrap_or_default()))
-        .collect()
+    parquet_kv(path)
 }
 
 #[test]
@@ -148,9 +141,33 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
         "fleet_validation.parquet",
         "summary.md",
         "shuffle_energy.svg",
+        "slope_shuffle_by_gear.svg",
         "error_metrics.svg",
     ] {
         assert!(rep.join(f).is_file(), "{f}");
+    }
+    // per gear, the shuffle the slope filter removes (raw-slope minus filtered-slope run) beside
+    // all shuffle with the raw slope, on every drive the shuffle stage ran on
+    let t1 = r["drives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|d| d["drive_id"] == "truck-0001")
+        .unwrap();
+    let by_gear = t1["record"]["metrics"]["slope_shuffle_by_gear"]
+        .as_array()
+        .unwrap();
+    assert!(by_gear.len() >= 3, "{by_gear:?}");
+    let gears: Vec<i64> = by_gear
+        .iter()
+        .map(|g| g["gear"].as_i64().unwrap())
+        .collect();
+    assert!(gears.windows(2).all(|w| w[0] < w[1]) && gears[0] >= 1);
+    for g in by_gear {
+        let removed = g["ms_slope_m2_per_s2"].as_f64().unwrap();
+        let total = g["ms_total_m2_per_s2"].as_f64().unwrap();
+        assert!(g["samples"].as_u64().unwrap() > 0);
+        assert!(removed > 0.0 && total > 0.0 && removed.is_finite(), "{g}");
     }
     // the diagnose stage: each 40 t drive's mismatches, findings and parameter estimates in the
     // dataset with its verdict, and its report folder; the 6x2 (no [driveline], no model the
@@ -213,6 +230,8 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
         "Failures (0)",
         "vehicle_speed_rmse",
         "shuffle_energy.svg",
+        "## Shuffle the slope filter removes, per gear",
+        "slope_shuffle_by_gear.svg",
     ] {
         assert!(md.contains(needle), "{needle} not in summary.md");
     }

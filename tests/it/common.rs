@@ -120,9 +120,14 @@ pub fn write_mcap(
 
 /// A small valid multi-rate MCAP drive: speed and slope at 10 Hz, 60 s at 15 m/s.
 pub fn mcap_messages() -> Vec<(&'static str, i64, String)> {
+    mcap_messages_at((0..600i64).map(|k| T0_NS + k * 100_000_000))
+}
+
+/// The same three J1939 JSON topics (54 km/h, 2 % slope, gear 10) at each time of `times`, ns:
+/// speed at the time, slope 1 ms and gear 2 ms after it.
+pub fn mcap_messages_at(times: impl Iterator<Item = i64>) -> Vec<(&'static str, i64, String)> {
     let mut m = Vec::new();
-    for k in 0..600i64 {
-        let t = T0_NS + k * 100_000_000;
+    for t in times {
         m.push((
             "/can/ccvs1",
             t,
@@ -140,4 +145,26 @@ pub fn mcap_messages() -> Vec<(&'static str, i64, String)> {
         ));
     }
     m
+}
+
+/// Runs the release binary from the repository top with `args`.
+pub fn fleetdyn_at_top<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_fleetdyn"))
+        .current_dir(fixture(""))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Key–value metadata of a Parquet file.
+pub fn parquet_kv(path: &Path) -> std::collections::HashMap<String, String> {
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    let r = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    r.metadata()
+        .file_metadata()
+        .key_value_metadata()
+        .unwrap()
+        .iter()
+        .map(|e| (e.key.clone(), e.value.clone().unwrap_or_default()))
+        .collect()
 }

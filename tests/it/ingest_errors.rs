@@ -2,7 +2,9 @@
 //! or a partial output file.
 
 use crate::common::*;
-use fleetdyn::ingest::{ingest_file, BadSamples, IngestError, IngestOptions, Mapping, TimeRepair};
+use fleetdyn::ingest::{
+    ingest_file, BadSamples, IngestError, IngestOptions, Mapping, OnGap, TimeRepair,
+};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig, ResampleError};
 use std::path::Path;
@@ -267,7 +269,11 @@ fn nan_runs_beyond_the_limit() {
         d.slope[k] = None; // 3 s gap at 10 Hz
     }
     d.write(&p);
-    match ingest_err(&p, &slope_opts()) {
+    let error_on_gap = IngestOptions {
+        on_gap: OnGap::Error,
+        ..slope_opts()
+    };
+    match ingest_err(&p, &error_on_gap) {
         IngestError::NanRun {
             column,
             row,
@@ -376,14 +382,26 @@ fn isolated_glitches_are_masked_and_counted_by_default() {
     assert!(v[9].is_nan() && v[30].is_nan());
     assert_eq!(v[40], 15.3, "the later sample of the repeated time");
     assert!(ing.log.signal("road_slope").unwrap()[17].is_nan());
-    // masking is bounded by the gap limit: 30 bad samples in a row (3 s) fail the drive
+    // masking is bounded by the gap limit: 30 bad samples in a row (3 s) are a hole, an error
+    // with on_gap = "error"; split, the 10 s drive leaves two pieces too short to keep
     let mut d = Drive::new(100);
     for k in 20..50 {
         d.slope[k] = Some(0.9);
     }
     d.write(&p);
-    match ingest_file(&p, &opts) {
+    let error_on_gap = IngestOptions {
+        on_gap: OnGap::Error,
+        ..opts.clone()
+    };
+    match ingest_file(&p, &error_on_gap) {
         Err(IngestError::NanRun { column, .. }) => assert_eq!(column, "road_slope"),
+        other => panic!("{:?}", other.map(|i| i.report)),
+    }
+    match ingest_file(&p, &opts) {
+        Err(IngestError::NoUsableSegment { found, reasons, .. }) => {
+            assert_eq!(found, 2);
+            assert!(reasons.contains("shorter than min_segment_s"), "{reasons}");
+        }
         other => panic!("{:?}", other.map(|i| i.report)),
     }
 }

@@ -32,6 +32,7 @@ mod fleet_proof;
 mod fleet_report;
 mod ingest_errors;
 mod ingest_fixtures;
+mod ingest_split;
 mod pipeline_paths;
 mod proof_independent;
 mod readers;

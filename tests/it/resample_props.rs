@@ -11,6 +11,7 @@ fn drive(speeds: &[f64], dt_ms: i64) -> DriveLog {
             drive_id: "p".into(),
             vehicle_id: None,
             source_file: "prop".into(),
+            segment: None,
         },
         timestamp_ns: (0..n as i64).map(|k| k * dt_ms * 1_000_000).collect(),
         signals: vec![

@@ -166,6 +166,7 @@ fn synthetic_track(
             drive_id: "synthetic".into(),
             vehicle_id: None,
             source_file: "synthetic-track".into(),
+            segment: None,
         },
         timestamp_ns: t,
         signals,

@@ -31,7 +31,7 @@ pub mod session;
 pub use dbc::Database;
 pub use frames::CanFrame;
 pub use mdf4::{read_mdf4, BusLog};
-pub use session::{ingest_session, read_session, Session};
+pub use session::{ingest_session, ingest_session_recording, read_session, Session};
 
 use std::path::PathBuf;
 use thiserror::Error;

@@ -14,8 +14,8 @@ use super::mapping::decode_channels;
 use super::{j1939, mcap_frames, mdf4, CanError, CanFrame};
 use crate::ingest::mapping::{Mapping, SourceFormat};
 use crate::ingest::{
-    align_channels, assemble, check_nan_runs, required_columns, IngestError, IngestOptions,
-    IngestReport, Ingested,
+    align_channels, drives, required_columns, single, IngestError, IngestOptions, IngestReport,
+    Ingested, Marks, Recording,
 };
 use crate::table::DriveMeta;
 use std::path::{Path, PathBuf};
@@ -141,16 +141,32 @@ pub fn auto_can_mapping(dbs: &[Database]) -> Result<Mapping, IngestError> {
     })
 }
 
-/// Ingests a session of raw CAN files decoded with `dbcs`.
+/// Ingests a session of raw CAN files decoded with `dbcs` as one drive (see
+/// [`ingest_session_recording`] for sessions split at logger pauses).
 ///
 /// # Errors
-/// Any [`IngestError`]: unreadable files ([`IngestError::Can`]), mapping problems, missing
-/// required columns, the checks every source gets.
+/// As [`ingest_session_recording`], and [`IngestError::Segmented`] when the session splits into
+/// several drives.
 pub fn ingest_session(
     files: &[PathBuf],
     dbcs: &[PathBuf],
     opts: &IngestOptions,
 ) -> Result<Ingested, IngestError> {
+    let rec = ingest_session_recording(files, dbcs, opts)?;
+    single(files.first().map_or(Path::new(""), PathBuf::as_path), rec)
+}
+
+/// Ingests a session of raw CAN files decoded with `dbcs`, split at logger pauses into drives of
+/// their own ([`crate::ingest::segment`]).
+///
+/// # Errors
+/// Any [`IngestError`]: unreadable files ([`IngestError::Can`]), mapping problems, missing
+/// required columns, the checks every source gets.
+pub fn ingest_session_recording(
+    files: &[PathBuf],
+    dbcs: &[PathBuf],
+    opts: &IngestOptions,
+) -> Result<Recording, IngestError> {
     let first: &Path = files.first().ok_or_else(|| IngestError::Setting {
         key: "input".into(),
         value: "(none)".into(),
@@ -207,15 +223,16 @@ pub fn ingest_session(
         ignored: decoded.ignored,
         ..Default::default()
     };
-    let (t_ns, signals) = align_channels(
+    let mut marks = Marks::default();
+    let pieces = align_channels(
         first,
         decoded.channels,
         &required,
         opts,
         &mapping,
         &mut report,
+        &mut marks,
     )?;
-    check_nan_runs(first, &t_ns, &signals, &required, opts.max_nan_run_s)?;
     let meta = DriveMeta {
         drive_id: opts.drive_id.clone().unwrap_or_else(|| {
             first
@@ -228,6 +245,14 @@ pub fn ingest_session(
             .clone()
             .or_else(|| mapping.vehicle_id.clone()),
         source_file: names,
+        segment: None,
     };
-    Ok(assemble(meta, t_ns, signals, report))
+    drives(
+        first,
+        meta,
+        report,
+        pieces,
+        &marks,
+        (opts.min_segment_s, opts.min_segment_m),
+    )
 }
