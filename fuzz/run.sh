@@ -5,7 +5,7 @@
 # vehicle files a pipeline names relative to it).
 #
 #   cargo +nightly fuzz build            # once (nightly, ASan + libFuzzer)
-#   bash fuzz/run.sh TARGET [SECONDS [LIBFUZZER FLAGS…]]   # ingest_mcap | ingest_parquet | pipeline_toml | vehicle_toml
+#   bash fuzz/run.sh TARGET [SECONDS [LIBFUZZER FLAGS…]]   # ingest_mcap | ingest_parquet | pipeline_toml | vehicle_toml | ingest_mdf4 | dbc_parse
 set -euo pipefail
 cd "$(dirname "$0")/.."
 T=${1:?target}
@@ -19,6 +19,10 @@ case "$T" in
     ingest_parquet) cp -n fixtures/bad/*.parquet "$C"/ ;;
     pipeline_toml) cp -n pipelines/*.toml fixtures/bad/pipeline-*.toml "$C"/ ;;
     vehicle_toml) cp -n fixtures/vehicles/*.toml fixtures/bad/vehicle-*.toml "$C"/ ;;
+    ingest_mdf4) for f in fixtures/bad/*.MF4 $(find fixtures/real -name '*.MF4'); do
+            cp -n "$f" "$C/$(echo "$f" | tr / _)"; done ;;
+    dbc_parse) for f in fixtures/bad/*.dbc $(find fixtures/real -name '*.dbc'); do
+            cp -n "$f" "$C/$(echo "$f" | tr / _)"; done ;;
     *) echo "unknown target $T" >&2; exit 2 ;;
 esac
 echo "target $T, $(date -u +%FT%TZ), $SECS s, seed corpus $(ls "$C" | wc -l) files"

@@ -1,9 +1,9 @@
 //! Shared by the ingest targets: ingest reads files (format by magic bytes, Parquet footer by
 //! seek, MCAP streamed), so each input is written to one per-process scratch file on tmpfs and
-//! read back through the same `ingest_file` the CLI and the batch runner use. A drive that
+//! read back through the same `ingest` the CLI and the batch runner use. A drive that
 //! ingests is also resampled to distance and slope-filtered, the first stages every drive meets.
 
-use fleetdyn::ingest::{ingest_file, IngestOptions};
+use fleetdyn::ingest::{ingest, IngestOptions};
 use fleetdyn::road::slope_filter::{filter_slope, SlopeFilterConfig};
 use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig};
@@ -27,12 +27,15 @@ pub fn ingest_bytes(data: &[u8], ext: &str) {
             stages,
             ..Default::default()
         };
-        let Ok(ing) = ingest_file(&path, &opts) else {
+        // every drive of the recording (split at pauses)
+        let Ok(rec) = ingest(&path, &opts) else {
             continue;
         };
-        let Ok(d) = resample_to_distance(&ing.log, &ResampleConfig::default()) else {
-            continue;
-        };
-        let _ = filter_slope(&d, &SlopeFilterConfig::default());
+        for ing in &rec.drives {
+            let Ok(d) = resample_to_distance(&ing.log, &ResampleConfig::default()) else {
+                continue;
+            };
+            let _ = filter_slope(&d, &SlopeFilterConfig::default());
+        }
     }
 }

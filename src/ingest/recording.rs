@@ -19,6 +19,9 @@ pub struct IngestReport {
     pub source_rows: u64,
     /// Exact duplicates dropped (all channels).
     pub duplicates_dropped: u64,
+    /// Raw CAN frame records or messages that could not be decoded, skipped (a corrupted
+    /// record costs that frame, not the file).
+    pub corrupt_records: u64,
     /// Samples replaced by a later one with the same time and another value (all channels;
     /// [`BadSamples::Mask`]).
     pub conflicts_resolved: u64,

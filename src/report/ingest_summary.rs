@@ -39,6 +39,8 @@ pub struct IngestSummary {
     pub channel_rates: Vec<(String, usize, f64)>,
     /// Exact duplicates dropped.
     pub duplicates_dropped: u64,
+    /// Raw CAN frame records that could not be decoded, skipped.
+    pub corrupt_records: u64,
     /// Samples replaced by a later one at the same time with another value.
     pub conflicts_resolved: u64,
     /// Samples masked to missing, per column (not finite, outside the range, a speed spike).
@@ -83,6 +85,7 @@ impl IngestSummary {
             time_base_hz: ing.report.time_base_hz,
             channel_rates: ing.report.channel_rates.clone(),
             duplicates_dropped: ing.report.duplicates_dropped,
+            corrupt_records: ing.report.corrupt_records,
             conflicts_resolved: ing.report.conflicts_resolved,
             masked: ing
                 .report
@@ -151,6 +154,13 @@ impl fmt::Display for IngestSummary {
                 f,
                 "dropped   {} exact duplicate samples",
                 self.duplicates_dropped
+            )?;
+        }
+        if self.corrupt_records > 0 {
+            writeln!(
+                f,
+                "corrupt   {} frame records that could not be decoded skipped",
+                self.corrupt_records
             )?;
         }
         if self.conflicts_resolved > 0 {

@@ -359,9 +359,50 @@ pub fn generate(dir: &Path) {
         ],
     );
 
+    // ---- raw CAN: MDF4 logs and DBC files, from the parked J1939 truck's recording -----------
+    let mdf = std::fs::read(fixture(
+        "fixtures/real/css-j1939-parked/00000001-head80k.MF4",
+    ))
+    .unwrap();
+    let flipped = |at: usize| {
+        let mut b = mdf.clone();
+        for x in &mut b[at..at + 8] {
+            *x ^= 0xFF;
+        }
+        b
+    };
+    // eight bytes flipped inside one frame record (its payload offset names no data): that frame
+    // is skipped and counted, the log goes on
+    write(dir, "mdf4-flipped-record.MF4", &flipped(60_000));
+    // eight bytes flipped in the header block: nothing can be read, a clear error
+    write(dir, "mdf4-flipped-header.MF4", &flipped(64));
+    let dbc = std::fs::read_to_string(fixture(
+        "fixtures/real/css-j1939-parked/CSS-Electronics-SAE-J1939-DEMO.dbc",
+    ))
+    .unwrap();
+    // cut in the middle of a signal line
+    let cut = dbc.find("\"km/h\"").expect("the speed signal's unit");
+    write(dir, "dbc-truncated.dbc", &dbc.as_bytes()[..cut]);
+    // a 16-bit signal from bit 60 of an 8-byte message
+    write(
+        dir,
+        "dbc-signal-beyond-message.dbc",
+        edited(
+            &dbc,
+            "WheelBasedVehicleSpeed : 8|16@1+",
+            "WheelBasedVehicleSpeed : 60|16@1+",
+        )
+        .as_bytes(),
+    );
+
     // ---- vehicle files ------------------------------------------------------------------------
     let truck = std::fs::read_to_string(fixture("fixtures/vehicles/truck-40t.toml")).unwrap();
     let edit = |from: &str, to: &str| edited(&truck, from, to);
+    write(
+        dir,
+        "vehicle-nan-mass.toml",
+        edit("mass_kg = 40000.0", "mass_kg = nan").as_bytes(),
+    );
     write(
         dir,
         "vehicle-negative-mass.toml",

@@ -189,6 +189,14 @@ impl Database {
                 if start_bit >= 8 * 64 {
                     return Err(bad("start bit beyond a 64-byte frame"));
                 }
+                let big_endian = s.byte_order == ByteOrder::BigEndian;
+                let bytes = last_byte(start_bit, size, big_endian) + 1;
+                if u64::from(bytes) > m.size {
+                    return Err(bad(&format!(
+                        "its bits reach byte {bytes}, the message has {} bytes",
+                        m.size
+                    )));
+                }
                 if (kind == RawKind::Float32 && size != 32)
                     || (kind == RawKind::Float64 && size != 64)
                 {
@@ -198,7 +206,7 @@ impl Database {
                     name: s.name.clone(),
                     start_bit,
                     size,
-                    big_endian: s.byte_order == ByteOrder::BigEndian,
+                    big_endian,
                     kind,
                     factor: s.factor,
                     offset: s.offset,
@@ -311,6 +319,25 @@ impl Database {
     pub fn message_index(&self, name: &str) -> Option<usize> {
         self.messages.iter().position(|m| m.name == name)
     }
+}
+
+/// Index of the last payload byte a signal touches (0-based): `(start + size − 1) / 8` for
+/// Intel (little-endian) order; for Motorola (big-endian) order, where the start bit is the most
+/// significant and the bits run down within a byte, then to the next byte's bit 7, the byte of
+/// the least significant bit.
+fn last_byte(start_bit: u32, size: u32, big_endian: bool) -> u32 {
+    if !big_endian {
+        return (start_bit + size - 1) / 8;
+    }
+    let mut pos = start_bit;
+    for _ in 1..size {
+        pos = if pos.is_multiple_of(8) {
+            pos + 15
+        } else {
+            pos - 1
+        };
+    }
+    pos / 8
 }
 
 /// Raw bits of a signal, unsigned; `None` when it reaches past the payload.
@@ -522,11 +549,23 @@ mod tests {
 
     #[test]
     fn short_payload_is_missing_not_a_panic() {
-        let d = db("BO_ 256 M: 8 X\n SG_ S : 56|8@1+ (1,0) [0|0] \"\" X\n SG_ T : 63|16@0+ (1,0) [0|0] \"\" X\n");
+        // a frame shorter than its message (a DLC below the DBC's size): the value is missing
+        let d = db("BO_ 256 M: 8 X\n SG_ S : 56|8@1+ (1,0) [0|0] \"\" X\n");
         let m = &d.messages[0];
         assert!(m.signal_value(0, &[1, 2, 3]).unwrap().is_nan());
-        // Motorola running off the end of an 8-byte frame
-        assert!(m.signal_value(1, &[0; 8]).unwrap().is_nan());
+    }
+
+    #[test]
+    fn a_signal_beyond_its_message_is_refused() {
+        // Motorola running off the end of an 8-byte message, Intel bits 60..75 of 8 bytes
+        for sg in ["63|16@0+", "60|16@1+"] {
+            let text = format!("{HEADER}BO_ 256 M: 8 X\n SG_ T : {sg} (1,0) [0|0] \"\" X\n");
+            let Err(e) = Database::parse(&text, "test.dbc") else {
+                panic!("{sg} was accepted");
+            };
+            let e = e.to_string();
+            assert!(e.contains("the message has 8 bytes"), "{e}");
+        }
     }
 
     /// Reference for both byte orders from a different formulation: the payload as one bit
@@ -547,6 +586,24 @@ mod tests {
             }
         }
         Some(v)
+    }
+
+    #[test]
+    fn the_last_byte_is_the_shortest_payload_raw_bits_read() {
+        for big_endian in [false, true] {
+            for start_bit in 0..64u32 {
+                for size in 1..=64u32 {
+                    let last = last_byte(start_bit, size, big_endian) as usize;
+                    // Motorola signals that run past bit 63 walk off the 8 bytes: skip those
+                    if last >= 16 {
+                        continue;
+                    }
+                    let fits = |n: usize| raw_bits(&[0u8; 16][..n], start_bit, size, big_endian);
+                    assert!(fits(last + 1).is_some(), "{start_bit} {size} {big_endian}");
+                    assert!(fits(last).is_none(), "{start_bit} {size} {big_endian}");
+                }
+            }
+        }
     }
 
     proptest::proptest! {

@@ -37,8 +37,8 @@ enum Kind {
 /// Reads the CAN frames of an MCAP file.
 ///
 /// # Errors
-/// [`CanError::Io`]; [`CanError::Mcap`] for an invalid MCAP file, or a frame message that does
-/// not decode (naming topic and message index).
+/// [`CanError::Io`]; [`CanError::Mcap`] for an invalid MCAP file. A frame message that does not
+/// decode is skipped and counted ([`BusLog::corrupt_records`]).
 pub fn read_mcap_frames(path: &Path) -> Result<BusLog, CanError> {
     let file = File::open(path).map_err(|e| CanError::Io {
         file: path.into(),
@@ -49,9 +49,8 @@ pub fn read_mcap_frames(path: &Path) -> Result<BusLog, CanError> {
         crate::ingest::mcap_source::validated_options(),
     );
     let mut frames = Vec::new();
-    let mut skipped = 0u64;
+    let (mut skipped, mut corrupt) = (0u64, 0u64);
     let mut kinds: HashMap<u16, Kind> = HashMap::new();
-    let mut per_topic: HashMap<u16, u64> = HashMap::new();
     for (messages, msg) in reader.enumerate() {
         let msg = msg.map_err(|e| CanError::Mcap {
             file: path.into(),
@@ -66,25 +65,25 @@ pub fn read_mcap_frames(path: &Path) -> Result<BusLog, CanError> {
                 _ => Kind::Other,
             }
         });
-        let index = {
-            let n = per_topic.entry(ch.id).or_insert(0);
-            *n += 1;
-            *n - 1
-        };
         let t_ns = i64::try_from(msg.log_time).unwrap_or(i64::MAX);
-        let bad = |what: String| CanError::Mcap {
-            file: path.into(),
-            message: format!("topic {} message {index}: {what}", ch.topic),
-        };
         let frame = match kind {
-            Kind::Cdr => cdr_frame(&msg.data, t_ns).map_err(bad)?,
+            Kind::Cdr => match cdr_frame(&msg.data, t_ns) {
+                Ok(f) => f,
+                Err(_) => {
+                    corrupt += 1;
+                    continue;
+                }
+            },
             Kind::Json => match json_frame(&msg.data, t_ns) {
                 Ok(f) => f,
                 Err(JsonFrame::NotAFrame) => {
                     *kind = Kind::Other;
                     None
                 }
-                Err(JsonFrame::Bad(what)) => return Err(bad(what)),
+                Err(JsonFrame::Bad) => {
+                    corrupt += 1;
+                    continue;
+                }
             },
             Kind::Other => None,
         };
@@ -99,6 +98,7 @@ pub fn read_mcap_frames(path: &Path) -> Result<BusLog, CanError> {
         start_ns: frames.first().map_or(0, |f| f.t_ns),
         frames,
         skipped_records: skipped,
+        corrupt_records: corrupt,
         unfinalised: false,
         format: "mcap",
     })
@@ -153,9 +153,11 @@ pub fn cdr_frame(data: &[u8], t_ns: i64) -> Result<Option<CanFrame>, String> {
     Ok(Some(CanFrame::new(t_ns, id, extended, 0, &payload[..len])))
 }
 
+/// Why a JSON message is not a frame: not frame-shaped at all (the topic is not a frame topic),
+/// or frame-shaped with a field that does not decode (a corrupted frame, skipped and counted).
 enum JsonFrame {
     NotAFrame,
-    Bad(String),
+    Bad,
 }
 
 fn json_frame(data: &[u8], t_ns: i64) -> Result<Option<CanFrame>, JsonFrame> {
@@ -166,29 +168,25 @@ fn json_frame(data: &[u8], t_ns: i64) -> Result<Option<CanFrame>, JsonFrame> {
     let id = id
         .as_u64()
         .filter(|&i| i <= 0x1FFF_FFFF)
-        .ok_or_else(|| JsonFrame::Bad(format!("id {id} is not a CAN identifier")))?;
+        .ok_or(JsonFrame::Bad)?;
     let bytes: Vec<u8> = match d {
         Value::Array(a) => a
             .iter()
             .map(|b| b.as_u64().filter(|&b| b <= 255).map(|b| b as u8))
             .collect::<Option<_>>()
-            .ok_or_else(|| JsonFrame::Bad("data holds a value that is not a byte".into()))?,
+            .ok_or(JsonFrame::Bad)?,
         Value::String(s) => {
             let s: String = s.chars().filter(|c| !c.is_whitespace()).collect();
             if !s.len().is_multiple_of(2) {
-                return Err(JsonFrame::Bad(format!("hex data `{s}` of odd length")));
+                return Err(JsonFrame::Bad);
             }
             (0..s.len())
                 .step_by(2)
                 .map(|i| u8::from_str_radix(&s[i..i + 2], 16).ok())
                 .collect::<Option<_>>()
-                .ok_or_else(|| JsonFrame::Bad(format!("data `{s}` is not hex")))?
+                .ok_or(JsonFrame::Bad)?
         }
-        _ => {
-            return Err(JsonFrame::Bad(
-                "data is neither a byte array nor hex".into(),
-            ))
-        }
+        _ => return Err(JsonFrame::Bad),
     };
     let extended = v
         .get("extended")
@@ -259,7 +257,7 @@ mod tests {
         ));
         assert!(matches!(
             json_frame(br#"{"id": 1, "data": [300]}"#, 0),
-            Err(JsonFrame::Bad(_))
+            Err(JsonFrame::Bad)
         ));
     }
 }

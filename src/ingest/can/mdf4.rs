@@ -46,6 +46,12 @@
 //! block of the wrong type or with a length that does not fit, link cycles, unknown record ids,
 //! records that do not fit their group, a time channel of another data type or conversion, a
 //! DZ block that does not inflate to its stated length. The whole file is read into memory.
+//!
+//! ## What is skipped
+//! A single frame record whose own fields do not decode (a field outside the record, a payload
+//! offset naming no signal data, a time that is not finite or beyond 10¹⁰ s) is a corrupted
+//! frame, not a corrupted file: it is skipped and counted in [`BusLog::corrupt_records`], and
+//! ingest reports the count.
 
 use super::frames::CanFrame;
 use super::mdf4_blocks::Reader;
@@ -66,6 +72,9 @@ pub struct BusLog {
     pub frames: Vec<CanFrame>,
     /// Records of other groups (error, remote, LIN frames) that were skipped.
     pub skipped_records: u64,
+    /// Frame records that could not be decoded (a field outside its record, a payload offset
+    /// naming no data, a time that is not finite), skipped and counted.
+    pub corrupt_records: u64,
     /// The file was unfinalised (`UnFinMF`).
     pub unfinalised: bool,
     /// `mdf4` or `mcap`.
@@ -144,7 +153,7 @@ impl<'a> Reader<'a> {
         };
 
         let mut frames = Vec::new();
-        let mut skipped = 0u64;
+        let (mut skipped, mut corrupt) = (0u64, 0u64);
         for &(dg_off, cg_first, data_link, rec_id_size) in &dgs {
             let groups = self.groups(cg_first)?;
             if data_link == 0 || groups.is_empty() {
@@ -156,8 +165,10 @@ impl<'a> Reader<'a> {
             } else {
                 self.stream(data_link, b"DT", 0)?
             };
-            skipped +=
+            let (s, c) =
                 self.records(dg_off, rec_id_size, &groups, &stream, start_ns, &mut frames)?;
+            skipped += s;
+            corrupt += c;
         }
         frames.sort_by_key(|f: &CanFrame| f.t_ns);
         Ok(BusLog {
@@ -165,6 +176,7 @@ impl<'a> Reader<'a> {
             start_ns,
             frames,
             skipped_records: skipped,
+            corrupt_records: corrupt,
             unfinalised: self.unfinalised,
             format: "mdf4",
         })

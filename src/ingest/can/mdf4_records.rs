@@ -13,7 +13,9 @@ use super::CanError;
 use std::borrow::Cow;
 
 impl<'a> Reader<'a> {
-    /// Walks the records of one data group; returns how many records were skipped.
+    /// Walks the records of one data group; returns how many records of other groups were
+    /// skipped and how many frame records could not be decoded (a corrupted field: a glitch
+    /// that costs that frame, not the file).
     pub(super) fn records(
         &self,
         dg: u64,
@@ -22,7 +24,7 @@ impl<'a> Reader<'a> {
         stream: &[u8],
         start_ns: i64,
         frames: &mut Vec<CanFrame>,
-    ) -> Result<u64, CanError> {
+    ) -> Result<(u64, u64), CanError> {
         let id_len = match rec_id_size {
             0 | 1 | 2 | 4 | 8 => usize::from(rec_id_size),
             n => return Err(self.err(dg, "DG", format!("record id size {n}"))),
@@ -41,7 +43,7 @@ impl<'a> Reader<'a> {
                 }
             }
         }
-        let mut skipped = 0u64;
+        let (mut skipped, mut corrupt) = (0u64, 0u64);
         if id_len == 0 {
             let [g] = groups else {
                 return Err(self.err(
@@ -52,7 +54,7 @@ impl<'a> Reader<'a> {
             };
             let size = usize::try_from(g.record_bytes).unwrap_or(usize::MAX);
             if size == 0 || g.vlsd {
-                return Ok(0);
+                return Ok((0, 0));
             }
             let mut n = stream.len() / size;
             if self.trust_cycle_counts && !self.unfinalised {
@@ -70,7 +72,7 @@ impl<'a> Reader<'a> {
                 n = want;
             }
             let Some(fg) = &g.frames else {
-                return Ok(n as u64);
+                return Ok((n as u64, 0));
             };
             let sd = self.vlsd_source(fg, &sd_cache);
             for k in 0..n {
@@ -79,7 +81,7 @@ impl<'a> Reader<'a> {
                     frames.push(f);
                 }
             }
-            return Ok(0);
+            return Ok((0, 0));
         }
         // Unsorted: record id, then the record (fixed) or u32 length + bytes (VLSD group).
         // VLSD group records: (group offset, virtual offset, payload range in `stream`).
@@ -158,11 +160,13 @@ impl<'a> Reader<'a> {
             };
             let rec = &stream[body..body + g.record_bytes as usize];
             let sd = self.vlsd_source(fg, &sd_cache);
-            if let Some(f) = self.frame(fg, g, rec, sd, &per_group[gi], start_ns)? {
-                frames.push(f);
+            match self.frame(fg, g, rec, sd, &per_group[gi], start_ns) {
+                Ok(Some(f)) => frames.push(f),
+                Ok(None) => {}
+                Err(_) => corrupt += 1,
             }
         }
-        Ok(skipped)
+        Ok((skipped, corrupt))
     }
 
     fn vlsd_source<'c>(&self, fg: &FrameGroup, cache: &'c [(u64, Cow<'a, [u8]>)]) -> &'c [u8] {

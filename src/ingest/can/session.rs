@@ -31,6 +31,8 @@ pub struct Session {
     pub raw_frames: u64,
     /// Records of other bus-logging groups (MDF4) or other messages (MCAP) skipped.
     pub skipped_records: u64,
+    /// Frame records or messages that could not be decoded, skipped.
+    pub corrupt_records: u64,
     /// Some file was MCAP.
     pub mcap: bool,
 }
@@ -67,12 +69,13 @@ pub fn read_bus_log(path: &Path) -> Result<mdf4::BusLog, CanError> {
 /// [`CanError`] for the first file that cannot be read.
 pub fn read_session(files: &[PathBuf]) -> Result<Session, CanError> {
     let mut frames = Vec::new();
-    let mut skipped = 0;
+    let (mut skipped, mut corrupt) = (0, 0);
     let mut mcap = false;
     for f in files {
         let log = read_bus_log(f)?;
         mcap |= log.format == "mcap";
         skipped += log.skipped_records;
+        corrupt += log.corrupt_records;
         frames.extend(log.frames);
     }
     frames.sort_by_key(|f: &CanFrame| f.t_ns);
@@ -87,6 +90,7 @@ pub fn read_session(files: &[PathBuf]) -> Result<Session, CanError> {
         frames,
         raw_frames,
         skipped_records: skipped,
+        corrupt_records: corrupt,
         mcap,
     })
 }
@@ -220,6 +224,7 @@ pub fn ingest_session_recording(
         format: if session.mcap { "mcap-can" } else { "mdf4-can" }.into(),
         mapping: mapping.name.clone(),
         source_rows: session.raw_frames,
+        corrupt_records: session.corrupt_records,
         ignored: decoded.ignored,
         ..Default::default()
     };

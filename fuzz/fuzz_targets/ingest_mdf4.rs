@@ -1,0 +1,30 @@
+//! MDF4 bytes through the raw CAN reader (blocks, links, data lists, zipped data, sorted and
+//! unsorted records, VLSD payloads), then through a session ingest decoded with the parked
+//! truck's J1939 DBC (decode, multi-rate alignment, splitting at pauses, checks). Must never
+//! panic.
+#![no_main]
+use fleetdyn::ingest::can::{ingest_session_recording, mdf4::parse_mdf4};
+use fleetdyn::ingest::IngestOptions;
+use std::path::{Path, PathBuf};
+
+const DBC: &str = "fixtures/real/css-j1939-parked/CSS-Electronics-SAE-J1939-DEMO.dbc";
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let path = Path::new("fuzz.MF4");
+    if parse_mdf4(data, path).is_err() {
+        return;
+    }
+    let shm = Path::new("/dev/shm");
+    let dir = if shm.is_dir() {
+        shm.to_path_buf()
+    } else {
+        std::env::temp_dir()
+    };
+    let file = dir.join(format!("fleetdyn-fuzz-{}.MF4", std::process::id()));
+    std::fs::write(&file, data).expect("scratch file");
+    let _ = ingest_session_recording(
+        &[file],
+        &[PathBuf::from(DBC)],
+        &IngestOptions::default(),
+    );
+});
