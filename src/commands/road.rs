@@ -148,6 +148,11 @@ pub fn run(job: Job) -> Result<(), Failure> {
                 );
             }
             say!(
+                "  mean PSD's power below 3e-4 1/m: {:.1} %, below 1e-3 1/m: {:.1} % (the paper: most of a highway's below 3e-4, most of a city road's below 1e-3)",
+                100.0 * study.share_below_paper[0],
+                100.0 * study.share_below_paper[1]
+            );
+            say!(
                 "  slope filter (f_co {} 1/m) removes {:.2} % of the mean PSD's power zero-phase, {:.2} % causal",
                 study.filter.config.cutoff_per_m,
                 100.0 * study.removed_by_zero_phase,
@@ -174,6 +179,11 @@ pub fn run(job: Job) -> Result<(), Failure> {
                 "{}: {column} on a {} m grid, {} Welch segments of {} samples ({:.1} dof); half the power below {:.3e} 1/m, 90 % below {:.3e} 1/m, 99 % below {:.3e} 1/m",
                 path.display(), col.step_m, sp.psd.n_segments, sp.psd.nperseg, sp.psd.dof,
                 sp.knee_50, sp.knee_90, sp.knee_99
+            );
+            say!(
+                "  power below 3e-4 1/m: {:.1} %, below 1e-3 1/m: {:.1} %",
+                100.0 * sp.share_below_paper[0],
+                100.0 * sp.share_below_paper[1]
             );
             for f in files {
                 say!("  wrote {}", f.display());

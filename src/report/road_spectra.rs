@@ -162,6 +162,14 @@ pub fn write_road_spectrum(
             ("knee_50_per_m".into(), format!("{:e}", sp.knee_50)),
             ("knee_90_per_m".into(), format!("{:e}", sp.knee_90)),
             ("knee_99_per_m".into(), format!("{:e}", sp.knee_99)),
+            (
+                "share_below_3e-4_per_m".into(),
+                format!("{:e}", sp.share_below_paper[0]),
+            ),
+            (
+                "share_below_1e-3_per_m".into(),
+                format!("{:e}", sp.share_below_paper[1]),
+            ),
             ("window".into(), "hann (periodic)".into()),
             ("detrend".into(), "constant".into()),
             ("scaling".into(), "density, one-sided".into()),
@@ -299,6 +307,14 @@ pub fn write_study(
         (
             "percentiles".into(),
             "numpy linear: value at rank p*(n-1) of the sorted roads".into(),
+        ),
+        (
+            "share_below_3e-4_per_m".into(),
+            format!("{:e}", study.share_below_paper[0]),
+        ),
+        (
+            "share_below_1e-3_per_m".into(),
+            format!("{:e}", study.share_below_paper[1]),
         ),
         (
             "knee_50_of_mean_per_m".into(),

@@ -29,8 +29,8 @@ use super::rules::RoadRules;
 use super::slope_filter::SlopeFilterConfig;
 use super::synth::{generate, SynthError};
 use crate::signal::{
-    butter, cumulative_power, knee_frequency, try_lowest_order_meeting, welch, BandType,
-    SignalError, WelchConfig, WelchPsd,
+    butter, cumulative_power, knee_frequency, share_below, try_lowest_order_meeting, welch,
+    BandType, SignalError, WelchConfig, WelchPsd,
 };
 use rayon::prelude::*;
 use thiserror::Error;
@@ -188,8 +188,20 @@ pub struct RoadSpectrum {
     pub knee_90: f64,
     /// Frequency below which 99 % of the power lies, 1/m.
     pub knee_99: f64,
+    /// Share of the power below [`PAPER_FREQS_PER_M`] (3·10⁻⁴ and 10⁻³ 1/m).
+    pub share_below_paper: [f64; 2],
     /// Slope filter response on the same frequencies.
     pub filter: FilterResponse,
+}
+
+/// The spatial frequencies Myklebust & Eriksson (2012), §5, name: highways carry most of their
+/// slope power below 3·10⁻⁴ 1/m, city roads below 10⁻³ 1/m. Spectra report the share of their
+/// power below each.
+pub const PAPER_FREQS_PER_M: [f64; 2] = [3e-4, 1e-3];
+
+/// Shares of the power below [`PAPER_FREQS_PER_M`], from a cumulative power over `freq`.
+pub fn paper_shares(freq: &[f64], cumulative: &[f64]) -> [f64; 2] {
+    PAPER_FREQS_PER_M.map(|f| share_below(freq, cumulative, f))
 }
 
 fn welch_config(n: usize, step_m: f64, s: &SpectrumSettings) -> Result<WelchConfig, StudyError> {
@@ -232,9 +244,11 @@ pub fn slope_spectrum(
         source,
     })?;
     let filter = filter_response(&psd.freq_hz, step_m)?;
+    let cumulative = cumulative_power(&psd.freq_hz, &psd.psd);
     Ok(RoadSpectrum {
         step_m,
-        cumulative: cumulative_power(&psd.freq_hz, &psd.psd),
+        share_below_paper: paper_shares(&psd.freq_hz, &cumulative),
+        cumulative,
         knee_50: knee_frequency(&psd.freq_hz, &psd.psd, 0.5),
         knee_90: knee_frequency(&psd.freq_hz, &psd.psd, 0.9),
         knee_99: knee_frequency(&psd.freq_hz, &psd.psd, 0.99),
@@ -336,6 +350,8 @@ pub struct Study {
     pub removed_by_zero_phase: f64,
     /// Share the causal filter removes: `1 − ∫P·|H|² df / ∫P df`.
     pub removed_by_causal: f64,
+    /// Share of the mean PSD's power below [`PAPER_FREQS_PER_M`].
+    pub share_below_paper: [f64; 2],
 }
 
 /// Share of the power of `psd` (over `freq`) that a filter of power gain `10^(gain_db/10)`
@@ -459,6 +475,7 @@ pub fn run_study(cfg: &StudyConfig) -> Result<Study, StudyError> {
         removed_by_zero_phase: power_removed(&freq_per_m, &mean, &filter.zero_phase_db),
         removed_by_causal: power_removed(&freq_per_m, &mean, &filter.causal_db),
         config: cfg.clone(),
+        share_below_paper: paper_shares(&freq_per_m, &cumulative_power(&freq_per_m, &mean)),
         cumulative_mean: cumulative_power(&freq_per_m, &mean),
         knee_50_of_mean: knee_frequency(&freq_per_m, &mean, 0.5),
         knee_90_of_mean: knee_frequency(&freq_per_m, &mean, 0.9),

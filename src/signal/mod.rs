@@ -43,7 +43,7 @@ pub use sos::{
     sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FREE_RESPONSE_FLOOR,
     FUSED_SECTIONS, LANES, LOCKSTEP_MIN, SOSFILT_BLOCK,
 };
-pub use spectrum::{cumulative_power, knee_frequency};
+pub use spectrum::{cumulative_power, knee_frequency, share_below};
 pub use welch::{
     chi2_ppf, csd, csd_pieces, equivalent_dof, hann_periodic, welch, WelchConfig, WelchCsd,
     WelchPsd,

@@ -43,9 +43,38 @@ pub fn knee_frequency(freq: &[f64], psd: &[f64], fraction: f64) -> f64 {
     freq[cum.len() - 1]
 }
 
+/// Share of the power below frequency `f`: the cumulative share (`cumulative`, from
+/// [`cumulative_power`] over `freq`) interpolated linearly at `f`; 0 below the first bin, 1 above
+/// the last, NaN without bins or power.
+pub fn share_below(freq: &[f64], cumulative: &[f64], f: f64) -> f64 {
+    let n = freq.len().min(cumulative.len());
+    if n < 2 || cumulative[n - 1] != 1.0 || f.is_nan() {
+        return f64::NAN;
+    }
+    if f <= freq[0] {
+        return 0.0;
+    }
+    let i = freq[..n].partition_point(|&x| x < f);
+    if i >= n {
+        return 1.0;
+    }
+    let t = (f - freq[i - 1]) / (freq[i] - freq[i - 1]);
+    cumulative[i - 1] + t * (cumulative[i] - cumulative[i - 1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn share_below_interpolates_the_cumulative_power() {
+        let f: Vec<f64> = (0..=100).map(|i| i as f64 * 0.01).collect();
+        let c = cumulative_power(&f, &vec![2.0; f.len()]);
+        assert!((share_below(&f, &c, 0.255) - 0.255).abs() < 1e-12);
+        assert_eq!(share_below(&f, &c, -1.0), 0.0);
+        assert_eq!(share_below(&f, &c, 2.0), 1.0);
+        assert!(share_below(&f, &[0.0; 101], 0.5).is_nan());
+    }
 
     #[test]
     fn flat_spectrum_knee_is_linear() {

@@ -7,7 +7,9 @@ use arrow::datatypes::UInt64Type;
 use fleetdyn::report::road_spectra::write_study;
 use fleetdyn::road::road_table::read_distance_column;
 use fleetdyn::road::rules::RoadRules;
-use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, Study, StudyConfig};
+use fleetdyn::road::study::{
+    run_study, slope_spectrum, SpectrumSettings, Study, StudyConfig, PAPER_FREQS_PER_M,
+};
 use fleetdyn::road::synth::generate;
 use fleetdyn::signal::knee_frequency;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -127,6 +129,18 @@ fn road_study_knee_of_an_analytic_lorentzian() {
     // The half-power knee of a wide band is the corner itself (fmax/fc = 500: within 0.2 %).
     let k50 = knee_frequency(&f, &s, 0.5);
     assert!((k50 - fc).abs() < 2e-3 * fc, "{k50}");
+    // the share of the power below a frequency is the same atan ratio (tolerance as above)
+    let c = fleetdyn::signal::cumulative_power(&f, &s);
+    for (x, share) in PAPER_FREQS_PER_M
+        .iter()
+        .zip(fleetdyn::road::study::paper_shares(&f, &c))
+    {
+        let want = (x / fc).atan() / (fmax / fc).atan();
+        assert!(
+            (share - want).abs() <= 1e-5 * want,
+            "{x}: {share} vs {want}"
+        );
+    }
 }
 
 #[test]
@@ -171,6 +185,10 @@ fn road_study_city_roads_reach_higher_frequencies_than_highways() {
     assert!(city.knee_50.p50 > 1.5 * hw.knee_50.p50);
     assert!(city.knee_90.p50 > 1.5 * hw.knee_90.p50);
     assert!(city.knee_99.p50 > 1.5 * hw.knee_99.p50);
+    // and less of their power at the paper's low frequencies
+    for k in 0..2 {
+        assert!(city.share_below_paper[k] < hw.share_below_paper[k]);
+    }
     for s in [&hw, &city] {
         for b in 0..s.freq_per_m.len() {
             assert!(s.psd_p05[b] <= s.psd_p50[b] && s.psd_p50[b] <= s.psd_p95[b]);
