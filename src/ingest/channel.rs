@@ -5,7 +5,7 @@
 //! value keeps the later sample ([`BadSamples::Mask`], counted) or is an error
 //! ([`BadSamples::Error`]); time going backwards is an error unless [`TimeRepair::Sort`]; values
 //! that are not finite, outside the schema's physical range, or a speed spike no truck can make
-//! are masked to missing ([`BadSamples::Mask`], counted; [`mask_bad_samples`]) or rejected.
+//! are masked to missing ([`BadSamples::Mask`], counted; [`bad_samples`]) or rejected.
 
 use super::mapping::ResolvedSignal;
 use super::IngestError;

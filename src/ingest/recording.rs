@@ -23,10 +23,10 @@ pub struct IngestReport {
     /// record costs that frame, not the file).
     pub corrupt_records: u64,
     /// Samples replaced by a later one with the same time and another value (all channels;
-    /// [`BadSamples::Mask`]).
+    /// [`super::BadSamples::Mask`]).
     pub conflicts_resolved: u64,
     /// Per column, samples masked to missing: not finite, outside the physical range, or a speed
-    /// spike ([`BadSamples::Mask`]).
+    /// spike ([`super::BadSamples::Mask`]).
     pub masked: BTreeMap<String, u64>,
     /// Per mapped channel: (column, samples, median rate Hz) — multi-rate sources only.
     pub channel_rates: Vec<(String, usize, f64)>,

@@ -20,7 +20,7 @@
 //! that is one segment keeps its id; holes at its edges are trimmed.
 //!
 //! **Policy.** [`OnGap::Split`] (default) does the above; [`OnGap::Error`] rejects the
-//! recording at its first hole ([`check_nan_runs`], [`check_row_gaps`]:
+//! recording at its first hole ([`check_nan_runs`], `check_row_gaps`:
 //! [`IngestError::NanRun`], [`IngestError::TimeGap`]).
 
 use super::channel::Channel;
