@@ -38,8 +38,8 @@ pub enum RoadCmd {
 /// `road synth`.
 #[derive(Args, Debug)]
 pub struct SynthRoadCmd {
-    /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us) or a TOML file of
-    /// the same keys (schemas/roads/*.toml).
+    /// Rule set: a bundled name (highway-se, highway-se-fitted, city-se, freeway-us,
+    /// urban-us) or a TOML file of the same keys (schemas/roads/*.toml).
     #[arg(long)]
     rules: String,
     /// Road length, km.

@@ -32,6 +32,10 @@ const BUNDLED: &[(&str, &str)] = &[
         "highway-se",
         include_str!("../../schemas/roads/highway-se.toml"),
     ),
+    (
+        "highway-se-fitted",
+        include_str!("../../schemas/roads/highway-se-fitted.toml"),
+    ),
     ("city-se", include_str!("../../schemas/roads/city-se.toml")),
     (
         "freeway-us",
