@@ -270,6 +270,13 @@ pub fn generate(dir: &Path) {
     drive_file(dir, "glitch-speed-spike.parquet", |d| {
         d.speed[33] = Some(41.0)
     });
+    // a gateway repeating a message unchanged: the exact duplicate row is dropped and counted
+    drive_file(dir, "duplicate-rows-agreeing.parquet", |d| {
+        d.t_ns[51] = d.t_ns[50];
+        d.speed[51] = d.speed[50];
+        d.slope[51] = d.slope[50];
+        d.gear[51] = d.gear[50];
+    });
     drive_file(dir, "glitch-repeated-timestamp.parquet", |d| {
         d.t_ns[44] = d.t_ns[43];
         d.speed[44] = Some(15.2);
