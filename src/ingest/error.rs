@@ -238,7 +238,7 @@ pub enum IngestError {
         limit: u64,
     },
     /// A single-drive command given a recording that splits at logger pauses into several drives.
-    #[error("{file}: the recording splits into {drives} drives at pauses in its signals ({pauses}); `fleetdyn ingest --output` writes each, a pipeline runs each, or set on_gap = \"error\" (--on-gap error)")]
+    #[error("{file}: the recording splits into {drives} drives at pauses in its signals ({pauses}); `fleetdyn ingest --output` writes each, a pipeline runs each, or set on_gap to `error` (--on-gap error)")]
     Segmented {
         /// Input file.
         file: PathBuf,

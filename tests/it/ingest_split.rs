@@ -164,6 +164,10 @@ fn a_single_drive_command_names_the_split_and_writes_nothing() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("splits into 2 drives"), "{err}");
     assert!(err.contains("fleetdyn ingest --output"), "{err}");
+    assert!(
+        !err.contains('"') && !err.contains("Some("),
+        "debug formatting: {err}"
+    );
     assert!(!out.exists());
     // ingest writes one file per drive, each with its provenance
     let o = fleetdyn_at_top(&["ingest", p.to_str().unwrap(), "-o", out.to_str().unwrap()]);
