@@ -68,45 +68,57 @@ fn slope_shuffle_section(s: &mut String, report: &RunReport) {
 
 /// Recordings split at logger pauses: each drive's segment and the segments skipped.
 fn split_section(s: &mut String, report: &RunReport) {
-    let split: Vec<(&str, &crate::table::Segment)> = report
+    // (input, segment, drive id, start, duration, outcome), in input and segment order
+    let mut rows: Vec<(&str, usize, &str, i64, f64, String)> = report
         .drives
         .iter()
         .filter_map(|d| d.record.as_ref())
-        .filter_map(|r| r.segment.as_ref().map(|g| (r.drive_id.as_str(), g)))
+        .filter_map(|r| {
+            r.segment.as_ref().map(|g| {
+                (
+                    r.input.as_str(),
+                    g.index,
+                    r.drive_id.as_str(),
+                    g.start_ns,
+                    (g.end_ns - g.start_ns) as f64 * 1e-9,
+                    format!("drive ({} segments)", g.count),
+                )
+            })
+        })
         .collect();
-    let n = split.len() + report.skipped_segments.len();
-    let _ = writeln!(s, "## Recordings split at pauses ({n} segments)\n");
-    if n == 0 {
+    rows.extend(report.skipped_segments.iter().map(|k| {
+        let g = &k.segment;
+        (
+            k.input.as_str(),
+            g.index,
+            g.drive_id.as_str(),
+            g.start_ns,
+            g.duration_s,
+            format!("skipped: {}", g.reason),
+        )
+    }));
+    rows.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    let _ = writeln!(
+        s,
+        "## Recordings split at pauses ({} segments)\n",
+        rows.len()
+    );
+    if rows.is_empty() {
         let _ = writeln!(s, "None.\n");
         return;
     }
     let _ = writeln!(
         s,
-        "| recording | segment | drive | start | duration | outcome |\n| --- | --- | --- | --- | --- | --- |"
+        "| input | segment | drive | start | duration | outcome |\n| --- | --- | --- | --- | --- | --- |"
     );
-    for (id, g) in split {
+    for (input, index, id, start, duration, outcome) in rows {
         let _ = writeln!(
             s,
-            "| {} | {} of {} | {} | {} | {:.0} s | drive |",
-            cell(&g.recording_drive_id),
-            g.index,
-            g.count,
+            "| `{}` | {index} | {} | {} | {duration:.0} s | {} |",
+            cell(input),
             cell(id),
-            crate::time_fmt::rfc3339_ns(g.start_ns),
-            (g.end_ns - g.start_ns) as f64 * 1e-9
-        );
-    }
-    for k in &report.skipped_segments {
-        let g = &k.segment;
-        let _ = writeln!(
-            s,
-            "| `{}` | {} | {} | {} | {:.0} s | skipped: {} |",
-            cell(&k.input),
-            g.index,
-            cell(&g.drive_id),
-            crate::time_fmt::rfc3339_ns(g.start_ns),
-            g.duration_s,
-            cell(&g.reason)
+            crate::time_fmt::rfc3339_ns(start),
+            cell(&outcome)
         );
     }
     let _ = writeln!(s);
