@@ -139,11 +139,34 @@ pub fn span(
     }
 }
 
-/// Rejects a hole in a required channel (two samples further apart than 2.5 median periods, so
-/// [`resample_channel`] leaves the grid NaN between them) whose part inside the grid's [`span`]
-/// is longer than `limit_s` plus that 2.5-period margin (the grid's edge rows may sit up to a
-/// period inside the span). Such a hole would fail the NaN-run rule after alignment anyway;
-/// checking the channel first keeps a year-long hole from allocating a year of grid.
+/// The holes of the `required` channels: (channel, k) where samples k and k + 1 lie further
+/// apart than 2.5 of the channel's median periods (so [`resample_channel`] leaves the grid NaN
+/// between them) and the part of the gap inside `span` (ns) is longer than `limit_s` plus that
+/// 2.5-period margin (the grid's edge rows may sit up to a period inside the span). In channel
+/// order, then time order.
+pub fn required_holes<'c>(
+    channels: &'c [Channel],
+    required: &'c [&str],
+    limit_s: f64,
+    (start, end): (i64, i64),
+) -> impl Iterator<Item = (&'c Channel, usize)> + 'c {
+    channels
+        .iter()
+        .filter(move |c| required.contains(&c.column.as_str()))
+        .flat_map(move |c| {
+            let max_gap = (c.median_period_ns() as f64 * 2.5) as i64;
+            c.t_ns.windows(2).enumerate().filter_map(move |(k, w)| {
+                let (t0, t1) = (w[0], w[1]);
+                let inside = t1.min(end).saturating_sub(t0.max(start)) as f64 * 1e-9;
+                (t1.saturating_sub(t0) > max_gap && inside > limit_s + max_gap as f64 * 1e-9)
+                    .then_some((c, k))
+            })
+        })
+}
+
+/// Rejects the first of the [`required_holes`] within the grid's [`span`]. Such a hole would
+/// fail the NaN-run rule after alignment anyway; checking the channels first keeps a year-long
+/// hole from allocating a year of grid.
 ///
 /// # Errors
 /// [`IngestError::TimeGap`] naming the channel, the source row after the hole and its length.
@@ -153,29 +176,20 @@ pub fn check_gaps(
     required: &[&str],
     limit_s: f64,
 ) -> Result<(), IngestError> {
-    let Ok((start, end)) = span(file, channels, required) else {
+    let Ok(span) = span(file, channels, required) else {
         return Ok(()); // align reports it
     };
-    for c in channels
-        .iter()
-        .filter(|c| required.contains(&c.column.as_str()))
-    {
-        let max_gap = (c.median_period_ns() as f64 * 2.5) as i64;
-        for (k, w) in c.t_ns.windows(2).enumerate() {
-            let (t0, t1) = (w[0], w[1]);
-            let inside = t1.min(end).saturating_sub(t0.max(start)) as f64 * 1e-9;
-            if t1.saturating_sub(t0) > max_gap && inside > limit_s + max_gap as f64 * 1e-9 {
-                return Err(IngestError::TimeGap {
-                    file: file.into(),
-                    column: c.column.clone(),
-                    row: c.rows[k + 1],
-                    time_ns: t1,
-                    previous_ns: t0,
-                    seconds: t1.saturating_sub(t0) as f64 * 1e-9,
-                    limit_s,
-                });
-            }
-        }
+    if let Some((c, k)) = required_holes(channels, required, limit_s, span).next() {
+        let (t0, t1) = (c.t_ns[k], c.t_ns[k + 1]);
+        return Err(IngestError::TimeGap {
+            file: file.into(),
+            column: c.column.clone(),
+            row: c.rows[k + 1],
+            time_ns: t1,
+            previous_ns: t0,
+            seconds: t1.saturating_sub(t0) as f64 * 1e-9,
+            limit_s,
+        });
     }
     Ok(())
 }

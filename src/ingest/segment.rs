@@ -3,14 +3,14 @@
 //!
 //! **Where it splits.** A *hole* is a stretch longer than `max_nan_run_s` in which a required
 //! column has no valid value: between two consecutive valid samples, or between the table's edge
-//! and its first (last) valid sample. A logger asleep at a rest stop leaves a hole in every
-//! column (no rows at all, reported as a pause of the logger); a sensor that stopped leaves one in
-//! its own column (reported with the column). Holes of all required columns are merged; each
-//! segment is a maximal run of rows that no merged hole crosses, and the rows inside holes are
-//! dropped. Multi-rate sources are cut on their channels first (a hole of a required channel
-//! longer than the limit plus 2.5 of its sample periods, as [`super::align::check_gaps`]
-//! measures it), so a pause never becomes grid rows, and each piece is aligned and split again
-//! by the same rule on its aligned rows.
+//! and its first (last) valid sample. A logger asleep at a rest stop leaves a hole in every column
+//! (no rows at all, reported as a pause of the logger); a sensor that stopped leaves one in its own
+//! column (reported with the column). Holes of all required columns are merged; each segment is a
+//! maximal run of rows that no merged hole crosses, and the rows inside holes are dropped.
+//! Multi-rate sources are cut on their channels first (a hole of a required channel longer than the
+//! limit plus 2.5 of its sample periods, [`required_holes`], the holes [`super::align::check_gaps`]
+//! refuses), so a pause never becomes grid rows, and each piece is aligned and split again by the
+//! same rule on its aligned rows.
 //!
 //! **What a segment is.** Segments are numbered 1, 2, … in time order over the whole recording.
 //! When there is more than one, a segment shorter than `min_segment_s`, or in which the vehicle
@@ -23,6 +23,7 @@
 //! recording at its first hole ([`check_nan_runs`], `check_row_gaps`:
 //! [`IngestError::NanRun`], [`IngestError::TimeGap`]).
 
+use super::align::required_holes;
 use super::channel::Channel;
 use super::error::IngestError;
 pub use crate::table::Segment;
@@ -187,29 +188,17 @@ pub fn split_rows(
 }
 
 /// Time windows `[start, end]` (ns, inclusive, `end > start`) of multi-rate `channels` between
-/// the holes of their `required` channels (a hole: two samples further apart than `limit_s` plus
-/// 2.5 of the channel's median periods), within the interval all required channels cover
-/// (`span`), and the holes, merged, in time order.
+/// the [`required_holes`] of their `required` channels, within the interval all required
+/// channels cover (`span`), and the holes, merged, in time order.
 pub fn channel_windows(
     channels: &[Channel],
     required: &[&str],
     limit_s: f64,
     span: (i64, i64),
 ) -> (Vec<(i64, i64)>, Vec<Pause>) {
-    let mut holes: Vec<(i64, i64, &str)> = Vec::new();
-    for c in channels
-        .iter()
-        .filter(|c| required.contains(&c.column.as_str()))
-    {
-        let margin = (c.median_period_ns() as f64 * 2.5) as i64;
-        let threshold = limit_s + margin as f64 * 1e-9;
-        for w in c.t_ns.windows(2) {
-            let (a, b) = (w[0].max(span.0), w[1].min(span.1));
-            if b > a && (w[1] - w[0]) as f64 * 1e-9 > threshold {
-                holes.push((w[0], w[1], &c.column));
-            }
-        }
-    }
+    let mut holes: Vec<(i64, i64, &str)> = required_holes(channels, required, limit_s, span)
+        .map(|(c, k)| (c.t_ns[k], c.t_ns[k + 1], c.column.as_str()))
+        .collect();
     holes.sort();
     let mut merged: Vec<(i64, i64, &str)> = Vec::new();
     for h in holes {
