@@ -25,7 +25,8 @@ pub struct IngestArgs {
     /// Time base for multi-rate sources, Hz (default: the fastest channel's rate).
     #[arg(long)]
     pub time_base_hz: Option<f64>,
-    /// Longest accepted run of missing values in a required column, s.
+    /// Longest accepted run of missing values in a required column, s; a longer one splits the
+    /// recording (or fails it with --on-gap error).
     #[arg(long, default_value_t = 2.0)]
     pub max_nan_run_s: f64,
     /// What to do when time goes backwards.

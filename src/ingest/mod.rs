@@ -11,9 +11,10 @@
 //! Multi-rate sources are aligned onto one time base ([`align`]); wide tables keep their own.
 //! Checks, each an [`IngestError`] naming file, column, row, time and value: required columns of
 //! the requested stages, dtypes, units, time order and duplicates, physical ranges (the vehicle's
-//! gearbox narrows the gear range), and runs of missing values longer than the limit. A vehicle
-//! that never moves is refused by resampling ([`crate::signal::distance`]). Nothing is written
-//! here; a failed drive leaves no output.
+//! gearbox narrows the gear range), and, with [`OnGap::Error`], runs of missing values longer
+//! than the limit (by default such a hole splits the recording, below). A vehicle that never
+//! moves is refused by resampling ([`crate::signal::distance`]). Nothing is written here; a failed
+//! drive leaves no output.
 //!
 //! Identification: `drive_id` and `vehicle_id` come from the source's metadata (Parquet
 //! key–value metadata; MCAP metadata records), else the drive id is the file stem; explicit
@@ -57,7 +58,8 @@ pub struct IngestOptions {
     pub stages: Vec<Stage>,
     /// Time base for multi-rate sources.
     pub time_base: TimeBase,
-    /// Longest run of missing values accepted in a required column, s.
+    /// Longest run of missing values accepted in a required column, s; a longer one is a hole
+    /// that splits the recording or fails it (`on_gap`).
     pub max_nan_run_s: f64,
     /// Valid gear range (from the vehicle file); the schema's wide range when `None`.
     pub gear_range: Option<(i16, i16)>,
@@ -101,8 +103,8 @@ impl Default for IngestOptions {
 /// Default shortest segment of a split recording kept as a drive, s: a minute holds a few
 /// shuffle periods and a launch, less is a logger waking for a moment.
 pub const DEFAULT_MIN_SEGMENT_S: f64 = 60.0;
-/// Default least distance a segment of a split recording must cover, m: a hundred metres is ten
-/// 10 m slope-grid samples, less is a truck manoeuvring at a rest stop.
+/// Default least distance a segment of a split recording must cover, m: less is a truck
+/// manoeuvring at a rest stop, not a drive.
 pub const DEFAULT_MIN_SEGMENT_M: f64 = 100.0;
 
 const PARQUET_MAGIC: &[u8] = b"PAR1";

@@ -19,7 +19,8 @@ pub struct IngestConfig {
     pub mapping: Option<PathBuf>,
     /// Aligned time base for multi-rate sources, Hz; the fastest channel's rate when absent.
     pub time_base_hz: Option<f64>,
-    /// Longest accepted run of missing values in a required column, s.
+    /// Longest accepted run of missing values in a required column, s; a longer one is a hole
+    /// (`on_gap`).
     pub max_nan_run_s: f64,
     /// `error` (default) or `sort` for time going backwards.
     pub time_repair: TimeRepair,
