@@ -9,7 +9,8 @@ use fleetdyn::schema::Stage;
 use fleetdyn::signal::distance::{resample_to_distance, ResampleConfig};
 use std::path::PathBuf;
 
-fn scratch(ext: &str) -> PathBuf {
+/// One per-process scratch file with extension `ext` on tmpfs (else the temp folder).
+pub fn scratch(ext: &str) -> PathBuf {
     let shm = std::path::Path::new("/dev/shm");
     let dir = if shm.is_dir() {
         shm.to_path_buf()
@@ -19,6 +20,8 @@ fn scratch(ext: &str) -> PathBuf {
     dir.join(format!("fleetdyn-fuzz-{}.{ext}", std::process::id()))
 }
 
+// the MDF4 target shares `scratch` only
+#[allow(dead_code)]
 pub fn ingest_bytes(data: &[u8], ext: &str) {
     let path = scratch(ext);
     std::fs::write(&path, data).expect("scratch file");

@@ -3,6 +3,7 @@
 //! truck's J1939 DBC (decode, multi-rate alignment, splitting at pauses, checks). Must never
 //! panic.
 #![no_main]
+mod common;
 use fleetdyn::ingest::can::{ingest_session_recording, mdf4::parse_mdf4};
 use fleetdyn::ingest::IngestOptions;
 use std::path::{Path, PathBuf};
@@ -14,13 +15,7 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     if parse_mdf4(data, path).is_err() {
         return;
     }
-    let shm = Path::new("/dev/shm");
-    let dir = if shm.is_dir() {
-        shm.to_path_buf()
-    } else {
-        std::env::temp_dir()
-    };
-    let file = dir.join(format!("fleetdyn-fuzz-{}.MF4", std::process::id()));
+    let file = common::scratch("MF4");
     std::fs::write(&file, data).expect("scratch file");
     let _ = ingest_session_recording(
         &[file],
