@@ -602,7 +602,14 @@ pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(
         }
     }
 
-    let md = super::run_summary::summary_md(plan, report, &dist, &plots, spectrum_line.as_deref());
+    let md = super::run_summary::summary_md(
+        plan,
+        report,
+        &dist,
+        &by_gear,
+        &plots,
+        spectrum_line.as_deref(),
+    );
     let p = dir.join("summary.md");
     AtomicFile::write_all(&p, md.as_bytes()).map_err(io_err(&p))?;
     written.push("summary.md");

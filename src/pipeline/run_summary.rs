@@ -4,6 +4,7 @@
 
 use super::record::{DriveOutcome, DriveStatus, RunReport};
 use super::spec::Plan;
+use crate::sim::slope_shuffle::GearShuffle;
 use std::fmt::Write as _;
 
 /// A metric's distribution: name, unit, and `drives, mean, min, p05, p50, p95, max`.
@@ -25,15 +26,8 @@ fn cell(s: &str) -> String {
 }
 
 /// Per gear, the shuffle the slope filter removes, all drives pooled (the `shuffle` stage with
-/// `compare_raw_slope`).
-fn slope_shuffle_section(s: &mut String, report: &RunReport) {
-    let pooled = crate::sim::slope_shuffle::pool(
-        report
-            .drives
-            .iter()
-            .filter_map(|d| d.record.as_ref())
-            .map(|r| r.metrics.slope_shuffle_by_gear.as_slice()),
-    );
+/// `compare_raw_slope`; [`crate::sim::slope_shuffle::pool`]).
+fn slope_shuffle_section(s: &mut String, pooled: &[GearShuffle]) {
     if pooled.is_empty() {
         return;
     }
@@ -45,7 +39,7 @@ fn slope_shuffle_section(s: &mut String, report: &RunReport) {
         s,
         "| gear | samples | removed by the filter [m²/s²] | all shuffle, raw slope [m²/s²] | removed / all |\n| --- | --- | --- | --- | --- |"
     );
-    for g in &pooled {
+    for g in pooled {
         let share = if g.ms_total_m2_per_s2 > 0.0 {
             format!(
                 "{:.1} %",
@@ -128,6 +122,7 @@ pub(super) fn summary_md(
     plan: &Plan,
     report: &RunReport,
     dist: &[Distribution],
+    by_gear: &[GearShuffle],
     plots: &[(&str, &str)],
     spectrum_line: Option<&str>,
 ) -> String {
@@ -263,6 +258,7 @@ pub(super) fn summary_md(
         }
         let _ = writeln!(s);
     }
+    slope_shuffle_section(&mut s, by_gear);
     let mut slow: Vec<&DriveOutcome> = report
         .drives
         .iter()
@@ -270,7 +266,6 @@ pub(super) fn summary_md(
         .collect();
     slow.sort_by(|a, b| b.elapsed_s.total_cmp(&a.elapsed_s));
     slow.truncate(plan.spec.report.slowest_drives);
-    slope_shuffle_section(&mut s, report);
     let _ = writeln!(s, "## Slowest drives (processed in this run)\n");
     if slow.is_empty() {
         let _ = writeln!(s, "None: every drive was up to date.\n");
