@@ -30,8 +30,8 @@ pub struct DriveCmd {
     /// carries bellow pressures.
     #[arg(long)]
     vehicle: PathBuf,
-    /// Rule set: a bundled name (highway-se, highway-se-fitted, city-se, freeway-us, urban-us)
-    /// or a TOML file.
+    /// Rule set: a bundled name (highway-se, city-se, freeway-us, urban-us, each also as
+    /// NAME-fitted: segment lengths fitted to measured roads) or a TOML file.
     #[arg(
         long,
         required_unless_present = "road_file",

@@ -2,8 +2,13 @@
 
 use super::failure::{input, io, model, usage, usage_msg, Failure};
 use super::progress::Progress;
+use fleetdyn::io::AtomicFile;
+use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
+use fleetdyn::report::road_compare::write_comparison;
 use fleetdyn::report::road_spectra::{write_road_spectrum, write_study};
+use fleetdyn::road::compare::{compare, CompareConfig, Comparison, ProfileInput, RulesInput};
+use fleetdyn::road::fit::{fit, Fit, FitConfig, FitError};
 use fleetdyn::road::gnss_profile::gnss_profile_of;
 use fleetdyn::road::profile::{GnssProfileConfig, ProfileError};
 use fleetdyn::road::profile_table::write_profile;
@@ -11,8 +16,43 @@ use fleetdyn::road::road_table::{read_distance_column, write_road};
 use fleetdyn::road::rules::RoadRules;
 use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError};
 use fleetdyn::road::synth;
-use fleetdyn::road::vdri::{cycle_profile, detect_input, read_vdri, ProfileInput};
+use fleetdyn::road::vdri::{cycle_profile, detect_input, read_vdri, ProfileInput as ProfileKind};
 use std::path::PathBuf;
+
+/// A measured profile named on the command line.
+pub struct ProfileSpec {
+    /// Road class label.
+    pub class: String,
+    /// VECTO cycle or road Parquet.
+    pub file: PathBuf,
+    /// Part kept, km from the start.
+    pub window_km: Option<(f64, f64)>,
+}
+
+/// The synthetic roads of a comparison or fit, and the shared Welch settings.
+pub struct Roads {
+    /// Roads per study.
+    pub n_roads: usize,
+    /// Road length, m.
+    pub length_m: f64,
+    /// First seed.
+    pub seed: u64,
+    /// Grid step of roads and profiles, m.
+    pub step_m: f64,
+    /// Welch settings.
+    pub spectrum: SpectrumSettings,
+    /// Worker threads.
+    pub jobs: usize,
+}
+
+/// Runs `f` on a pool of `jobs` threads.
+fn on_pool<T: Send>(jobs: usize, f: impl FnOnce() -> T + Send) -> Result<T, Failure> {
+    Ok(rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| model(anyhow::anyhow!("thread pool: {e}")))?
+        .install(f))
+}
 
 /// A resolved `road` subcommand.
 pub enum Job {
@@ -53,6 +93,34 @@ pub enum Job {
         /// Welch settings.
         settings: SpectrumSettings,
     },
+    /// Rule sets, profiles and resonances side by side.
+    Compare {
+        /// Rule sets with their classes.
+        rules: Vec<RulesInput>,
+        /// Profiles.
+        profiles: Vec<ProfileSpec>,
+        /// Vehicle file with a driveline, and its path.
+        vehicle: Option<Box<(VehicleFile, String)>>,
+        /// Synthetic roads and Welch settings.
+        roads: Roads,
+        /// Output folder.
+        output: PathBuf,
+    },
+    /// A rule set's segment lengths fitted to measured roads.
+    Fit {
+        /// Base rules.
+        base: RoadRules,
+        /// Name of the fitted set.
+        name: String,
+        /// Targets.
+        targets: Vec<ProfileSpec>,
+        /// Scale factors.
+        scales: Vec<f64>,
+        /// Synthetic roads and Welch settings.
+        roads: Roads,
+        /// Output TOML file.
+        output: PathBuf,
+    },
     /// Road profile from a GNSS track or a VECTO cycle.
     Profile {
         /// Input file.
@@ -84,6 +152,145 @@ fn profile_failure(e: ProfileError) -> Failure {
         ProfileError::Setting { .. } => usage(e),
         _ => input(e),
     }
+}
+
+/// The slope of a profile file on a `step_m` grid, cut to its window; the label is the file
+/// stem with the window.
+fn load_profile(spec: &ProfileSpec, step_m: f64) -> Result<ProfileInput, Failure> {
+    let path = &spec.file;
+    let slope = match detect_input(path).map_err(profile_failure)? {
+        ProfileKind::VectoCycle => {
+            let c = read_vdri(path).map_err(profile_failure)?;
+            cycle_profile(&c, step_m).map_err(profile_failure)?.slope
+        }
+        ProfileKind::Recording => {
+            let col = read_distance_column(path, "slope").map_err(input)?;
+            if (col.step_m - step_m).abs() > 1e-9 * step_m {
+                return Err(usage_msg(format_args!(
+                    "{}: its grid step is {} m, the comparison's {} m (--step-m)",
+                    path.display(),
+                    col.step_m,
+                    step_m
+                )));
+            }
+            col.values
+        }
+    };
+    let stem = path.file_stem().map_or_else(
+        || path.display().to_string(),
+        |s| s.to_string_lossy().into(),
+    );
+    let (name, slope) = match spec.window_km {
+        None => (stem, slope),
+        Some((a, b)) => {
+            let len_km = (slope.len().saturating_sub(1)) as f64 * step_m / 1000.0;
+            if b > len_km + 1e-9 {
+                return Err(usage_msg(format_args!(
+                    "{}: window {a}..{b} km reaches beyond the profile's {len_km:.3} km",
+                    path.display()
+                )));
+            }
+            let (i0, i1) = (
+                (a * 1000.0 / step_m).round() as usize,
+                ((b * 1000.0 / step_m).round() as usize).min(slope.len() - 1),
+            );
+            (format!("{stem}@{a}..{b}"), slope[i0..=i1].to_vec())
+        }
+    };
+    Ok(ProfileInput {
+        name,
+        class: spec.class.clone(),
+        origin: path.display().to_string(),
+        slope,
+    })
+}
+
+fn load_profiles(specs: &[ProfileSpec], step_m: f64) -> Result<Vec<ProfileInput>, Failure> {
+    specs.iter().map(|p| load_profile(p, step_m)).collect()
+}
+
+fn print_comparison(c: &Comparison) {
+    say!(
+        "{:<28} {:<8} {:<9} {:>8} {:>28} {:>28} {:>8} {:>8} {:>8} {:>7}",
+        "item",
+        "kind",
+        "class",
+        "km",
+        "50 % knee [1/m] (range)",
+        "90 % knee [1/m] (range)",
+        "<3e-4",
+        "<1e-3",
+        "removed",
+        "margin"
+    );
+    for it in &c.items {
+        let k = |q: &fleetdyn::road::compare::Knee| {
+            format!("{:.2e} ({:.2e}-{:.2e})", q.value, q.lo, q.hi)
+        };
+        say!(
+            "{:<28} {:<8} {:<9} {:>8.1} {:>28} {:>28} {:>7.1}% {:>7.1}% {:>7.2}% {:>6.1}x",
+            it.name,
+            it.kind.as_str(),
+            if it.class.is_empty() { "-" } else { &it.class },
+            it.length_m / 1000.0,
+            k(&it.knees[0]),
+            k(&it.knees[1]),
+            100.0 * it.share_below_paper[0],
+            100.0 * it.share_below_paper[1],
+            100.0 * it.removed_zero_phase,
+            it.cutoff_margin(&c.filter)
+        );
+    }
+    say!(
+        "  ranges: rule sets 5-95 % across roads, profiles 90 % bootstrap; removed: slope power the zero-phase filter takes; margin: f_co {} 1/m over the 99 % knee",
+        c.filter.config.cutoff_per_m
+    );
+    for r in &c.resonances {
+        match (r.peak_hz, r.peak_per_m, r.zero_phase_db, r.causal_db) {
+            (Some(hz), Some(pm), Some(zp), Some(ca)) => say!(
+                "  gear {:>2}: resonance {:.2} Hz at {:.1} m/s = {:.3} 1/m ({:.1} x f_lo); filter {:.1} dB zero-phase, {:.1} dB causal",
+                r.gear, hz, r.v_top_mps, pm, pm / c.filter.config.stop_per_m, zp, ca
+            ),
+            _ => say!("  gear {:>2}: no resonance peak (open loop)", r.gear),
+        }
+    }
+}
+
+/// The fitted rule file: a comment block recording the fit, then the rules.
+fn fit_toml(cfg: &FitConfig, f: &Fit) -> String {
+    let mut s = format!(
+        "# {}: {} with its segment lengths scaled by k = {}, fitted by `fleetdyn road fit`\n# (docs/models/road.md). Regulation values, radius band and e-folding grade unchanged.\n#\n# Command: fleetdyn {}\n#\n# Targets (Welch segments of {} m on a {} m grid):\n",
+        f.rules.name,
+        cfg.base.name,
+        f.points[f.best].scale,
+        std::env::args().skip(1).collect::<Vec<_>>().join(" "),
+        cfg.spectrum.segment_length_m,
+        cfg.step_m
+    );
+    for (t, p) in f.targets.iter().zip(&cfg.targets) {
+        s += &format!(
+            "#   {} ({}): 50 % knee {:.3e} 1/m, 90 % knee {:.3e} 1/m\n",
+            t.name, p.origin, t.knee_50, t.knee_90
+        );
+    }
+    s += &format!(
+        "#\n# Grid ({} roads x {} m per k, seeds {}..{}): k, median 50 % knee, median 90 % knee, J\n",
+        cfg.n_roads,
+        cfg.length_m,
+        cfg.seed,
+        cfg.seed + cfg.n_roads as u64 - 1
+    );
+    for (i, p) in f.points.iter().enumerate() {
+        s += &format!(
+            "#   {:<6} {:.3e} {:.3e} {:.4}{}\n",
+            p.scale,
+            p.knee_50,
+            p.knee_90,
+            p.objective,
+            if i == f.best { "  <- fitted" } else { "" }
+        );
+    }
+    s + &f.rules.canonical_toml()
 }
 
 /// Runs it.
@@ -122,12 +329,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
             output,
         } => {
             let spinner = Progress::spinner(&format!("{} roads", cfg.n_roads));
-            let study = rayon::ThreadPoolBuilder::new()
-                .num_threads(jobs)
-                .build()
-                .map_err(|e| model(anyhow::anyhow!("thread pool: {e}")))?
-                .install(|| run_study(&cfg))
-                .map_err(study_failure)?;
+            let study = on_pool(jobs, || run_study(&cfg))?.map_err(study_failure)?;
             drop(spinner);
             let files = write_study(&output, &study, &rules_name).map_err(io)?;
             let c = &study.config;
@@ -190,6 +392,93 @@ pub fn run(job: Job) -> Result<(), Failure> {
             }
             Ok(())
         }
+        Job::Compare {
+            rules,
+            profiles,
+            vehicle,
+            roads,
+            output,
+        } => {
+            let cfg = CompareConfig {
+                rules,
+                profiles: load_profiles(&profiles, roads.step_m)?,
+                n_roads: roads.n_roads,
+                length_m: roads.length_m,
+                seed: roads.seed,
+                step_m: roads.step_m,
+                spectrum: roads.spectrum,
+            };
+            let driveline = match vehicle.as_deref() {
+                Some((v, file)) => Some((v.driveline(file).map_err(usage)?, &v.gearbox.ratios[..])),
+                None => None,
+            };
+            let spinner = Progress::spinner("road comparison");
+            let cmp = on_pool(roads.jobs, || compare(&cfg, driveline))?.map_err(study_failure)?;
+            drop(spinner);
+            let files = write_comparison(&output, &cmp).map_err(io)?;
+            print_comparison(&cmp);
+            for f in files {
+                say!("  wrote {}", f.display());
+            }
+            Ok(())
+        }
+        Job::Fit {
+            base,
+            name,
+            targets,
+            scales,
+            roads,
+            output,
+        } => {
+            let cfg = FitConfig {
+                base,
+                targets: load_profiles(&targets, roads.step_m)?,
+                scales,
+                n_roads: roads.n_roads,
+                length_m: roads.length_m,
+                seed: roads.seed,
+                step_m: roads.step_m,
+                spectrum: roads.spectrum,
+            };
+            let spinner = Progress::spinner(&format!("{} studies", cfg.scales.len()));
+            let f = on_pool(roads.jobs, || fit(&cfg, &name))?.map_err(|e| match e {
+                FitError::Study(s) => study_failure(s),
+                e @ FitError::Setup { .. } => usage(e),
+            })?;
+            drop(spinner);
+            let text = fit_toml(&cfg, &f);
+            AtomicFile::write_all(&output, text.as_bytes()).map_err(io)?;
+            for t in &f.targets {
+                say!(
+                    "target {}: 50 % knee {:.3e} 1/m, 90 % knee {:.3e} 1/m",
+                    t.name,
+                    t.knee_50,
+                    t.knee_90
+                );
+            }
+            say!(
+                "{:>6} {:>12} {:>12} {:>10} {:>12}",
+                "k",
+                "50 % knee",
+                "90 % knee",
+                "J",
+                "lengthened"
+            );
+            for (i, p) in f.points.iter().enumerate() {
+                say!(
+                    "{:>6} {:>12.3e} {:>12.3e} {:>10.4} {:>6} / {:<6}{}",
+                    p.scale,
+                    p.knee_50,
+                    p.knee_90,
+                    p.objective,
+                    p.lengthened,
+                    p.segments,
+                    if i == f.best { "  <- best" } else { "" }
+                );
+            }
+            say!("  wrote {} ({})", output.display(), f.rules.name);
+            Ok(())
+        }
         Job::Profile {
             input: path,
             output,
@@ -198,7 +487,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
             mapping,
         } => {
             let (profile, fp) = match detect_input(&path).map_err(profile_failure)? {
-                ProfileInput::VectoCycle => {
+                ProfileKind::VectoCycle => {
                     if smooth_given {
                         return Err(usage_msg(format_args!(
                             "{}: --smooth-m applies to GNSS tracks; a VECTO cycle's grade is used as given",
@@ -209,7 +498,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
                     let p = cycle_profile(&c, gnss.step_m).map_err(profile_failure)?;
                     (p, format!("road_profile:vdri:v1 step_m={}", gnss.step_m))
                 }
-                ProfileInput::Recording => {
+                ProfileKind::Recording => {
                     // GNSS fixes may be missing for long (no satellite lock): the profile
                     // interpolates over them in distance, so ingest takes any missing-value run
                     // and requires no column; the profile names what is missing.

@@ -10,6 +10,8 @@
 //! PSD values more than 10 decades below the largest are drawn at that floor.
 
 use crate::road::study::FilterResponse;
+use plotters::chart::DualCoordChartContext;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 /// Most bins drawn per series.
@@ -34,7 +36,7 @@ pub struct PsdPlot<'a> {
 
 /// Indices 1 … n−1, all of them while log-spaced targets are denser than the bins, thinned to
 /// about `max_points` log-spaced ones above.
-fn plot_indices(n: usize, max_points: usize) -> Vec<usize> {
+pub(crate) fn plot_indices(n: usize, max_points: usize) -> Vec<usize> {
     if n <= 1 {
         return Vec::new();
     }
@@ -48,6 +50,50 @@ fn plot_indices(n: usize, max_points: usize) -> Vec<usize> {
         }
     }
     out
+}
+
+/// The chart both road plots draw on: log–log PSD axes (spatial frequency, `y_desc`) and the
+/// slope filter's gain, −150 … 10 dB, on the right; the axes are drawn.
+pub(crate) type PsdChart<'a, 'b> = DualCoordChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<LogCoord<f64>, LogCoord<f64>>,
+    Cartesian2d<LogCoord<f64>, RangedCoordf64>,
+>;
+
+/// Builds a [`PsdChart`] on `root` over `x` (1/m) and `y`.
+pub(crate) fn psd_chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    title_size: u32,
+    x: (f64, f64),
+    y: (f64, f64),
+    y_desc: &str,
+) -> Result<PsdChart<'a, 'b>, String> {
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", title_size))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .right_y_label_area_size(60)
+        .build_cartesian_2d((x.0..x.1).log_scale(), (y.0..y.1).log_scale())
+        .map_err(|x| e(&x))?
+        .set_secondary_coord((x.0..x.1).log_scale(), -150.0f64..10.0f64);
+    chart
+        .configure_mesh()
+        .x_desc("spatial frequency [1/m]")
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_secondary_axes()
+        .y_desc("slope filter gain [dB]")
+        .draw()
+        .map_err(|x| e(&x))?;
+    Ok(chart)
 }
 
 /// Renders the plot to an SVG string.
@@ -93,28 +139,14 @@ pub fn render_psd_svg(p: &PsdPlot<'_>) -> Result<String, String> {
         let root = SVGBackend::with_string(&mut svg, (1000, 600)).into_drawing_area();
         let e = |e: &dyn std::fmt::Display| e.to_string();
         root.fill(&WHITE).map_err(|x| e(&x))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&p.title, ("sans-serif", 17))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .right_y_label_area_size(60)
-            .build_cartesian_2d((x0..x1).log_scale(), (y_floor..y_top).log_scale())
-            .map_err(|x| e(&x))?
-            .set_secondary_coord((x0..x1).log_scale(), -150.0f64..10.0f64);
-        chart
-            .configure_mesh()
-            .x_desc("spatial frequency [1/m]")
-            .y_desc("slope PSD [(tan α)² / (1/m)]")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(|x| e(&x))?;
-        chart
-            .configure_secondary_axes()
-            .y_desc("slope filter gain [dB]")
-            .draw()
-            .map_err(|x| e(&x))?;
+        let mut chart = psd_chart(
+            &root,
+            &p.title,
+            17,
+            (x0, x1),
+            (y_floor, y_top),
+            "slope PSD [(tan α)² / (1/m)]",
+        )?;
 
         let band_colour = RGBColor(70, 130, 200);
         let mut poly = pts(p.band.1);

@@ -39,7 +39,7 @@ pub enum RoadReportError {
     },
 }
 
-fn write_svg(path: &Path, svg: &str) -> Result<(), RoadReportError> {
+pub(crate) fn write_svg(path: &Path, svg: &str) -> Result<(), RoadReportError> {
     let io = |source| RoadReportError::Io {
         path: path.to_path_buf(),
         source,
@@ -48,13 +48,13 @@ fn write_svg(path: &Path, svg: &str) -> Result<(), RoadReportError> {
 }
 
 /// One output file: its path and the writer that puts it there.
-type Step<'a> = (
+pub(crate) type Step<'a> = (
     PathBuf,
     Box<dyn FnOnce(&Path) -> Result<(), RoadReportError> + 'a>,
 );
 
 /// Runs the writers in order; on the first error removes the files the earlier ones wrote.
-fn all_or_nothing(steps: Vec<Step<'_>>) -> Result<Vec<PathBuf>, RoadReportError> {
+pub(crate) fn all_or_nothing(steps: Vec<Step<'_>>) -> Result<Vec<PathBuf>, RoadReportError> {
     let mut done: Vec<PathBuf> = Vec::new();
     for (path, write) in steps {
         if let Err(e) = write(&path) {
@@ -198,7 +198,10 @@ pub fn write_road_spectrum(
     ])
 }
 
-fn filter_text(causal_order: usize, fc: &crate::road::slope_filter::SlopeFilterConfig) -> String {
+pub(crate) fn filter_text(
+    causal_order: usize,
+    fc: &crate::road::slope_filter::SlopeFilterConfig,
+) -> String {
     format!(
         "Butterworth low-pass, cut-off {} 1/m; zero-phase order {} (|H|^2), causal order {} (|H|); -{} dB required at {} 1/m (Myklebust & Eriksson 2012, §5)",
         fc.cutoff_per_m, fc.order, causal_order, fc.required_attenuation_db, fc.stop_per_m

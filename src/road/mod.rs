@@ -13,10 +13,14 @@
 //! - [`synth`]: the generator — constant grades joined by parabolic vertical curves.
 //! - [`road_table`]: road profiles as Parquet, and reading a slope column on a distance grid.
 //! - [`study`]: Welch spectra of slope, knees, and studies over many random roads.
+//! - [`compare`]: rule sets, measured profiles and a driveline's resonances on one grid.
+//! - [`fit`]: a rule set's segment lengths calibrated to measured roads.
 //! - [`profile`], [`gnss_profile`], [`vdri`]: road profiles from real tracks (GNSS fixes, VECTO
 //!   driving cycles); [`wgs84`]: the distance between GNSS fixes; [`profile_table`]: those
 //!   profiles as Parquet.
 
+pub mod compare;
+pub mod fit;
 pub mod gnss_profile;
 pub mod profile;
 pub mod profile_table;

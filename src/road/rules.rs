@@ -38,12 +38,24 @@ const BUNDLED: &[(&str, &str)] = &[
     ),
     ("city-se", include_str!("../../schemas/roads/city-se.toml")),
     (
+        "city-se-fitted",
+        include_str!("../../schemas/roads/city-se-fitted.toml"),
+    ),
+    (
         "freeway-us",
         include_str!("../../schemas/roads/freeway-us.toml"),
     ),
     (
+        "freeway-us-fitted",
+        include_str!("../../schemas/roads/freeway-us-fitted.toml"),
+    ),
+    (
         "urban-us",
         include_str!("../../schemas/roads/urban-us.toml"),
+    ),
+    (
+        "urban-us-fitted",
+        include_str!("../../schemas/roads/urban-us-fitted.toml"),
     ),
 ];
 

@@ -112,6 +112,9 @@ pub enum StudyError {
         #[source]
         source: SynthError,
     },
+    /// A comparison given neither a rule set nor a profile.
+    #[error("nothing to compare: give at least one rule set or one profile")]
+    NothingToCompare,
     /// Welch or the filter design failed (e.g. a grid too coarse for the filter's cut-off).
     #[error("{context}: {source}")]
     Signal {

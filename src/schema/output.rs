@@ -59,6 +59,18 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../../schemas/outputs/road-study-knees.toml"),
     ),
     (
+        "road_compare",
+        include_str!("../../schemas/outputs/road-compare.toml"),
+    ),
+    (
+        "road_compare_psd",
+        include_str!("../../schemas/outputs/road-compare-psd.toml"),
+    ),
+    (
+        "road_compare_resonances",
+        include_str!("../../schemas/outputs/road-compare-resonances.toml"),
+    ),
+    (
         "drive_summary",
         include_str!("../../schemas/outputs/drive-summary.toml"),
     ),

@@ -39,6 +39,7 @@ mod readers;
 mod real_data;
 mod resample_props;
 mod resample_truth;
+mod road_compare;
 mod road_profile;
 mod road_study;
 mod road_synth;
