@@ -30,7 +30,7 @@ use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::catalogue::Effect;
 use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
-use crate::signal::interp_linear;
+use crate::signal::{interp_linear, interp_linear_at};
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::scenario_from_log;
@@ -408,16 +408,8 @@ impl<'a> LongitudinalModel<'a> {
             }
         }
         Ok(LongitudinalOutputs {
-            vehicle_speed: self
-                .t
-                .iter()
-                .map(|&tt| interp_linear(&ts, &vs, tt))
-                .collect(),
-            engine_speed: self
-                .t
-                .iter()
-                .map(|&tt| interp_linear(&ts, &ws, tt))
-                .collect(),
+            vehicle_speed: interp_linear_at(&ts, &vs, &self.t),
+            engine_speed: interp_linear_at(&ts, &ws, &self.t),
         })
     }
 }

@@ -37,14 +37,13 @@ use super::dopri::Stats;
 use super::hybrid::{ClutchMode, EngineInput, Event, Scenario, SimError, Trajectory, N_STATES};
 use crate::model::driveline::DrivelineParams;
 use nalgebra::{DMatrix, SMatrix, SVector};
-use std::collections::HashMap;
 
 const N_IN: usize = 4;
 
 type Phi = SMatrix<f64, N_STATES, N_STATES>;
 type Gamma = SMatrix<f64, N_STATES, N_IN>;
 
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, PartialEq, Eq)]
 struct Key {
     gear: usize,
     locked: bool,
@@ -54,6 +53,17 @@ struct Key {
     integrate: bool,
     /// Drive shaft in its lash gap: no shaft spring or damper.
     gap: bool,
+}
+
+impl Key {
+    /// Slot of this configuration in [`FastDriveline`]'s cache: 16 per gear.
+    fn slot(self) -> usize {
+        (self.gear - 1) * 16
+            + usize::from(self.locked)
+            + 2 * usize::from(self.pi)
+            + 4 * usize::from(self.integrate)
+            + 8 * usize::from(self.gap)
+    }
 }
 
 /// Search cursors of the scenario's inputs for one simulation: the steps move forward in
@@ -75,7 +85,8 @@ pub struct FastDriveline<'a> {
     dt: f64,
     /// Total drive-shaft play b, rad (0: none).
     lash: f64,
-    cache: HashMap<Key, (Phi, Gamma)>,
+    /// Discretised matrices per configuration, at [`Key::slot`].
+    cache: Vec<Option<Box<(Phi, Gamma)>>>,
 }
 
 impl<'a> FastDriveline<'a> {
@@ -86,7 +97,7 @@ impl<'a> FastDriveline<'a> {
             ratios,
             dt: dt_s,
             lash: 0.0,
-            cache: HashMap::new(),
+            cache: vec![None; 16 * ratios.len()],
         }
     }
 
@@ -98,7 +109,7 @@ impl<'a> FastDriveline<'a> {
         } else {
             0.0
         };
-        self.cache.clear();
+        self.cache.iter_mut().for_each(|c| *c = None);
         self
     }
 
@@ -208,7 +219,8 @@ impl<'a> FastDriveline<'a> {
 
     fn discrete(&mut self, k: Key) -> &(Phi, Gamma) {
         let dt = self.dt;
-        if !self.cache.contains_key(&k) {
+        let slot = k.slot();
+        if self.cache[slot].is_none() {
             let (a, b) = self.continuous(k);
             let n = N_STATES + N_IN;
             let mut m = DMatrix::zeros(n, n);
@@ -219,9 +231,9 @@ impl<'a> FastDriveline<'a> {
             let e = m.exp();
             let phi = Phi::from_fn(|i, j| e[(i, j)]);
             let gamma = Gamma::from_fn(|i, j| e[(i, N_STATES + j)]);
-            self.cache.insert(k, (phi, gamma));
+            self.cache[slot] = Some(Box::new((phi, gamma)));
         }
-        &self.cache[&k]
+        self.cache[slot].as_deref().expect("filled above")
     }
 
     fn clutch_capacity(&self, x: f64) -> f64 {
@@ -339,7 +351,7 @@ impl<'a> FastDriveline<'a> {
         };
         for k in 0..=n {
             let t = t_start + k as f64 * dt;
-            let (me, _, _) = engine_torque(t, &y);
+            let (me, pi_active, _) = engine_torque(t, &y);
             let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
             let mtr = match mode {
                 ClutchMode::Locked => self.m_trans_locked(me, mc),
@@ -364,7 +376,8 @@ impl<'a> FastDriveline<'a> {
                 });
                 gear = g;
             }
-            let (me_start, pi_active, _) = engine_torque(t, &y);
+            // the engine torque at the step's start, as recorded above (same t, same state)
+            let me_start = me;
             let (me_mid, _, w_ref) = match &sc.engine {
                 EngineInput::Torque(m) => (m.eval_from(&cur.engine, tm), false, 0.0),
                 EngineInput::SpeedReference(r) => {
@@ -406,31 +419,35 @@ impl<'a> FastDriveline<'a> {
             // mode switches at the step end
             let t1 = t + dt;
             if sc.standstill_events {
-                let (me1, _, _) = engine_torque(t1, &y);
-                let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
-                let mg = p.mass_kg * p.gravity_m_per_s2;
-                let drive =
-                    md1 / p.wheel_radius_m - mg * sc.slope.eval_from(&cur.slope, t1).atan().sin();
-                let f0 = if sc.smoothing { 0.0 } else { 1.0 };
-                let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
                 let v_end = p.wheel_radius_m * y[7];
-                if stuck {
-                    if drive.abs() > cap {
-                        stuck = false;
+                let crossing = v_start != 0.0 && v_start * v_end <= 0.0;
+                // the forces at the step end matter only when held or when the speed crosses 0
+                if stuck || crossing {
+                    let (me1, _, _) = engine_torque(t1, &y);
+                    let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
+                    let mg = p.mass_kg * p.gravity_m_per_s2;
+                    let drive = md1 / p.wheel_radius_m
+                        - mg * sc.slope.eval_from(&cur.slope, t1).atan().sin();
+                    let f0 = if sc.smoothing { 0.0 } else { 1.0 };
+                    let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
+                    if stuck {
+                        if drive.abs() > cap {
+                            stuck = false;
+                            traj.events.push(Event {
+                                t: t1,
+                                kind: "breakaway".into(),
+                            });
+                        } else {
+                            y[7] = 0.0;
+                        }
+                    } else if drive.abs() <= cap {
+                        stuck = true;
+                        y[7] = 0.0;
                         traj.events.push(Event {
                             t: t1,
-                            kind: "breakaway".into(),
+                            kind: "stop".into(),
                         });
-                    } else {
-                        y[7] = 0.0;
                     }
-                } else if v_start != 0.0 && v_start * v_end <= 0.0 && drive.abs() <= cap {
-                    stuck = true;
-                    y[7] = 0.0;
-                    traj.events.push(Event {
-                        t: t1,
-                        kind: "stop".into(),
-                    });
                 }
             }
             match mode {
