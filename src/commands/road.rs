@@ -444,6 +444,7 @@ pub fn run(job: Job) -> Result<(), Failure> {
             let f = on_pool(roads.jobs, || fit(&cfg, &name))?.map_err(|e| match e {
                 FitError::Study(s) => study_failure(s),
                 e @ FitError::Setup { .. } => usage(e),
+                e @ FitError::FlatTarget { .. } => input(e),
             })?;
             drop(spinner);
             let text = fit_toml(&cfg, &f);

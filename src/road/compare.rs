@@ -6,7 +6,7 @@
 //! - every spectrum is the Welch PSD of the slope (tan α) over spatial frequency, 1/m, on the same
 //!   grid step and segment length ([`SpectrumSettings`]), so the bins are the same for every item;
 //! - knees are the frequencies below which 50, 90 and 99 % of the slope power lies
-//!   ([`crate::signal::spectrum::knee_frequency`]);
+//!   ([`crate::signal::knee_frequency`]);
 //! - a rule set's knee is the median over its roads, its range the 5th–95th percentile across the
 //!   roads (how far one road of that length strays); its plotted PSD is the mean over the roads;
 //! - a measured profile's knee is that of its Welch PSD, its range a 90 % bootstrap interval

@@ -104,6 +104,12 @@ pub enum FitError {
         /// Scales given.
         scales: Vec<f64>,
     },
+    /// A target whose slope has no power (a flat road): it has no knees to fit to.
+    #[error("target {target} has no slope power (a flat road): nothing to fit its knees to")]
+    FlatTarget {
+        /// Its label.
+        target: String,
+    },
     /// A study or a target's spectrum.
     #[error(transparent)]
     Study(#[from] StudyError),
@@ -135,6 +141,14 @@ pub fn fit(cfg: &FitConfig, name: &str) -> Result<Fit, FitError> {
             })
         })
         .collect::<Result<Vec<_>, StudyError>>()?;
+    if let Some(t) = targets
+        .iter()
+        .find(|t| !(t.knee_50.is_finite() && t.knee_90.is_finite()))
+    {
+        return Err(FitError::FlatTarget {
+            target: t.name.clone(),
+        });
+    }
     let mut points = Vec::with_capacity(cfg.scales.len());
     for &k in &cfg.scales {
         let study = run_study(&StudyConfig {
@@ -242,5 +256,8 @@ mod tests {
         });
         cfg.scales = vec![1.0, -1.0];
         assert!(matches!(fit(&cfg, "x"), Err(FitError::Setup { .. })));
+        // a flat target has no knees
+        cfg.scales = vec![1.0];
+        assert!(matches!(fit(&cfg, "x"), Err(FitError::FlatTarget { .. })));
     }
 }
