@@ -76,8 +76,8 @@ pub struct StudyArgs {
     /// Roads per study (per rule set).
     #[arg(long, default_value_t = 64)]
     roads: usize,
-    /// Length of each synthetic road, km (about the measured profiles' length keeps their
-    /// spectra comparable).
+    /// Length of each synthetic road, km (in a comparison or a fit, about the measured
+    /// profiles' length keeps their spectra comparable).
     #[arg(long, default_value_t = 50.0, allow_negative_numbers = true)]
     length_km: f64,
     /// Seed of a study's first road.
@@ -219,9 +219,9 @@ fn class_prefix(spec: &str) -> (String, &str) {
     }
 }
 
-/// Parses `FILE[@FROM_KM..TO_KM]`.
+/// Parses `FILE[@FROM_KM..TO_KM]` (an `@` not followed by a `..` range is part of the file name).
 fn window(spec: &str) -> Result<(PathBuf, Option<(f64, f64)>), Failure> {
-    let Some((file, w)) = spec.rsplit_once('@') else {
+    let Some((file, w)) = spec.rsplit_once('@').filter(|(_, w)| w.contains("..")) else {
         return Ok((PathBuf::from(spec), None));
     };
     let bad = || {

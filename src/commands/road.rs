@@ -11,6 +11,7 @@ use fleetdyn::road::compare::{compare, CompareConfig, Comparison, ProfileInput, 
 use fleetdyn::road::fit::{fit, Fit, FitConfig, FitError};
 use fleetdyn::road::gnss_profile::gnss_profile_of;
 use fleetdyn::road::profile::{GnssProfileConfig, ProfileError};
+use fleetdyn::road::profile_input::{read_profile_input, ProfileInputError};
 use fleetdyn::road::profile_table::write_profile;
 use fleetdyn::road::road_table::{read_distance_column, write_road};
 use fleetdyn::road::rules::RoadRules;
@@ -154,59 +155,19 @@ fn profile_failure(e: ProfileError) -> Failure {
     }
 }
 
-/// The slope of a profile file on a `step_m` grid, cut to its window; the label is the file
-/// stem with the window.
-fn load_profile(spec: &ProfileSpec, step_m: f64) -> Result<ProfileInput, Failure> {
-    let path = &spec.file;
-    let slope = match detect_input(path).map_err(profile_failure)? {
-        ProfileKind::VectoCycle => {
-            let c = read_vdri(path).map_err(profile_failure)?;
-            cycle_profile(&c, step_m).map_err(profile_failure)?.slope
-        }
-        ProfileKind::Recording => {
-            let col = read_distance_column(path, "slope").map_err(input)?;
-            if (col.step_m - step_m).abs() > 1e-9 * step_m {
-                return Err(usage_msg(format_args!(
-                    "{}: its grid step is {} m, the comparison's {} m (--step-m)",
-                    path.display(),
-                    col.step_m,
-                    step_m
-                )));
-            }
-            col.values
-        }
-    };
-    let stem = path.file_stem().map_or_else(
-        || path.display().to_string(),
-        |s| s.to_string_lossy().into(),
-    );
-    let (name, slope) = match spec.window_km {
-        None => (stem, slope),
-        Some((a, b)) => {
-            let len_km = (slope.len().saturating_sub(1)) as f64 * step_m / 1000.0;
-            if b > len_km + 1e-9 {
-                return Err(usage_msg(format_args!(
-                    "{}: window {a}..{b} km reaches beyond the profile's {len_km:.3} km",
-                    path.display()
-                )));
-            }
-            let (i0, i1) = (
-                (a * 1000.0 / step_m).round() as usize,
-                ((b * 1000.0 / step_m).round() as usize).min(slope.len() - 1),
-            );
-            (format!("{stem}@{a}..{b}"), slope[i0..=i1].to_vec())
-        }
-    };
-    Ok(ProfileInput {
-        name,
-        class: spec.class.clone(),
-        origin: path.display().to_string(),
-        slope,
-    })
-}
-
+/// The profiles on a `step_m` grid: a window or grid that does not fit is a usage error, a file
+/// that holds no usable profile an input error.
 fn load_profiles(specs: &[ProfileSpec], step_m: f64) -> Result<Vec<ProfileInput>, Failure> {
-    specs.iter().map(|p| load_profile(p, step_m)).collect()
+    specs
+        .iter()
+        .map(|p| {
+            read_profile_input(&p.file, &p.class, p.window_km, step_m).map_err(|e| match e {
+                ProfileInputError::Profile(e) => profile_failure(e),
+                e @ ProfileInputError::RoadFile(_) => input(e),
+                e @ (ProfileInputError::Step { .. } | ProfileInputError::Window { .. }) => usage(e),
+            })
+        })
+        .collect()
 }
 
 fn print_comparison(c: &Comparison) {

@@ -14,7 +14,8 @@
 //! - [`road_table`]: road profiles as Parquet, and reading a slope column on a distance grid.
 //! - [`study`]: Welch spectra of slope, knees, and studies over many random roads.
 //! - [`compare`]: rule sets, measured profiles and a driveline's resonances on one grid.
-//! - [`fit`]: a rule set's segment lengths calibrated to measured roads.
+//! - [`fit`]: a rule set's segment lengths calibrated to measured roads; [`profile_input`]: the
+//!   measured profiles they read.
 //! - [`profile`], [`gnss_profile`], [`vdri`]: road profiles from real tracks (GNSS fixes, VECTO
 //!   driving cycles); [`wgs84`]: the distance between GNSS fixes; [`profile_table`]: those
 //!   profiles as Parquet.
@@ -23,6 +24,7 @@ pub mod compare;
 pub mod fit;
 pub mod gnss_profile;
 pub mod profile;
+pub mod profile_input;
 pub mod profile_table;
 pub mod road_table;
 pub mod rules;
