@@ -9,7 +9,7 @@
 //! driveline resonance at its top speed as a red tick labelled with the gear (the axis reaches
 //! past the grid's Nyquist frequency when a resonance lies beyond it).
 
-use super::road_plot::{plot_indices, psd_chart, MAX_PLOT_POINTS};
+use super::road_plot::{draw_filter_marks, plot_indices, psd_chart, MAX_PLOT_POINTS};
 use super::road_spectra::{
     all_or_nothing, filter_text, write_svg, RoadReportError, Step, SLOPE_PSD_UNIT,
 };
@@ -153,25 +153,7 @@ pub fn render_compare_svg(c: &Comparison) -> Result<String, String> {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], grey));
         }
         let fc = c.filter.config;
-        for (fv, label) in [
-            (
-                fc.cutoff_per_m,
-                format!("filter cut-off f_co = {:.0e} 1/m", fc.cutoff_per_m),
-            ),
-            (
-                fc.stop_per_m,
-                format!(
-                    "f_lo = {:.0e} 1/m (-{} dB required)",
-                    fc.stop_per_m, fc.required_attenuation_db
-                ),
-            ),
-        ] {
-            chart
-                .draw_series(LineSeries::new(vline(fv), BLACK.stroke_width(1)))
-                .map_err(|x| e(&x))?
-                .label(label)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
-        }
+        draw_filter_marks(&mut chart, &fc, (x0, x1), (y_floor, y_top))?;
         let red = RGBColor(200, 30, 30);
         let gain: Vec<(f64, f64)> = idx
             .iter()

@@ -96,6 +96,41 @@ pub(crate) fn psd_chart<'a, 'b>(
     Ok(chart)
 }
 
+/// Draws the slope filter's cut-off f_co and its −30 dB frequency f_lo as black vertical lines
+/// with their legend entries, where they fall inside `x`.
+pub(crate) fn draw_filter_marks(
+    chart: &mut PsdChart<'_, '_>,
+    fc: &crate::road::slope_filter::SlopeFilterConfig,
+    x: (f64, f64),
+    y: (f64, f64),
+) -> Result<(), String> {
+    for (f, label) in [
+        (
+            fc.cutoff_per_m,
+            format!("filter cut-off f_co = {:.0e} 1/m", fc.cutoff_per_m),
+        ),
+        (
+            fc.stop_per_m,
+            format!(
+                "f_lo = {:.0e} 1/m (-{} dB required)",
+                fc.stop_per_m, fc.required_attenuation_db
+            ),
+        ),
+    ] {
+        if f >= x.0 && f <= x.1 {
+            chart
+                .draw_series(LineSeries::new(
+                    vec![(f, y.0), (f, y.1)],
+                    BLACK.stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?
+                .label(label)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
+        }
+    }
+    Ok(())
+}
+
 /// Renders the plot to an SVG string.
 ///
 /// # Errors
@@ -201,27 +236,7 @@ pub fn render_psd_svg(p: &PsdPlot<'_>) -> Result<String, String> {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], style));
         }
         let fc = p.filter.config;
-        for (f, label) in [
-            (
-                fc.cutoff_per_m,
-                format!("filter cut-off f_co = {:.0e} 1/m", fc.cutoff_per_m),
-            ),
-            (
-                fc.stop_per_m,
-                format!(
-                    "f_lo = {:.0e} 1/m (-{} dB required)",
-                    fc.stop_per_m, fc.required_attenuation_db
-                ),
-            ),
-        ] {
-            if f >= x0 && f <= x1 {
-                chart
-                    .draw_series(LineSeries::new(vline(f), BLACK.stroke_width(1)))
-                    .map_err(|x| e(&x))?
-                    .label(label)
-                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));
-            }
-        }
+        draw_filter_marks(&mut chart, &fc, (x0, x1), (y_floor, y_top))?;
         let red = RGBColor(200, 30, 30);
         let gain = |v: &[f64]| -> Vec<(f64, f64)> {
             idx.iter()
