@@ -262,6 +262,20 @@ fn road_compare_refuses_what_it_cannot_compare() {
         assert!(err.contains(message), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?} left output");
     }
+    // a file that holds no road profile (a drive log without `distance`) is an input error
+    let drive = fixture("fixtures/drives/truck-0003-export.parquet");
+    let o = cli(&[
+        "road",
+        "compare",
+        "--profile",
+        drive.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("truck-0003-export.parquet"), "{err}");
+    assert!(!out.exists());
 }
 
 #[test]
