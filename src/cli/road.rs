@@ -7,7 +7,7 @@ use clap::{Args, Subcommand};
 use fleetdyn::road::compare::RulesInput;
 use fleetdyn::road::profile::GnssProfileConfig;
 use fleetdyn::road::rules::RoadRules;
-use fleetdyn::road::study::{SpectrumSettings, StudyConfig};
+use fleetdyn::road::study::{SpectrumSettings, StudyConfig, StudyRoads};
 use std::path::PathBuf;
 
 /// Roads (docs/models/road.md): synthetic roads from road-design rules, studies of their slope
@@ -96,7 +96,7 @@ pub struct StudyArgs {
 }
 
 impl StudyArgs {
-    /// The roads and Welch settings, checked.
+    /// The roads and Welch settings, checked, and the worker threads.
     fn resolve(&self) -> Result<road::Roads, Failure> {
         let spectrum = SpectrumSettings {
             segment_length_m: self.segment_length_m,
@@ -104,11 +104,13 @@ impl StudyArgs {
         };
         spectrum.validate().map_err(setting)?;
         Ok(road::Roads {
-            n_roads: self.roads,
-            length_m: self.length_km * 1000.0,
-            seed: self.seed,
-            step_m: self.step_m,
-            spectrum,
+            study: StudyRoads {
+                n_roads: self.roads,
+                length_m: self.length_km * 1000.0,
+                seed: self.seed,
+                step_m: self.step_m,
+                spectrum,
+            },
             jobs: jobs(self.jobs)?,
         })
     }

@@ -8,14 +8,16 @@ use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
 use fleetdyn::report::road_compare::write_comparison;
 use fleetdyn::report::road_spectra::{write_road_spectrum, write_study};
 use fleetdyn::road::compare::{compare, CompareConfig, Comparison, ProfileInput, RulesInput};
-use fleetdyn::road::fit::{fit, Fit, FitConfig, FitError};
+use fleetdyn::road::fit::{fit, rule_file, FitConfig, FitError};
 use fleetdyn::road::gnss_profile::gnss_profile_of;
 use fleetdyn::road::profile::{GnssProfileConfig, ProfileError};
 use fleetdyn::road::profile_input::{read_profile_input, ProfileInputError};
 use fleetdyn::road::profile_table::write_profile;
 use fleetdyn::road::road_table::{read_distance_column, write_road};
 use fleetdyn::road::rules::RoadRules;
-use fleetdyn::road::study::{run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError};
+use fleetdyn::road::study::{
+    run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError, StudyRoads,
+};
 use fleetdyn::road::synth;
 use fleetdyn::road::vdri::{cycle_profile, detect_input, read_vdri, ProfileInput as ProfileKind};
 use std::path::PathBuf;
@@ -30,18 +32,10 @@ pub struct ProfileSpec {
     pub window_km: Option<(f64, f64)>,
 }
 
-/// The synthetic roads of a comparison or fit, and the shared Welch settings.
+/// The synthetic roads of a comparison or fit with their Welch settings, and the worker threads.
 pub struct Roads {
-    /// Roads per study.
-    pub n_roads: usize,
-    /// Road length, m.
-    pub length_m: f64,
-    /// First seed.
-    pub seed: u64,
-    /// Grid step of roads and profiles, m.
-    pub step_m: f64,
-    /// Welch settings.
-    pub spectrum: SpectrumSettings,
+    /// Roads, grid and Welch settings.
+    pub study: StudyRoads,
     /// Worker threads.
     pub jobs: usize,
 }
@@ -217,43 +211,6 @@ fn print_comparison(c: &Comparison) {
     }
 }
 
-/// The fitted rule file: a comment block recording the fit, then the rules.
-fn fit_toml(cfg: &FitConfig, f: &Fit) -> String {
-    let mut s = format!(
-        "# {}: {} with its segment lengths scaled by k = {}, fitted by `fleetdyn road fit`\n# (docs/models/road.md). Regulation values, radius band and e-folding grade unchanged.\n#\n# Command: fleetdyn {}\n#\n# Targets (Welch segments of {} m on a {} m grid):\n",
-        f.rules.name,
-        cfg.base.name,
-        f.points[f.best].scale,
-        std::env::args().skip(1).collect::<Vec<_>>().join(" "),
-        cfg.spectrum.segment_length_m,
-        cfg.step_m
-    );
-    for (t, p) in f.targets.iter().zip(&cfg.targets) {
-        s += &format!(
-            "#   {} ({}): 50 % knee {:.3e} 1/m, 90 % knee {:.3e} 1/m\n",
-            t.name, p.origin, t.knee_50, t.knee_90
-        );
-    }
-    s += &format!(
-        "#\n# Grid ({} roads x {} m per k, seeds {}..{}): k, median 50 % knee, median 90 % knee, J\n",
-        cfg.n_roads,
-        cfg.length_m,
-        cfg.seed,
-        cfg.seed + cfg.n_roads as u64 - 1
-    );
-    for (i, p) in f.points.iter().enumerate() {
-        s += &format!(
-            "#   {:<6} {:.3e} {:.3e} {:.4}{}\n",
-            p.scale,
-            p.knee_50,
-            p.knee_90,
-            p.objective,
-            if i == f.best { "  <- fitted" } else { "" }
-        );
-    }
-    s + &f.rules.canonical_toml()
-}
-
 /// Runs it.
 pub fn run(job: Job) -> Result<(), Failure> {
     match job {
@@ -362,12 +319,8 @@ pub fn run(job: Job) -> Result<(), Failure> {
         } => {
             let cfg = CompareConfig {
                 rules,
-                profiles: load_profiles(&profiles, roads.step_m)?,
-                n_roads: roads.n_roads,
-                length_m: roads.length_m,
-                seed: roads.seed,
-                step_m: roads.step_m,
-                spectrum: roads.spectrum,
+                profiles: load_profiles(&profiles, roads.study.step_m)?,
+                roads: roads.study,
             };
             let driveline = match vehicle.as_deref() {
                 Some((v, file)) => Some((v.driveline(file).map_err(usage)?, &v.gearbox.ratios[..])),
@@ -393,13 +346,9 @@ pub fn run(job: Job) -> Result<(), Failure> {
         } => {
             let cfg = FitConfig {
                 base,
-                targets: load_profiles(&targets, roads.step_m)?,
+                targets: load_profiles(&targets, roads.study.step_m)?,
                 scales,
-                n_roads: roads.n_roads,
-                length_m: roads.length_m,
-                seed: roads.seed,
-                step_m: roads.step_m,
-                spectrum: roads.spectrum,
+                roads: roads.study,
             };
             let spinner = Progress::spinner(&format!("{} studies", cfg.scales.len()));
             let f = on_pool(roads.jobs, || fit(&cfg, &name))?.map_err(|e| match e {
@@ -408,7 +357,8 @@ pub fn run(job: Job) -> Result<(), Failure> {
                 e @ FitError::FlatTarget { .. } => input(e),
             })?;
             drop(spinner);
-            let text = fit_toml(&cfg, &f);
+            let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
+            let text = rule_file(&cfg, &f, &command);
             AtomicFile::write_all(&output, text.as_bytes()).map_err(io)?;
             for t in &f.targets {
                 say!(

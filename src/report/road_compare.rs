@@ -103,10 +103,10 @@ pub fn render_compare_svg(c: &Comparison) -> Result<String, String> {
         let title = format!(
             "Slope PSD / total slope power: {} rule set(s) ({} roads x {:.0} km each) and {} measured profile(s); Welch segments of {:.0} m",
             c.items.iter().filter(|i| i.kind == Kind::Rules).count(),
-            c.config.n_roads,
-            c.config.length_m / 1000.0,
+            c.config.roads.n_roads,
+            c.config.roads.length_m / 1000.0,
             c.items.iter().filter(|i| i.kind == Kind::Profile).count(),
-            c.nperseg as f64 * c.config.step_m
+            c.nperseg as f64 * c.config.roads.step_m
         );
         let mut chart = psd_chart(
             &root,
@@ -230,24 +230,24 @@ pub fn write_comparison(dir: &Path, c: &Comparison) -> Result<Vec<PathBuf>, Road
             "generator": GENERATOR,
             "rules": cfg.rules.iter().map(|r| (r.class.clone(), r.rules.canonical_toml())).collect::<Vec<_>>(),
             "profiles": cfg.profiles.iter().map(|p| (p.name.clone(), p.class.clone(), p.origin.clone())).collect::<Vec<_>>(),
-            "roads": cfg.n_roads,
-            "length_m": cfg.length_m,
-            "seed": cfg.seed,
-            "step_m": cfg.step_m,
-            "spectrum": cfg.spectrum,
+            "roads": cfg.roads.n_roads,
+            "length_m": cfg.roads.length_m,
+            "seed": cfg.roads.seed,
+            "step_m": cfg.roads.step_m,
+            "spectrum": cfg.roads.spectrum,
             "resonances": c.resonances.iter().map(|r| (r.gear, r.peak_per_m)).collect::<Vec<_>>(),
         }),
     );
     let hash = config_hash(&[fp.as_bytes()]);
     let extra = vec![
         ("generator".into(), GENERATOR.to_string()),
-        ("roads_per_rule_set".into(), cfg.n_roads.to_string()),
-        ("road_length_m".into(), cfg.length_m.to_string()),
-        ("seed_first".into(), cfg.seed.to_string()),
-        ("step_m".into(), cfg.step_m.to_string()),
+        ("roads_per_rule_set".into(), cfg.roads.n_roads.to_string()),
+        ("road_length_m".into(), cfg.roads.length_m.to_string()),
+        ("seed_first".into(), cfg.roads.seed.to_string()),
+        ("step_m".into(), cfg.roads.step_m.to_string()),
         (
             "segment_length_m".into(),
-            cfg.spectrum.segment_length_m.to_string(),
+            cfg.roads.spectrum.segment_length_m.to_string(),
         ),
         ("nperseg".into(), c.nperseg.to_string()),
         (

@@ -4,7 +4,7 @@
 //!
 //! Conventions:
 //! - every spectrum is the Welch PSD of the slope (tan α) over spatial frequency, 1/m, on the same
-//!   grid step and segment length ([`SpectrumSettings`]), so the bins are the same for every item;
+//!   grid step and segment length ([`super::study::SpectrumSettings`]), so the bins are the same for every item;
 //! - knees are the frequencies below which 50, 90 and 99 % of the slope power lies
 //!   ([`crate::signal::knee_frequency`]);
 //! - a rule set's knee is the median over its roads, its range the 5th–95th percentile across the
@@ -24,12 +24,12 @@
 use super::rules::RoadRules;
 use super::study::{
     filter_response, percentile_sorted, power_removed, run_study, slope_spectrum, FilterResponse,
-    SpectrumSettings, StudyConfig, StudyError,
+    RoadSpectrum, StudyError, StudyRoads,
 };
 use crate::model::driveline::DrivelineParams;
 use crate::model::resonance::{resonance, Path};
 use crate::rng::Xoshiro256StarStar;
-use crate::signal::{cumulative_power, knee_frequency, share_below, welch, WelchConfig};
+use crate::signal::{knee_frequency, welch, WelchConfig};
 
 /// Bootstrap draws behind a measured profile's knee interval.
 pub const BOOTSTRAP_DRAWS: usize = 2000;
@@ -155,16 +155,9 @@ pub struct CompareConfig {
     pub rules: Vec<RulesInput>,
     /// Measured profiles.
     pub profiles: Vec<ProfileInput>,
-    /// Roads per rule set.
-    pub n_roads: usize,
-    /// Length of each synthetic road, m.
-    pub length_m: f64,
-    /// Seed of each rule set's first road.
-    pub seed: u64,
-    /// Grid step of roads and profiles, m.
-    pub step_m: f64,
-    /// Welch settings, shared by every item.
-    pub spectrum: SpectrumSettings,
+    /// Roads per rule set, their grid (also the profiles') and the Welch settings shared by
+    /// every item.
+    pub roads: StudyRoads,
 }
 
 /// A comparison's results.
@@ -191,20 +184,19 @@ pub struct Comparison {
 /// narrower than one from independent segments would be. With a single segment the interval is
 /// the knee itself.
 ///
+/// `whole` is the spectrum [`slope_spectrum`] gives for `slope`; its segments are taken again
+/// one by one.
+///
 /// # Errors
-/// [`StudyError`] as [`slope_spectrum`].
-pub fn knee_intervals(
-    slope: &[f64],
-    step_m: f64,
-    s: &SpectrumSettings,
-) -> Result<[Knee; 3], StudyError> {
-    let whole = slope_spectrum(slope, step_m, s)?;
+/// [`StudyError::Signal`] when a segment's periodogram cannot be computed.
+pub fn knee_intervals(slope: &[f64], whole: &RoadSpectrum) -> Result<[Knee; 3], StudyError> {
     let (n, step) = (whole.psd.nperseg, whole.psd.nperseg - whole.psd.noverlap);
     let one = WelchConfig {
-        fs_hz: 1.0 / step_m,
+        fs_hz: 1.0 / whole.step_m,
         nperseg: Some(n),
         noverlap: None,
-        confidence: s.confidence,
+        // only the PSD of a segment is used, not its confidence band
+        confidence: 0.95,
     };
     let segments: Vec<Vec<f64>> = (0..whole.psd.n_segments)
         .map(|k| {
@@ -255,11 +247,6 @@ pub fn knee_intervals(
         };
     }
     Ok(out)
-}
-
-fn paper_shares_of(freq: &[f64], psd: &[f64]) -> [f64; 2] {
-    let cum = cumulative_power(freq, psd);
-    super::study::PAPER_FREQS_PER_M.map(|f| share_below(freq, &cum, f))
 }
 
 fn rms(x: &[f64]) -> f64 {
@@ -319,14 +306,7 @@ pub fn compare(
     let mut items = Vec::with_capacity(cfg.rules.len() + cfg.profiles.len());
     let mut grid: Option<(Vec<f64>, usize, FilterResponse)> = None;
     for r in &cfg.rules {
-        let study = run_study(&StudyConfig {
-            rules: r.rules.clone(),
-            n_roads: cfg.n_roads,
-            length_m: cfg.length_m,
-            step_m: cfg.step_m,
-            seed: cfg.seed,
-            spectrum: cfg.spectrum,
-        })?;
+        let study = run_study(&cfg.roads.with_rules(r.rules.clone()))?;
         let rms_mean =
             study.roads.iter().map(|k| k.slope_rms).sum::<f64>() / study.roads.len() as f64;
         let knee = |p: &super::study::Percentiles| Knee {
@@ -339,8 +319,8 @@ pub fn compare(
             kind: Kind::Rules,
             class: r.class.clone(),
             origin: r.rules.source.clone(),
-            length_m: cfg.length_m,
-            roads: cfg.n_roads,
+            length_m: cfg.roads.length_m,
+            roads: cfg.roads.n_roads,
             segments: study.n_segments,
             knees: [
                 knee(&study.knee_50),
@@ -356,19 +336,19 @@ pub fn compare(
         grid.get_or_insert((study.freq_per_m, study.nperseg, study.filter));
     }
     for p in &cfg.profiles {
-        let sp = slope_spectrum(&p.slope, cfg.step_m, &cfg.spectrum)?;
-        let knees = knee_intervals(&p.slope, cfg.step_m, &cfg.spectrum)?;
+        let sp = slope_spectrum(&p.slope, cfg.roads.step_m, &cfg.roads.spectrum)?;
+        let knees = knee_intervals(&p.slope, &sp)?;
         let freq = &sp.psd.freq_hz;
         items.push(Item {
             name: p.name.clone(),
             kind: Kind::Profile,
             class: p.class.clone(),
             origin: p.origin.clone(),
-            length_m: (p.slope.len().saturating_sub(1)) as f64 * cfg.step_m,
+            length_m: (p.slope.len().saturating_sub(1)) as f64 * cfg.roads.step_m,
             roads: 1,
             segments: sp.psd.n_segments,
             knees,
-            share_below_paper: paper_shares_of(freq, &sp.psd.psd),
+            share_below_paper: sp.share_below_paper,
             removed_zero_phase: power_removed(freq, &sp.psd.psd, &sp.filter.zero_phase_db),
             removed_causal: power_removed(freq, &sp.psd.psd, &sp.filter.causal_db),
             slope_rms: rms(&p.slope),
@@ -380,7 +360,7 @@ pub fn compare(
         return Err(StudyError::NothingToCompare);
     };
     let resonances = match driveline {
-        Some((p, ratios)) => gear_resonances(p, ratios, cfg.step_m)?,
+        Some((p, ratios)) => gear_resonances(p, ratios, cfg.roads.step_m)?,
         None => Vec::new(),
     };
     let mut config = cfg.clone();
@@ -401,6 +381,7 @@ pub fn compare(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::road::study::SpectrumSettings;
 
     fn lcg_noise(n: usize, seed: u64) -> Vec<f64> {
         let mut r = Xoshiro256StarStar::seed_from_u64(seed);
@@ -421,8 +402,8 @@ mod tests {
             segment_length_m: 4096.0,
             ..Default::default()
         };
-        let k = knee_intervals(&slope, 1.0, &s).unwrap();
         let whole = slope_spectrum(&slope, 1.0, &s).unwrap();
+        let k = knee_intervals(&slope, &whole).unwrap();
         assert_eq!(k[0].value, whole.knee_50);
         for q in k {
             assert!(q.lo <= q.value && q.value <= q.hi, "{q:?}");
@@ -433,7 +414,7 @@ mod tests {
             );
         }
         // Same input, same interval.
-        assert_eq!(knee_intervals(&slope, 1.0, &s).unwrap(), k);
+        assert_eq!(knee_intervals(&slope, &whole).unwrap(), k);
     }
 
     #[test]
@@ -451,7 +432,7 @@ mod tests {
             segment_length_m: 4096.0,
             ..Default::default()
         };
-        let k = knee_intervals(&slope, 1.0, &s).unwrap();
+        let k = knee_intervals(&slope, &slope_spectrum(&slope, 1.0, &s).unwrap()).unwrap();
         assert!(k.iter().all(|q| q.lo == q.value && q.hi == q.value));
     }
 }

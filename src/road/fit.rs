@@ -20,7 +20,7 @@
 
 use super::compare::ProfileInput;
 use super::rules::RoadRules;
-use super::study::{run_study, slope_spectrum, SpectrumSettings, StudyConfig, StudyError};
+use super::study::{run_study, slope_spectrum, StudyError, StudyRoads};
 
 /// Settings of a fit.
 #[derive(Debug, Clone, PartialEq)]
@@ -31,16 +31,8 @@ pub struct FitConfig {
     pub targets: Vec<ProfileInput>,
     /// Scale factors tried, in order.
     pub scales: Vec<f64>,
-    /// Roads per study.
-    pub n_roads: usize,
-    /// Length of each road, m.
-    pub length_m: f64,
-    /// Seed of each study's first road.
-    pub seed: u64,
-    /// Grid step, m.
-    pub step_m: f64,
-    /// Welch settings, shared by targets and studies.
-    pub spectrum: SpectrumSettings,
+    /// Roads per study, their grid (also the targets') and the Welch settings.
+    pub roads: StudyRoads,
 }
 
 /// One grid point.
@@ -133,7 +125,7 @@ pub fn fit(cfg: &FitConfig, name: &str) -> Result<Fit, FitError> {
         .targets
         .iter()
         .map(|t| {
-            let sp = slope_spectrum(&t.slope, cfg.step_m, &cfg.spectrum)?;
+            let sp = slope_spectrum(&t.slope, cfg.roads.step_m, &cfg.roads.spectrum)?;
             Ok(TargetKnees {
                 name: t.name.clone(),
                 knee_50: sp.knee_50,
@@ -151,14 +143,7 @@ pub fn fit(cfg: &FitConfig, name: &str) -> Result<Fit, FitError> {
     }
     let mut points = Vec::with_capacity(cfg.scales.len());
     for &k in &cfg.scales {
-        let study = run_study(&StudyConfig {
-            rules: scaled(&cfg.base, k),
-            n_roads: cfg.n_roads,
-            length_m: cfg.length_m,
-            step_m: cfg.step_m,
-            seed: cfg.seed,
-            spectrum: cfg.spectrum,
-        })?;
+        let study = run_study(&cfg.roads.with_rules(scaled(&cfg.base, k)))?;
         let (k50, k90) = (study.knee_50.p50, study.knee_90.p50);
         let objective = targets
             .iter()
@@ -185,10 +170,10 @@ pub fn fit(cfg: &FitConfig, name: &str) -> Result<Fit, FitError> {
         cfg.base.source,
         cfg.base.name,
         cfg.scales,
-        cfg.n_roads,
-        cfg.length_m,
-        cfg.seed,
-        cfg.spectrum.segment_length_m,
+        cfg.roads.n_roads,
+        cfg.roads.length_m,
+        cfg.roads.seed,
+        cfg.roads.spectrum.segment_length_m,
         names.join(", ")
     );
     Ok(Fit {
@@ -199,9 +184,48 @@ pub fn fit(cfg: &FitConfig, name: &str) -> Result<Fit, FitError> {
     })
 }
 
+/// The fitted rule file: a comment block recording the fit (`command` as it was given, the
+/// targets' knees, every grid point with the chosen one marked), then the rules as TOML.
+pub fn rule_file(cfg: &FitConfig, f: &Fit, command: &str) -> String {
+    let r = &cfg.roads;
+    let mut s = format!(
+        "# {}: {} with its segment lengths scaled by k = {}, fitted by `fleetdyn road fit`\n# (docs/models/road.md). Regulation values, radius band and e-folding grade unchanged.\n#\n# Command: fleetdyn {command}\n#\n# Targets (Welch segments of {} m on a {} m grid):\n",
+        f.rules.name,
+        cfg.base.name,
+        f.points[f.best].scale,
+        r.spectrum.segment_length_m,
+        r.step_m
+    );
+    for (t, p) in f.targets.iter().zip(&cfg.targets) {
+        s += &format!(
+            "#   {} ({}): 50 % knee {:.3e} 1/m, 90 % knee {:.3e} 1/m\n",
+            t.name, p.origin, t.knee_50, t.knee_90
+        );
+    }
+    s += &format!(
+        "#\n# Grid ({} roads x {} m per k, seeds {}..{}): k, median 50 % knee, median 90 % knee, J\n",
+        r.n_roads,
+        r.length_m,
+        r.seed,
+        r.seed + r.n_roads as u64 - 1
+    );
+    for (i, p) in f.points.iter().enumerate() {
+        s += &format!(
+            "#   {:<6} {:.3e} {:.3e} {:.4}{}\n",
+            p.scale,
+            p.knee_50,
+            p.knee_90,
+            p.objective,
+            if i == f.best { "  <- fitted" } else { "" }
+        );
+    }
+    s + &f.rules.canonical_toml()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::road::study::SpectrumSettings;
     use crate::road::synth::generate;
 
     #[test]
@@ -218,13 +242,15 @@ mod tests {
                 slope: target.profile.slope,
             }],
             scales: vec![0.5, 1.0, 2.0, 4.0],
-            n_roads: 16,
-            length_m: 40_000.0,
-            seed: 1,
-            step_m: 1.0,
-            spectrum: SpectrumSettings {
-                segment_length_m: 4096.0,
-                ..Default::default()
+            roads: StudyRoads {
+                n_roads: 16,
+                length_m: 40_000.0,
+                seed: 1,
+                step_m: 1.0,
+                spectrum: SpectrumSettings {
+                    segment_length_m: 4096.0,
+                    ..Default::default()
+                },
             },
         };
         let f = fit(&cfg, "city-se-test").unwrap();
@@ -241,11 +267,13 @@ mod tests {
             base,
             targets: vec![],
             scales: vec![1.0],
-            n_roads: 2,
-            length_m: 10_000.0,
-            seed: 1,
-            step_m: 1.0,
-            spectrum: SpectrumSettings::default(),
+            roads: StudyRoads {
+                n_roads: 2,
+                length_m: 10_000.0,
+                seed: 1,
+                step_m: 1.0,
+                spectrum: SpectrumSettings::default(),
+            },
         };
         assert!(matches!(fit(&cfg, "x"), Err(FitError::Setup { .. })));
         cfg.targets.push(ProfileInput {

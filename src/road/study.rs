@@ -277,6 +277,36 @@ pub struct StudyConfig {
     pub spectrum: SpectrumSettings,
 }
 
+/// The synthetic roads of a study and its Welch settings, without the rule set: what a
+/// comparison ([`super::compare`]) or a fit ([`super::fit`]) shares across its rule sets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StudyRoads {
+    /// Number of roads.
+    pub n_roads: usize,
+    /// Length of each road, m.
+    pub length_m: f64,
+    /// Grid step, m.
+    pub step_m: f64,
+    /// Seed of the first road; road j has seed `seed + j`.
+    pub seed: u64,
+    /// Welch settings.
+    pub spectrum: SpectrumSettings,
+}
+
+impl StudyRoads {
+    /// The study of these roads drawn from `rules`.
+    pub fn with_rules(&self, rules: RoadRules) -> StudyConfig {
+        StudyConfig {
+            rules,
+            n_roads: self.n_roads,
+            length_m: self.length_m,
+            step_m: self.step_m,
+            seed: self.seed,
+            spectrum: self.spectrum,
+        }
+    }
+}
+
 /// What one road of a study contributes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RoadKnees {
