@@ -7,7 +7,7 @@ use clap::{Args, Subcommand};
 use fleetdyn::road::compare::RulesInput;
 use fleetdyn::road::profile::GnssProfileConfig;
 use fleetdyn::road::rules::RoadRules;
-use fleetdyn::road::study::{SpectrumSettings, StudyConfig, StudyRoads};
+use fleetdyn::road::study::{SpectrumSettings, StudyRoads};
 use std::path::PathBuf;
 
 /// Roads (docs/models/road.md): synthetic roads from road-design rules, studies of their slope
@@ -96,13 +96,13 @@ pub struct StudyArgs {
 }
 
 impl StudyArgs {
-    /// The roads and Welch settings, checked, and the worker threads.
+    /// The roads and Welch settings (the segment length is checked against the grid when the
+    /// study runs), and the worker threads.
     fn resolve(&self) -> Result<road::Roads, Failure> {
         let spectrum = SpectrumSettings {
             segment_length_m: self.segment_length_m,
             ..Default::default()
         };
-        spectrum.validate().map_err(setting)?;
         Ok(road::Roads {
             study: StudyRoads {
                 n_roads: self.roads,
@@ -285,22 +285,16 @@ impl RoadCmd {
                 step_m: c.step_m,
                 output: c.output,
             },
-            RoadCmd::Study(c) => road::Job::Study {
-                cfg: StudyConfig {
-                    rules: RoadRules::resolve(&c.rules).map_err(usage)?,
-                    n_roads: c.study.roads,
-                    length_m: c.study.length_km * 1000.0,
-                    step_m: c.study.step_m,
-                    seed: c.study.seed,
-                    spectrum: SpectrumSettings {
-                        segment_length_m: c.study.segment_length_m,
-                        ..Default::default()
-                    },
-                },
-                rules_name: c.rules,
-                jobs: jobs(c.study.jobs)?,
-                output: c.output,
-            },
+            RoadCmd::Study(c) => {
+                let rules = RoadRules::resolve(&c.rules).map_err(usage)?;
+                let roads = c.study.resolve()?;
+                road::Job::Study {
+                    cfg: roads.study.with_rules(rules),
+                    rules_name: c.rules,
+                    jobs: roads.jobs,
+                    output: c.output,
+                }
+            }
             RoadCmd::Spectrum(c) => {
                 let settings = SpectrumSettings {
                     segment_length_m: c.segment_length_m,
