@@ -106,6 +106,11 @@ pub struct ProveCmd {
     /// Fleet proof: trucks that develop a fault.
     #[arg(long, default_value_t = 6, requires = "fleet")]
     faulty: usize,
+    /// Fleet proof: score the fleet proof saved in this folder (its fleet_proof.json) again,
+    /// without simulating or diagnosing; the plan is the saved one, so the plan's flags are
+    /// not allowed beside it.
+    #[arg(long, requires = "fleet", conflicts_with_all = ["seed", "trucks", "drives_per_truck", "faulty", "min_km", "max_km", "vehicle"])]
+    rescore: Option<PathBuf>,
 }
 
 /// Where the proof's drives come from.
@@ -129,6 +134,12 @@ enum DrivingArg {
 impl ProveCmd {
     /// The job: the plan, the nominal vehicle file, output and threads.
     pub fn resolve(self) -> Result<prove::Job, Failure> {
+        if let Some(saved) = self.rescore {
+            return Ok(prove::Job::Rescore {
+                saved,
+                output: self.output,
+            });
+        }
         if self.fleet {
             let cfg = FleetProofConfig {
                 seed: self.seed,

@@ -2,7 +2,9 @@
 
 use super::failure::{io, model, usage, Failure};
 use super::progress::Progress;
-use fleetdyn::proof::{run_fleet_proof, run_proof, FleetProofConfig, ProofConfig, ProveError};
+use fleetdyn::proof::{
+    rescore_fleet_proof, run_fleet_proof, run_proof, FleetProofConfig, ProofConfig, ProveError,
+};
 use std::path::{Path, PathBuf};
 
 /// A resolved `prove`.
@@ -17,6 +19,13 @@ pub enum Job {
         output: PathBuf,
         /// Worker threads.
         jobs: usize,
+    },
+    /// A saved fleet proof scored again (`--fleet --rescore`).
+    Rescore {
+        /// The saved proof's folder.
+        saved: PathBuf,
+        /// Output folder.
+        output: PathBuf,
     },
     /// The fleet proof (`--fleet`).
     Fleet {
@@ -33,7 +42,7 @@ pub enum Job {
 
 fn category(e: ProveError) -> Failure {
     match e {
-        ProveError::Vehicle(_) => usage(e),
+        ProveError::Vehicle(_) | ProveError::Saved { .. } => usage(e),
         ProveError::Pool(_) => model(e),
         ProveError::Io { .. } | ProveError::Output(_) => io(e),
     }
@@ -54,6 +63,16 @@ pub fn run(job: Job) -> Result<(), Failure> {
             output,
             jobs,
         } => run_fleet(&cfg, &vehicle, &output, jobs),
+        Job::Rescore { saved, output } => {
+            let run = rescore_fleet_proof(&saved, &output).map_err(category)?;
+            say!("{}", run.to_markdown());
+            say!(
+                "wrote     {} and {}",
+                output.join("fleet_proof.md").display(),
+                output.join("fleet").join("fleet.html").display()
+            );
+            Ok(())
+        }
     }
 }
 

@@ -1,11 +1,94 @@
-//! A parameter's per-drive estimates pooled into one ([`pool`]).
+//! A parameter's per-drive estimates pooled into one ([`pool`]), and the random-effects fit of
+//! one or more groups of them that pooling and the change test share ([`GroupFit`]).
+//!
+//! Drives of one truck scatter more than their own intervals say: each drive's estimate takes up
+//! what else its residual holds (wind on that day, that road, that payload), a departure that is
+//! the same size on a long drive as on a short one. The scatter is therefore modelled as
+//! additive, `xᵢ = θ + uᵢ + eᵢ`, `var eᵢ = sᵢ²` (the drive's own interval), `var uᵢ = τ²` (the
+//! between-drive variance), and fitted as a random-effects meta-analysis is: `τ²` by the
+//! DerSimonian–Laird moment estimator, the means weighted by `1/(sᵢ² + τ²)`, their standard
+//! errors scaled by the modified Hartung–Knapp factor `R = max(1, Q*/(n − g))` and read with
+//! Student t on `n − g` degrees of freedom (DerSimonian & Laird, *Meta-analysis in clinical
+//! trials*, Controlled Clinical Trials 7, 1986; Knapp & Hartung, *Improved tests for a random
+//! effects meta-regression with a single covariate*, Statistics in Medicine 22, 2003). With few
+//! drives a scale estimated from the drives themselves is uncertain, and the t quantile carries
+//! that uncertainty; a normal quantile would not.
 
 use super::series::Z_975;
+
+/// A random-effects fit of `g` groups of per-drive estimates that share one between-drive
+/// variance: each group's mean and its standard error.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupFit {
+    /// Per group: the weighted mean and its standard error (scaled by `scale`).
+    pub means: Vec<(f64, f64)>,
+    /// Between-drive variance `τ²` (DerSimonian–Laird, pooled within the groups).
+    pub tau2: f64,
+    /// Modified Hartung–Knapp factor `R = max(1, Q*/(n − g))` (1 with no degree of freedom).
+    pub scale: f64,
+    /// Degrees of freedom of the scale, `n − g`.
+    pub dof: usize,
+}
+
+/// Fits `groups` of `(value, standard error)` (each group's points already filtered, none
+/// empty): the DerSimonian–Laird `τ² = max(0, (Q − (n − g)) / c)` from the fixed-weight
+/// (`wᵢ = 1/sᵢ²`) within-group statistic `Q = Σ wᵢ (xᵢ − x̄_g)²` and
+/// `c = Σ_g (Σ wᵢ − Σ wᵢ² / Σ wᵢ)`; then the means with `wᵢ* = 1/(sᵢ² + τ²)`, each with the
+/// standard error `√(R / Σ wᵢ*)`.
+pub fn fit_groups(groups: &[&[(f64, f64)]]) -> GroupFit {
+    let n: usize = groups.iter().map(|g| g.len()).sum();
+    let dof = n.saturating_sub(groups.len());
+    let mean = |g: &[(f64, f64)], tau2: f64| {
+        let sw: f64 = g.iter().map(|(_, s)| 1.0 / (s * s + tau2)).sum();
+        let m = g.iter().map(|(x, s)| x / (s * s + tau2)).sum::<f64>() / sw;
+        let q: f64 = g
+            .iter()
+            .map(|(x, s)| (x - m).powi(2) / (s * s + tau2))
+            .sum();
+        (m, sw, q)
+    };
+    let (mut q, mut c) = (0.0, 0.0);
+    for g in groups {
+        let (_, sw, qg) = mean(g, 0.0);
+        q += qg;
+        c += sw - g.iter().map(|(_, s)| s.powi(-4)).sum::<f64>() / sw;
+    }
+    let tau2 = if dof > 0 && c > 0.0 {
+        ((q - dof as f64) / c).max(0.0)
+    } else {
+        0.0
+    };
+    let fits: Vec<(f64, f64, f64)> = groups.iter().map(|g| mean(g, tau2)).collect();
+    let q_star: f64 = fits.iter().map(|f| f.2).sum();
+    let scale = if dof > 0 {
+        (q_star / dof as f64).max(1.0)
+    } else {
+        1.0
+    };
+    GroupFit {
+        means: fits
+            .iter()
+            .map(|(m, sw, _)| (*m, (scale / sw).sqrt()))
+            .collect(),
+        tau2,
+        scale,
+        dof,
+    }
+}
+
+/// The finite points with a positive standard error.
+pub fn usable(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    points
+        .iter()
+        .copied()
+        .filter(|(x, s)| x.is_finite() && s.is_finite() && *s > 0.0)
+        .collect()
+}
 
 /// A pooled estimate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pooled {
-    /// The inverse-variance weighted mean.
+    /// The random-effects weighted mean.
     pub value: f64,
     /// Its standard error, scaled by the dispersion.
     pub se: f64,
@@ -15,53 +98,39 @@ pub struct Pooled {
     pub ci_high: f64,
     /// Drives pooled.
     pub n: usize,
-    /// Birge ratio `R = max(1, χ² / (n − 1))` (1 for one drive): how much more the drives
-    /// scatter than their own intervals say.
+    /// Between-drive standard deviation `τ`, in the parameter's unit: how much the drives
+    /// scatter beyond their own intervals (0 when they do not).
+    pub between_drive_sd: f64,
+    /// Modified Hartung–Knapp factor `R = max(1, Q*/(n − 1))` (1 for one drive): how much more
+    /// the drives scatter than `τ` and their intervals say.
     pub dispersion: f64,
 }
 
-/// Pools per-drive estimates `(value, standard error)`: the inverse-variance weighted mean
-/// `x̄ = Σ wᵢ xᵢ / Σ wᵢ`, `wᵢ = 1/sᵢ²`, with the standard error `√(R / Σ wᵢ)` scaled by the Birge
-/// ratio `R = max(1, Σ wᵢ (xᵢ − x̄)² / (n − 1))`, so that drives scattering more than their
-/// intervals say (a city drive's estimate biased by what else its residual holds) widen the
-/// interval instead of being trusted; the 95 % interval `x̄ ± q · se` with `q` the Student t
-/// quantile with `n − 1` degrees of freedom when `R > 1` (the scale was estimated), else the
-/// normal one. Points with a non-finite value or a standard error that is not positive are
-/// left out; `None` when none is left.
+/// Pools per-drive estimates `(value, standard error)` ([`fit_groups`] with one group): the
+/// mean weighted by `1/(sᵢ² + τ²)`, its standard error `√(R / Σ wᵢ*)`, and the 95 % interval
+/// `x̄ ± q · se` with `q` the Student t quantile on `n − 1` degrees of freedom when a scale was
+/// estimated from the drives (`τ > 0` or `R > 1`), else the normal one. Points with a non-finite
+/// value or a standard error that is not positive are left out; `None` when none is left.
 pub fn pool(points: &[(f64, f64)]) -> Option<Pooled> {
-    let ok: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|(x, s)| x.is_finite() && s.is_finite() && *s > 0.0)
-        .collect();
-    let n = ok.len();
-    if n == 0 {
+    let ok = usable(points);
+    if ok.is_empty() {
         return None;
     }
-    let sw: f64 = ok.iter().map(|(_, s)| 1.0 / (s * s)).sum();
-    let value = ok.iter().map(|(x, s)| x / (s * s)).sum::<f64>() / sw;
-    let chi2: f64 = ok.iter().map(|(x, s)| ((x - value) / s).powi(2)).sum();
-    let dispersion = if n > 1 {
-        (chi2 / (n - 1) as f64).max(1.0)
-    } else {
-        1.0
-    };
-    let se = (dispersion / sw).sqrt();
-    let q = if dispersion > 1.0 {
-        match crate::signal::stats::t_quantile(0.975, (n - 1) as f64) {
-            q if q.is_nan() => Z_975,
-            q => q,
-        }
-    } else {
-        Z_975
+    let fit = fit_groups(&[&ok]);
+    let (value, se) = fit.means[0];
+    let estimated = fit.tau2 > 0.0 || fit.scale > 1.0;
+    let q = match crate::signal::stats::t_quantile(0.975, fit.dof as f64) {
+        q if estimated && q.is_finite() => q,
+        _ => Z_975,
     };
     Some(Pooled {
         value,
         se,
         ci_low: value - q * se,
         ci_high: value + q * se,
-        n,
-        dispersion,
+        n: ok.len(),
+        between_drive_sd: fit.tau2.sqrt(),
+        dispersion: fit.scale,
     })
 }
 
@@ -74,18 +143,43 @@ mod tests {
         let p = pool(&[(1.0, 0.5), (1.0, 0.5), (1.0, 0.5), (1.0, 0.5)]).unwrap();
         assert_eq!(p.value, 1.0);
         assert!((p.se - 0.25).abs() < 1e-15 && p.dispersion == 1.0);
+        assert_eq!(p.between_drive_sd, 0.0);
         assert!((p.ci_high - 1.0 - Z_975 * 0.25).abs() < 1e-12);
     }
 
     #[test]
     fn weights_follow_the_errors_and_scatter_widens_the_interval() {
-        // a precise drive dominates
-        let p = pool(&[(1.0, 0.1), (2.0, 1.0)]).unwrap();
-        assert!((p.value - (100.0 + 2.0) / 101.0).abs() < 1e-12);
-        // drives 10 standard errors apart: R = χ² = 2 · 10² / 2 … the interval widens by √R
+        // drives within their intervals: fixed weights, a precise drive dominates
+        let p = pool(&[(1.0, 0.1), (1.05, 1.0)]).unwrap();
+        assert_eq!(p.between_drive_sd, 0.0);
+        assert!((p.value - (100.0 + 1.05) / 101.0).abs() < 1e-12);
+        // two drives 10 standard errors apart: fixed weights 100 each, Q = 2 · 100 · 1² = 200,
+        // c = 200 − 2·10⁴/200 = 100, τ² = (200 − 1)/100 = 1.99; weights 1/(0.01 + 1.99) = 0.5,
+        // mean 1, Q* = 1, R = 1, se = √(1/1) = 1; t₁ quantile 12.71
         let tight = pool(&[(0.0, 0.1), (2.0, 0.1)]).unwrap();
-        assert!((tight.dispersion - 200.0).abs() < 1e-9, "{tight:?}");
-        assert!(tight.ci_low < 0.0 && tight.ci_high > 2.0, "{tight:?}");
+        assert!(
+            (tight.between_drive_sd - 1.99f64.sqrt()).abs() < 1e-12,
+            "{tight:?}"
+        );
+        assert!((tight.value - 1.0).abs() < 1e-12 && (tight.dispersion - 1.0).abs() < 1e-12);
+        assert!((tight.se - 1.0).abs() < 1e-12, "{tight:?}");
+        assert!(
+            (tight.ci_high - 1.0 - 12.706_204_736).abs() < 1e-6,
+            "{tight:?}"
+        );
         assert!(pool(&[(f64::NAN, 1.0), (1.0, 0.0)]).is_none());
+    }
+
+    #[test]
+    fn the_between_drive_variance_is_the_dersimonian_laird_estimate() {
+        // equal errors s = 1, values 0, 2, 4: Q = 8, c = 3 − 3/3 = 2, τ² = (8 − 2)/2 = 3,
+        // weights 1/4, mean 2, Q* = 8/4 = 2, R = max(1, 2/2) = 1, se = √(4/3)
+        let p = pool(&[(0.0, 1.0), (2.0, 1.0), (4.0, 1.0)]).unwrap();
+        assert!((p.between_drive_sd - 3f64.sqrt()).abs() < 1e-12, "{p:?}");
+        assert!((p.value - 2.0).abs() < 1e-12 && p.dispersion == 1.0);
+        assert!((p.se - (4.0f64 / 3.0).sqrt()).abs() < 1e-12, "{p:?}");
+        // with equal errors the interval is the one-sample t interval of the values
+        let t2 = crate::signal::stats::t_quantile(0.975, 2.0);
+        assert!((p.ci_high - 2.0 - t2 * (4.0f64 / 3.0).sqrt()).abs() < 1e-12);
     }
 }

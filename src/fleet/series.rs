@@ -41,24 +41,31 @@ pub enum FleetError {
     },
 }
 
-/// One row of a drive's `parameter_estimates` table (schema `parameter_estimates`).
-#[derive(Debug, Clone, PartialEq)]
+/// One row of a drive's `parameter_estimates` table (schema `parameter_estimates`); in JSON a
+/// non-finite number is `null`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EstimateRow {
     /// Catalogue id.
     pub effect: String,
     /// SI unit of the values.
     pub unit: String,
     /// Estimate.
+    #[serde(with = "crate::io::json_f64")]
     pub value: f64,
     /// 95 % interval, lower end.
+    #[serde(with = "crate::io::json_f64")]
     pub ci_low: f64,
     /// 95 % interval, upper end.
+    #[serde(with = "crate::io::json_f64")]
     pub ci_high: f64,
     /// The vehicle file's value.
+    #[serde(with = "crate::io::json_f64")]
     pub nominal: f64,
     /// Tolerance band, lower end.
+    #[serde(with = "crate::io::json_f64")]
     pub tolerance_low: f64,
     /// Tolerance band, upper end.
+    #[serde(with = "crate::io::json_f64")]
     pub tolerance_high: f64,
     /// `named`, `fitted` or `linearised`.
     pub method: String,

@@ -118,6 +118,11 @@ pub fn parameter_columns(vs: &[VehicleEvidence]) -> Vec<OutColumn> {
             "drives_total",
             rows.iter().map(|(_, p)| p.points.len() as u64).collect(),
         ),
+        OutColumn::f64(
+            "between_drive_sd",
+            per_row,
+            f(&|p| p.current().pooled.between_drive_sd),
+        ),
         OutColumn::f64("dispersion", "1", f(&|p| p.current().pooled.dispersion)),
         count(
             "changes",

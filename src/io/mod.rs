@@ -3,6 +3,7 @@
 mod atomic;
 mod escape;
 mod fingerprint;
+pub mod json_f64;
 mod parquet_out;
 
 pub use atomic::AtomicFile;

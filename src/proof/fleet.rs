@@ -36,11 +36,11 @@ use crate::rng::Xoshiro256StarStar;
 use crate::truth::{
     simulate_independent_drive, write_independent_drive, IndependentDriveConfig, TruthEffect,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// A fault a truck develops.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FleetFault {
     /// A roof fairing lost: drag area × 1.25.
@@ -80,7 +80,7 @@ impl FleetFault {
 }
 
 /// A fleet proof.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FleetProofConfig {
     /// Seed of the plan.
     pub seed: u64,
@@ -153,7 +153,7 @@ impl FleetProofConfig {
 }
 
 /// One planned drive.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FleetDrive {
     /// Truck index.
     pub truck: usize,
@@ -162,7 +162,7 @@ pub struct FleetDrive {
     /// Drive seed.
     pub seed: u64,
     /// Road rules.
-    pub rules: &'static str,
+    pub rules: String,
     /// Length, km.
     pub length_km: f64,
     /// Mass against the vehicle file's.
@@ -228,7 +228,7 @@ pub fn fleet_plan(cfg: &FleetProofConfig) -> (Vec<FleetTruck>, Vec<FleetDrive>) 
                 truck: t,
                 day,
                 seed,
-                rules,
+                rules: rules.to_string(),
                 length_km: lo + (hi - lo) * r.next_f64(),
                 mass_scale: 0.75 + 0.25 * r.next_f64(),
                 fault: fault.filter(|(_, onset)| day >= *onset).map(|(f, _)| f),
@@ -238,8 +238,8 @@ pub fn fleet_plan(cfg: &FleetProofConfig) -> (Vec<FleetTruck>, Vec<FleetDrive>) 
     (trucks, drives)
 }
 
-/// What one drive gave.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// What one drive gave; in JSON a non-finite number is `null`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FleetDriveResult {
     /// The plan.
     pub drive: FleetDrive,
@@ -248,13 +248,13 @@ pub struct FleetDriveResult {
     /// Why the drive failed, if it did.
     pub error: Option<String>,
     /// Truth at this drive: drag area (m²), c_r1, clutch kinetic capacity (N·m), mass (kg).
+    #[serde(with = "crate::io::json_f64::array")]
     pub truth: [f64; 4],
     /// Diagnosis time, s.
     pub seconds: f64,
     /// Simulated duration, s.
     pub duration_s: f64,
-    /// The estimates.
-    #[serde(skip)]
+    /// The estimates (the drive's `parameter_estimates` rows).
     pub rows: Vec<EstimateRow>,
 }
 
@@ -286,7 +286,7 @@ pub fn run_drive(
         effect,
         truck_seed: Some(truck.truck_seed),
         mass_scale: d.mass_scale,
-        ..IndependentDriveConfig::new(d.rules, d.length_km, d.seed)
+        ..IndependentDriveConfig::new(&d.rules, d.length_km, d.seed)
     };
     let result = (|| -> Result<(), String> {
         let mut sim = simulate_independent_drive(vf, &cfg).map_err(|e| e.to_string())?;

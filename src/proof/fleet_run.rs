@@ -10,7 +10,7 @@ use crate::fleet::evidence::VehicleEvidence;
 use crate::io::AtomicFile;
 use crate::model::vehicle::VehicleFile;
 use crate::report::fleet_files::{write_fleet_outputs, FleetMeta};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -26,6 +26,8 @@ pub const TARGET_ESTIMATE_ERROR: f64 = 0.05;
 pub struct FleetProofRun {
     /// The configuration.
     pub config: FleetProofConfig,
+    /// The nominal vehicle file.
+    pub vehicle: String,
     /// Per truck.
     pub trucks: Vec<TruckScore>,
     /// Faulty trucks whose fault was flagged within [`TARGET_DELAY_DRIVES`] drives.
@@ -163,7 +165,9 @@ impl FleetProofRun {
 }
 
 /// Runs the fleet proof of `cfg` on the vehicle file `vehicle` into `out` with `jobs` threads;
-/// `progress(done, total)` after each drive.
+/// `progress(done, total)` after each drive. `out` receives `fleet_proof.md`,
+/// `fleet_proof.json` (the run and every drive's result with its estimates, from which
+/// [`rescore_fleet_proof`] scores it again) and the fleet evidence under `fleet/`.
 ///
 /// # Errors
 /// [`ProveError`] for the vehicle file, the thread pool or the outputs; a failing drive only
@@ -179,10 +183,6 @@ pub fn run_fleet_proof(
     let t0 = std::time::Instant::now();
     let vf = VehicleFile::load(vehicle)?;
     let (trucks, drives) = fleet_plan(cfg);
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ProveError::Io { path, source }
-    };
     let scratch = out.join("scratch");
     std::fs::create_dir_all(&scratch).map_err(io(&scratch))?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -203,6 +203,69 @@ pub fn run_fleet_proof(
             .collect()
     });
     let _ = std::fs::remove_dir_all(&scratch);
+    let elapsed_s = t0.elapsed().as_secs_f64();
+    score_and_write(cfg, &vehicle.display().to_string(), results, elapsed_s, out)
+}
+
+/// What [`rescore_fleet_proof`] reads back of a fleet proof's run.
+#[derive(Deserialize)]
+struct SavedRun {
+    config: FleetProofConfig,
+    #[serde(default)]
+    vehicle: String,
+    elapsed_s: f64,
+}
+
+/// Scores the fleet proof saved in `saved` (its `fleet_proof.json`) again, without simulating
+/// or diagnosing a drive: the drives' estimates as they were, the fleet evidence and the scores
+/// as the current code computes them, written into `out` as [`run_fleet_proof`] writes them
+/// (the wall time kept from the saved run).
+///
+/// # Errors
+/// [`ProveError::Saved`] when the file cannot be read or is not a fleet proof's, [`ProveError`]
+/// for the outputs.
+pub fn rescore_fleet_proof(saved: &Path, out: &Path) -> Result<FleetProofRun, ProveError> {
+    let path = saved.join("fleet_proof.json");
+    let bad = |message: String| ProveError::Saved {
+        path: path.clone(),
+        message,
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| bad(e.to_string()))?;
+    let (run, results): (SavedRun, Vec<FleetDriveResult>) =
+        serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    run.config.validate().map_err(|e| bad(e.to_string()))?;
+    let planned = fleet_plan(&run.config).1;
+    if planned.len() != results.len()
+        || planned
+            .iter()
+            .zip(&results)
+            .any(|(p, r)| (p.truck, p.day, p.seed) != (r.drive.truck, r.drive.day, r.drive.seed))
+    {
+        return Err(bad(
+            "its drives are not the plan of its configuration".to_string()
+        ));
+    }
+    score_and_write(&run.config, &run.vehicle, results, run.elapsed_s, out)
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> ProveError {
+    let path = path.to_path_buf();
+    move |source| ProveError::Io {
+        path: path.clone(),
+        source,
+    }
+}
+
+/// Scores every truck from the drives' `results` and writes the summary, the JSON and the
+/// fleet evidence into `out`.
+fn score_and_write(
+    cfg: &FleetProofConfig,
+    vehicle: &str,
+    results: Vec<FleetDriveResult>,
+    elapsed_s: f64,
+    out: &Path,
+) -> Result<FleetProofRun, ProveError> {
+    let trucks = fleet_plan(cfg).0;
     let mut scores = Vec::new();
     let mut evidence: Vec<VehicleEvidence> = Vec::new();
     for (t, truck) in trucks.iter().enumerate() {
@@ -218,6 +281,7 @@ pub fn run_fleet_proof(
     let faulty = scores.iter().filter(|s| s.fault.is_some()).count();
     let run = FleetProofRun {
         config: cfg.clone(),
+        vehicle: vehicle.to_string(),
         detected_in_time: scores
             .iter()
             .filter(|s| s.delay.is_some_and(|d| d <= TARGET_DELAY_DRIVES))
@@ -230,7 +294,7 @@ pub fn run_fleet_proof(
         drives: results.len(),
         drive_hours,
         seconds_per_drive_hour: ok.iter().map(|r| r.seconds).sum::<f64>() / drive_hours.max(1e-12),
-        elapsed_s: t0.elapsed().as_secs_f64(),
+        elapsed_s,
         trucks: scores,
     };
     std::fs::create_dir_all(out).map_err(io(out))?;
@@ -242,7 +306,7 @@ pub fn run_fleet_proof(
     AtomicFile::write_all(&json, text.as_bytes()).map_err(io(&json))?;
     let files: BTreeMap<String, String> = trucks
         .iter()
-        .map(|t| (t.vehicle_id.clone(), vehicle.display().to_string()))
+        .map(|t| (t.vehicle_id.clone(), vehicle.to_string()))
         .collect();
     write_fleet_outputs(
         &out.join("fleet"),
@@ -251,7 +315,7 @@ pub fn run_fleet_proof(
         &FleetMeta {
             pipeline: "prove --fleet",
             model_version: "proof",
-            source_file: &vehicle.display().to_string(),
+            source_file: vehicle,
             config_hash: "",
         },
         &|_, _| "#".to_string(),

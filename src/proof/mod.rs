@@ -56,7 +56,7 @@ pub mod score;
 pub mod summary;
 
 pub use fleet::{FleetFault, FleetProofConfig};
-pub use fleet_run::{run_fleet_proof, FleetProofRun};
+pub use fleet_run::{rescore_fleet_proof, run_fleet_proof, FleetProofRun};
 pub use generate::{drive_config, generate, GenerateError, GeneratedCase, ProofTruth, Stretch};
 pub use plan::{drawn_driver, plan, Driving, Hidden, Outside, ProofCase, ProofConfig, TruthSource};
 pub use run::{run_proof, ProofRun, ProveError, MAX_ATTEMPTS, RESEED_STRIDE};

@@ -31,6 +31,14 @@ pub enum ProveError {
     /// Writing the case table.
     #[error(transparent)]
     Output(#[from] crate::io::OutputError),
+    /// A saved proof that cannot be read back.
+    #[error("{path}: {message}")]
+    Saved {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
 }
 
 /// Seed stride between the attempts of one case.

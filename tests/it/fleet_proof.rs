@@ -5,10 +5,13 @@
 //! flagged is printed, not asserted: on drives this short the per-drive drag estimates scatter
 //! too much for a change at the 10⁻³ level within ten drives (measured: not flagged). Detection
 //! is measured by the full proof (`fleetdyn prove --fleet`, docs/fleet.md), too long for the
-//! suite, and its logic by the unit tests of `fleet::evidence` and `fleet::change`.
+//! suite, and its logic by the unit tests of `fleet::evidence` and `fleet::change`. The saved
+//! proof scored again (`--rescore`) must give the same summary, byte for byte.
 
 use crate::common::fixture;
-use fleetdyn::proof::{run_fleet_proof, FleetFault, FleetProofConfig};
+use fleetdyn::proof::{
+    rescore_fleet_proof, run_fleet_proof, FleetFault, FleetProofConfig, ProveError,
+};
 
 #[test]
 fn two_trucks_are_diagnosed_without_false_alarms() {
@@ -41,4 +44,23 @@ fn two_trucks_are_diagnosed_without_false_alarms() {
     ] {
         assert!(dir.path().join(f).is_file(), "{f}");
     }
+    // scored again from its saved drives: the same summary, the same evidence
+    let again = tempfile::tempdir().unwrap();
+    let re = rescore_fleet_proof(dir.path(), again.path()).unwrap();
+    assert_eq!(re.to_markdown(), run.to_markdown());
+    for f in ["fleet_proof.md", "fleet/fleet_parameters.parquet"] {
+        assert_eq!(
+            std::fs::read(dir.path().join(f)).unwrap(),
+            std::fs::read(again.path().join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    // a folder without a saved proof is refused, naming the file, and nothing is written
+    let none = tempfile::tempdir().unwrap();
+    let out = none.path().join("out");
+    match rescore_fleet_proof(none.path(), &out) {
+        Err(ProveError::Saved { path, .. }) => assert!(path.ends_with("fleet_proof.json")),
+        other => panic!("{other:?}"),
+    }
+    assert!(!out.exists());
 }
