@@ -166,10 +166,9 @@ mod tests {
     #[test]
     fn drives_scattering_beyond_their_intervals_raise_no_more_alarms() {
         // 1 000 clean series each of 8, 15 and 30 drives that scatter 1 and 3 times their
-        // largest stated error beyond it, heavy-tailed: a per-segment scale read with a normal
-        // quantile finds a change in 2–13 % of such series; the random-effects test must stay
-        // near its level (at most 5 in 1 000 per setting, where the level expects 1; the t
-        // reference is exact only for normal scatter, and these tails are heavier)
+        // largest stated error beyond it, heavy-tailed: the test must stay near its level (at
+        // most 5 in 1 000 per setting, where the level expects 1; the t reference is exact
+        // only for normal scatter, and these tails are heavier)
         let mut rng = Xoshiro256StarStar::seed_from_u64(13);
         for tau in [1.5, 4.5] {
             for n in [8, 15, 30] {
