@@ -4,7 +4,7 @@
 
 use super::change::{changes, segments, Change, FALSE_ALARM, MIN_SEGMENT};
 use super::pool::Pooled;
-use super::series::DriveEstimates;
+use super::series::{DriveEstimates, EstimateRow};
 use crate::model::catalogue::Effect;
 use crate::time_fmt::utc_date;
 
@@ -196,9 +196,26 @@ impl VehicleEvidence {
     }
 }
 
+/// Whether a drive's estimate stopped at an edge of the effect's fit domain
+/// ([`crate::model::catalogue::FitRule`]: `lo`, `hi`, times the nominal value for a relative
+/// rule): such a fit reads only a bound — "at most 0.25 θ₀" — not a value, and pooling it as a
+/// value with a Gaussian error would pull the vehicle's estimate to the edge. The edge is met
+/// within 10⁻⁹ of the domain's width.
+pub fn at_domain_edge(e: Effect, r: &EstimateRow) -> bool {
+    use crate::model::catalogue::Scale;
+    let f = e.spec().fit;
+    let k = match f.scale {
+        Scale::Relative => r.nominal,
+        Scale::Absolute => 1.0,
+    };
+    let (lo, hi) = (f.lo * k, f.hi * k);
+    let eps = 1e-9 * (hi - lo).abs();
+    !f.switch && eps > 0.0 && ((r.value - lo).abs() <= eps || (r.value - hi).abs() <= eps)
+}
+
 /// The evidence of one vehicle from its drives (any order; sorted by start time, then drive id):
 /// for every persistent catalogue parameter (not [`PER_TRIP`], not a switch) the drives'
-/// estimates, the changes at [`FALSE_ALARM`], the segments and the current status (judged only
+/// estimates (those that stopped at the edge of the fit domain left out, [`at_domain_edge`]), the changes at [`FALSE_ALARM`], the segments and the current status (judged only
 /// on at least [`MIN_SEGMENT`] drives; flagged only after a change).
 pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> VehicleEvidence {
     drives.sort_by(|a, b| (a.start_ns, &a.drive_id).cmp(&(b.start_ns, &b.drive_id)));
@@ -212,7 +229,7 @@ pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> Ve
         for d in &drives {
             if let Some(r) = d.rows.iter().find(|r| r.effect == e.id()) {
                 let se = r.standard_error();
-                if r.value.is_finite() && se.is_finite() && se > 0.0 {
+                if r.value.is_finite() && se.is_finite() && se > 0.0 && !at_domain_edge(e, r) {
                     points.push(Point {
                         drive_id: d.drive_id.clone(),
                         start_ns: d.start_ns,
@@ -320,6 +337,31 @@ mod tests {
             s.contains("the 12 drives before: 5.60 m^2") && s.contains("consistent with it"),
             "{s}"
         );
+    }
+
+    #[test]
+    fn fits_stopped_at_the_domain_edge_are_left_out() {
+        // ten drives at the file's value and three whose drag fit stopped at 0.25 θ₀ (the fit
+        // domain's lower edge): the three read only a bound and are not pooled
+        let mut drives: Vec<DriveEstimates> = (0..10)
+            .map(|i| drive(i, 5.6 + if i.is_multiple_of(2) { 0.1 } else { -0.1 }))
+            .collect();
+        for i in 10..13 {
+            let mut d = drive(i, 0.25 * 5.6);
+            d.rows[0].ci_high = 22.4;
+            drives.push(d);
+        }
+        assert!(at_domain_edge(Effect::AeroDrag, &drives[10].rows[0]));
+        assert!(!at_domain_edge(Effect::AeroDrag, &drives[0].rows[0]));
+        let v = vehicle_evidence("TRK-1", drives);
+        let p = &v.parameters[0];
+        assert_eq!(p.points.len(), 10);
+        assert!(
+            (p.current().pooled.value - 5.6).abs() < 1e-9,
+            "{:?}",
+            p.current()
+        );
+        assert_eq!(p.status, Status::Consistent);
     }
 
     #[test]
