@@ -198,9 +198,10 @@ impl VehicleEvidence {
 
 /// Whether a drive's estimate stopped at an edge of the effect's fit domain
 /// ([`crate::model::catalogue::FitRule`]: `lo`, `hi`, times the nominal value for a relative
-/// rule): such a fit reads only a bound — "at most 0.25 θ₀" — not a value, and pooling it as a
-/// value with a Gaussian error would pull the vehicle's estimate to the edge. The edge is met
-/// within 10⁻⁹ of the domain's width.
+/// rule) that is only the end of the search: such a fit reads a bound — "at most 0.25 θ₀" — not
+/// a value, and pooling it as a value with a Gaussian error would pull the vehicle's estimate to
+/// the edge. An edge at the nominal value is a physical limit the truck can sit on (no lash, no
+/// delay), and an estimate there is a value. The edge is met within 10⁻⁹ of the domain's width.
 pub fn at_domain_edge(e: Effect, r: &EstimateRow) -> bool {
     use crate::model::catalogue::Scale;
     let f = e.spec().fit;
@@ -210,13 +211,15 @@ pub fn at_domain_edge(e: Effect, r: &EstimateRow) -> bool {
     };
     let (lo, hi) = (f.lo * k, f.hi * k);
     let eps = 1e-9 * (hi - lo).abs();
-    !f.switch && eps > 0.0 && ((r.value - lo).abs() <= eps || (r.value - hi).abs() <= eps)
+    let stopped_at = |edge: f64| (r.value - edge).abs() <= eps && (edge - r.nominal).abs() > eps;
+    !f.switch && eps > 0.0 && (stopped_at(lo) || stopped_at(hi))
 }
 
 /// The evidence of one vehicle from its drives (any order; sorted by start time, then drive id):
 /// for every persistent catalogue parameter (not [`PER_TRIP`], not a switch) the drives'
-/// estimates (those that stopped at the edge of the fit domain left out, [`at_domain_edge`]), the changes at [`FALSE_ALARM`], the segments and the current status (judged only
-/// on at least [`MIN_SEGMENT`] drives; flagged only after a change).
+/// estimates (those that stopped at the edge of the fit domain left out, [`at_domain_edge`]),
+/// the changes at [`FALSE_ALARM`], the segments and the current status (judged only on at
+/// least [`MIN_SEGMENT`] drives; flagged only after a change).
 pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> VehicleEvidence {
     drives.sort_by(|a, b| (a.start_ns, &a.drive_id).cmp(&(b.start_ns, &b.drive_id)));
     let mut parameters = Vec::new();
@@ -353,6 +356,16 @@ mod tests {
         }
         assert!(at_domain_edge(Effect::AeroDrag, &drives[10].rows[0]));
         assert!(!at_domain_edge(Effect::AeroDrag, &drives[0].rows[0]));
+        // no lash is the lash domain's lower edge and the file's value: a value, kept
+        let no_lash = EstimateRow {
+            effect: "driveline_backlash".into(),
+            value: 0.0,
+            ci_low: 0.0,
+            ci_high: 0.01,
+            nominal: 0.0,
+            ..drives[0].rows[0].clone()
+        };
+        assert!(!at_domain_edge(Effect::DrivelineBacklash, &no_lash));
         let v = vehicle_evidence("TRK-1", drives);
         let p = &v.parameters[0];
         assert_eq!(p.points.len(), 10);
