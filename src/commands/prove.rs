@@ -3,7 +3,8 @@
 use super::failure::{io, model, usage, Failure};
 use super::progress::Progress;
 use fleetdyn::proof::{
-    rescore_fleet_proof, run_fleet_proof, run_proof, FleetProofConfig, ProofConfig, ProveError,
+    rescore_fleet_proof, run_fleet_proof, run_proof, FleetProofConfig, FleetProofRun, ProofConfig,
+    ProveError,
 };
 use std::path::{Path, PathBuf};
 
@@ -65,15 +66,20 @@ pub fn run(job: Job) -> Result<(), Failure> {
         } => run_fleet(&cfg, &vehicle, &output, jobs),
         Job::Rescore { saved, output } => {
             let run = rescore_fleet_proof(&saved, &output).map_err(category)?;
-            say!("{}", run.to_markdown());
-            say!(
-                "wrote     {} and {}",
-                output.join("fleet_proof.md").display(),
-                output.join("fleet").join("fleet.html").display()
-            );
+            say_fleet(&run, &output);
             Ok(())
         }
     }
+}
+
+/// Prints a fleet proof's summary and where it was written.
+fn say_fleet(run: &FleetProofRun, output: &Path) {
+    say!("{}", run.to_markdown());
+    say!(
+        "wrote     {} and {}",
+        output.join("fleet_proof.md").display(),
+        output.join("fleet").join("fleet.html").display()
+    );
 }
 
 fn run_fleet(
@@ -97,12 +103,7 @@ fn run_fleet(
     };
     let run = run_fleet_proof(cfg, vehicle, output, jobs, &progress).map_err(category)?;
     drop(bar);
-    say!("{}", run.to_markdown());
-    say!(
-        "wrote     {} and {}",
-        output.join("fleet_proof.md").display(),
-        output.join("fleet").join("fleet.html").display()
-    );
+    say_fleet(&run, output);
     Ok(())
 }
 
