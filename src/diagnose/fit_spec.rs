@@ -18,7 +18,7 @@
 //! road_slope_resolution`, [`crate::model::vehicle::Sensors`]).
 
 use super::problem::Problem;
-use crate::model::catalogue::{Effect, FitRule, Scale};
+use crate::model::catalogue::{Effect, FitRule};
 use serde::Serialize;
 
 /// How an effect's parameter is screened and fitted.
@@ -62,10 +62,7 @@ pub fn fit_spec(e: Effect, nom: f64, slope_step: Option<f64>) -> FitSpec {
             ladder: rule.ladder,
         };
     }
-    let k = match rule.scale {
-        Scale::Relative => nom,
-        Scale::Absolute => 1.0,
-    };
+    let k = rule.factor(nom);
     FitSpec {
         step: rule.step * k,
         lo: rule.lo * k,

@@ -1,7 +1,7 @@
 //! Changes of a parameter over a vehicle's drives ([`changes`]): binary segmentation with a
 //! random-effects two-sample test at every split, its false-alarm rate fixed in advance.
 
-use super::pool::{fit_groups, pool, usable, Pooled};
+use super::pool::{fit_groups, is_usable, pool, Pooled};
 use crate::signal::stats::t_cdf;
 
 /// Fewest drives on either side of a change: a change needs three drives to stand on (one drive
@@ -41,12 +41,9 @@ pub struct Change {
 /// `None` below `2 · MIN_SEGMENT` usable drives.
 pub fn best_split(points: &[(f64, f64)]) -> Option<Change> {
     let index: Vec<usize> = (0..points.len())
-        .filter(|&i| {
-            let (x, s) = points[i];
-            x.is_finite() && s.is_finite() && s > 0.0
-        })
+        .filter(|&i| is_usable(&points[i]))
         .collect();
-    let ok = usable(points);
+    let ok: Vec<(f64, f64)> = index.iter().map(|&i| points[i]).collect();
     let n = ok.len();
     if n < 2 * MIN_SEGMENT {
         return None;

@@ -201,14 +201,12 @@ impl VehicleEvidence {
 /// rule) that is only the end of the search: such a fit reads a bound — "at most 0.25 θ₀" — not
 /// a value, and pooling it as a value with a Gaussian error would pull the vehicle's estimate to
 /// the edge. An edge at the nominal value is a physical limit the truck can sit on (no lash, no
-/// delay), and an estimate there is a value. The edge is met within 10⁻⁹ of the domain's width.
+/// delay), and an estimate there is a value. The edge is met within 10⁻⁹ of the domain's width:
+/// the fit clamps to the edge exactly, and the margin only absorbs the rounding of the edge
+/// recomputed from the nominal value written to the table.
 pub fn at_domain_edge(e: Effect, r: &EstimateRow) -> bool {
-    use crate::model::catalogue::Scale;
     let f = e.spec().fit;
-    let k = match f.scale {
-        Scale::Relative => r.nominal,
-        Scale::Absolute => 1.0,
-    };
+    let k = f.factor(r.nominal);
     let (lo, hi) = (f.lo * k, f.hi * k);
     let eps = 1e-9 * (hi - lo).abs();
     let stopped_at = |edge: f64| (r.value - edge).abs() <= eps && (edge - r.nominal).abs() > eps;

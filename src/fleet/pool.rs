@@ -76,13 +76,15 @@ pub fn fit_groups(groups: &[&[(f64, f64)]]) -> GroupFit {
     }
 }
 
-/// The finite points with a positive standard error.
+/// Whether a point `(value, standard error)` can be pooled: a finite value with a finite,
+/// positive standard error.
+pub fn is_usable(&(x, s): &(f64, f64)) -> bool {
+    x.is_finite() && s.is_finite() && s > 0.0
+}
+
+/// The points that can be pooled ([`is_usable`]).
 pub fn usable(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    points
-        .iter()
-        .copied()
-        .filter(|(x, s)| x.is_finite() && s.is_finite() && *s > 0.0)
-        .collect()
+    points.iter().copied().filter(is_usable).collect()
 }
 
 /// A pooled estimate.

@@ -276,6 +276,17 @@ pub struct FitRule {
     pub ladder: &'static [f64],
 }
 
+impl FitRule {
+    /// What `step`, `lo`, `hi` and `grid` are multiplied by for a parameter whose nominal value
+    /// is `nominal`: `nominal` for a [`Scale::Relative`] rule, 1 for a [`Scale::Absolute`] one.
+    pub fn factor(&self, nominal: f64) -> f64 {
+        match self.scale {
+            Scale::Relative => nominal,
+            Scale::Absolute => 1.0,
+        }
+    }
+}
+
 /// The screen's probe steps, as multiples of [`FitRule::step`], for the effects whose outputs
 /// respond to their parameter by a threshold or a shift rather than in proportion: a clutch
 /// slips only once its capacity falls below the torque it carries, a lash acts only where the

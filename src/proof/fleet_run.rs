@@ -3,7 +3,7 @@
 //! fleet evidence written.
 
 use super::fleet::{
-    fleet_plan, run_drive, score_truck, FleetDriveResult, FleetProofConfig, TruckScore,
+    fleet_plan, run_drive, score_truck, FleetDriveResult, FleetProofConfig, FleetTruck, TruckScore,
 };
 use super::run::ProveError;
 use crate::fleet::evidence::VehicleEvidence;
@@ -204,7 +204,8 @@ pub fn run_fleet_proof(
     });
     let _ = std::fs::remove_dir_all(&scratch);
     let elapsed_s = t0.elapsed().as_secs_f64();
-    score_and_write(cfg, &vehicle.display().to_string(), results, elapsed_s, out)
+    let vehicle = vehicle.display().to_string();
+    score_and_write(cfg, &trucks, &vehicle, results, elapsed_s, out)
 }
 
 /// What [`rescore_fleet_proof`] reads back of a fleet proof's run.
@@ -234,7 +235,7 @@ pub fn rescore_fleet_proof(saved: &Path, out: &Path) -> Result<FleetProofRun, Pr
     let (run, results): (SavedRun, Vec<FleetDriveResult>) =
         serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     run.config.validate().map_err(|e| bad(e.to_string()))?;
-    let planned = fleet_plan(&run.config).1;
+    let (trucks, planned) = fleet_plan(&run.config);
     if planned.len() != results.len()
         || planned
             .iter()
@@ -245,7 +246,14 @@ pub fn rescore_fleet_proof(saved: &Path, out: &Path) -> Result<FleetProofRun, Pr
             "its drives are not the plan of its configuration".to_string()
         ));
     }
-    score_and_write(&run.config, &run.vehicle, results, run.elapsed_s, out)
+    score_and_write(
+        &run.config,
+        &trucks,
+        &run.vehicle,
+        results,
+        run.elapsed_s,
+        out,
+    )
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> ProveError {
@@ -256,16 +264,16 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ProveError {
     }
 }
 
-/// Scores every truck from the drives' `results` and writes the summary, the JSON and the
-/// fleet evidence into `out`.
+/// Scores every truck of the plan (`trucks`, of `cfg`) from the drives' `results` and writes the
+/// summary, the JSON and the fleet evidence into `out`.
 fn score_and_write(
     cfg: &FleetProofConfig,
+    trucks: &[FleetTruck],
     vehicle: &str,
     results: Vec<FleetDriveResult>,
     elapsed_s: f64,
     out: &Path,
 ) -> Result<FleetProofRun, ProveError> {
-    let trucks = fleet_plan(cfg).0;
     let mut scores = Vec::new();
     let mut evidence: Vec<VehicleEvidence> = Vec::new();
     for (t, truck) in trucks.iter().enumerate() {
