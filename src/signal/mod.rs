@@ -19,6 +19,7 @@ mod butterworth;
 pub mod dequantise;
 pub mod distance;
 mod error;
+pub mod fft_plans;
 mod filtfilt;
 mod interp;
 pub mod quantization;

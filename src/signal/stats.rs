@@ -4,7 +4,6 @@
 //! function, and the cross-correlation sums of two series by
 //! FFT.
 
-use realfft::RealFftPlanner;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal, StudentsT};
 
 /// Median of `v` (sorted in place by `f64::total_cmp`; the mean of the two middle values for an
@@ -107,9 +106,8 @@ pub fn xcorr_sums(a: &[f64], b: &[f64], max_lag: usize) -> Vec<f64> {
         return vec![0.0; 2 * max_lag + 1];
     }
     let m = (2 * n).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(m);
-    let inv = planner.plan_fft_inverse(m);
+    let fwd = super::fft_plans::forward(m);
+    let inv = super::fft_plans::inverse(m);
     let spec = |x: &[f64]| {
         let mut buf = fwd.make_input_vec();
         buf[..n].copy_from_slice(x);

@@ -8,7 +8,6 @@
 //! eq. (292b)).
 
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use statrs::function::gamma::{gamma_lr, gamma_ur, ln_gamma};
 
@@ -125,8 +124,7 @@ pub fn welch(x: &[f64], cfg: &WelchConfig) -> Result<WelchPsd, SignalError> {
     let scale = 1.0 / (cfg.fs_hz * win_ss);
     let nfreq = nperseg / 2 + 1;
 
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(nperseg);
+    let fft = super::fft_plans::forward(nperseg);
     let mut buf = fft.make_input_vec();
     let mut spec = fft.make_output_vec();
     let mut scratch = fft.make_scratch_vec();
@@ -268,8 +266,7 @@ pub fn csd_pieces(pieces: &[(&[f64], &[f64])], cfg: &WelchConfig) -> Result<Welc
     let win_ss: f64 = win.iter().map(|w| w * w).sum();
     let scale = 1.0 / (cfg.fs_hz * win_ss);
     let nfreq = nperseg / 2 + 1;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(nperseg);
+    let fft = super::fft_plans::forward(nperseg);
     let mut buf = fft.make_input_vec();
     let mut sx = fft.make_output_vec();
     let mut sy = fft.make_output_vec();

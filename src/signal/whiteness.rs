@@ -7,7 +7,6 @@
 //! only formed within a run (the samples on either side of a gap are not neighbours);
 //! [`super::stats::run_positions`] finds the runs of a set of row indices.
 
-use realfft::RealFftPlanner;
 use std::ops::Range;
 
 /// Mean over the lags `k · lag_step`, `k = 1 … lags`, of the squared *non-centred*
@@ -61,14 +60,13 @@ pub fn effective_samples(r: &[f64], runs: &[Range<usize>]) -> f64 {
         return n as f64;
     }
     let mean = r.iter().sum::<f64>() / n as f64;
-    let mut planner = RealFftPlanner::<f64>::new();
     let mut acov: Vec<f64> = Vec::new();
     for run in runs {
         let len = run.len();
         let x: Vec<f64> = r[run.clone()].iter().map(|v| v - mean).collect();
         let m = (2 * len).next_power_of_two();
-        let fwd = planner.plan_fft_forward(m);
-        let inv = planner.plan_fft_inverse(m);
+        let fwd = super::fft_plans::forward(m);
+        let inv = super::fft_plans::inverse(m);
         let mut buf = vec![0.0; m];
         buf[..len].copy_from_slice(&x);
         let mut spec = fwd.make_output_vec();
