@@ -16,7 +16,6 @@ use super::noise_config::NoiseConfig;
 use super::noise_error::NoiseError;
 use crate::signal::sensor_noise::{stream, SensorNoise};
 use crate::signal::{csd_pieces, WelchConfig};
-use realfft::RealFftPlanner;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -123,25 +122,30 @@ fn moving_mean(x: &[f64], hw: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Σ_t x(t)·x(t+k) for k = 0..=max_lag, by FFT.
-fn autocov_sums(x: &[f64], max_lag: usize) -> Vec<f64> {
-    let n = x.len();
+/// `Σ_c Σ_t x_c(t)·x_c(t+k)` for k = 0..=max_lag, summed over the series `xs` (each of
+/// length `n`), by FFT: the power spectra summed, one inverse transform. The transform length
+/// is the next power of two from `n + max_lag + 1`, enough zero padding that no lag up to
+/// `max_lag` wraps around.
+fn autocov_sums<'x>(xs: impl IntoIterator<Item = &'x [f64]>, n: usize, max_lag: usize) -> Vec<f64> {
     if n == 0 {
         return vec![0.0; max_lag + 1];
     }
-    let m = (2 * n).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(m);
-    let inv = planner.plan_fft_inverse(m);
+    let m = (n + max_lag + 1).next_power_of_two();
+    let fwd = crate::signal::fft_plans::forward(m);
+    let inv = crate::signal::fft_plans::inverse(m);
+    let mut power = fwd.make_output_vec();
     let mut buf = fwd.make_input_vec();
-    buf[..n].copy_from_slice(x);
     let mut spec = fwd.make_output_vec();
-    fwd.process(&mut buf, &mut spec).expect("plan sizes");
-    for c in spec.iter_mut() {
-        *c = num_complex::Complex64::new(c.norm_sqr(), 0.0);
+    for x in xs {
+        buf[..n].copy_from_slice(&x[..n]);
+        buf[n..].iter_mut().for_each(|v| *v = 0.0);
+        fwd.process(&mut buf, &mut spec).expect("plan sizes");
+        for (p, c) in power.iter_mut().zip(&spec) {
+            p.re += c.norm_sqr();
+        }
     }
     let mut out = inv.make_output_vec();
-    inv.process(&mut spec, &mut out).expect("plan sizes");
+    inv.process(&mut power, &mut out).expect("plan sizes");
     (0..=max_lag)
         .map(|k| if k < n { out[k] / m as f64 } else { 0.0 })
         .collect()
@@ -219,22 +223,22 @@ impl NoiseFloor {
                 }
             })
             .collect();
-        let pairs = autocov_sums(&mask, max_lag);
-        let mut acc = vec![0.0; max_lag + 1];
-        for c in copies {
-            let z: Vec<f64> = (0..n)
-                .map(|i| {
-                    if mask[i] > 0.0 {
-                        c[i] / smooth[i].sqrt()
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            for (a, s) in acc.iter_mut().zip(autocov_sums(&z, max_lag)) {
-                *a += s;
-            }
-        }
+        let pairs = autocov_sums([mask.as_slice()], n, max_lag);
+        let normalised: Vec<Vec<f64>> = copies
+            .iter()
+            .map(|c| {
+                (0..n)
+                    .map(|i| {
+                        if mask[i] > 0.0 {
+                            c[i] / smooth[i].sqrt()
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let acc = autocov_sums(normalised.iter().map(Vec::as_slice), n, max_lag);
         let mut autocorrelation = Vec::with_capacity(max_lag + 1);
         if pairs.first().copied().unwrap_or(0.0) > 0.5 {
             let r0 = acc[0] / pairs[0];
