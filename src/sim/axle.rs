@@ -42,7 +42,7 @@ const TH: usize = 1;
 const ZF: usize = 2;
 
 /// Inputs of the axle model, functions of time (s from the start).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct AxleInputs {
     /// Longitudinal acceleration along the road, m/s² (+ forward), from speed or an IMU.
     pub accel_mps2: Piecewise,
@@ -68,8 +68,10 @@ pub struct Longitudinal {
     pub resistance_n: f64,
     /// Acceleration, m/s².
     pub accel_mps2: f64,
-    /// Grade angle α, rad.
-    pub alpha_rad: f64,
+    /// `sin α` of the grade angle α.
+    pub sin_alpha: f64,
+    /// `cos α` of the grade angle α.
+    pub cos_alpha: f64,
 }
 
 /// Piece indices of the five inputs, moved forward as time increases (so a long recorded drive
@@ -331,8 +333,11 @@ impl<'a> HalfTruck<'a> {
     fn longitudinal_with(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> Longitudinal {
         let p = self.p;
         let a = c.eval(0, &u.accel_mps2, t);
-        let alpha = c.eval(1, &u.slope, t).atan();
-        let total = self.st.mass_kg * (a + p.gravity_m_per_s2 * alpha.sin());
+        // sin α and cos α of the slope s = tan α, algebraically (no atan, sin, cos per step)
+        let s = c.eval(1, &u.slope, t);
+        let cos_alpha = 1.0 / (1.0 + s * s).sqrt();
+        let sin_alpha = s * cos_alpha;
+        let total = self.st.mass_kg * (a + p.gravity_m_per_s2 * sin_alpha);
         let fb = u.service_brake_n.as_ref().map_or(0.0, |s| c.eval(2, s, t));
         let mut f = Axle::ALL.map(|ax| -p.brake_share(ax) * fb);
         let torque = u.drive_torque_wheel_nm.is_some() || u.aux_brake_torque_wheel_nm.is_some();
@@ -355,17 +360,17 @@ impl<'a> HalfTruck<'a> {
             contact_n: f,
             resistance_n: resistance,
             accel_mps2: a,
-            alpha_rad: alpha,
+            sin_alpha,
+            cos_alpha,
         }
     }
 
     /// Generalised forces that do not depend on the state.
     fn external(&self, l: &Longitudinal) -> V5 {
         let g = self.p.gravity_m_per_s2;
-        let mut q = self.q_pre
-            - g * l.alpha_rad.cos() * self.g_w
-            - (l.accel_mps2 + g * l.alpha_rad.sin()) * self.g_u
-            + l.resistance_n * self.resist;
+        let mut q =
+            self.q_pre - g * l.cos_alpha * self.g_w - (l.accel_mps2 + g * l.sin_alpha) * self.g_u
+                + l.resistance_n * self.resist;
         for i in 0..3 {
             q += l.contact_n[i] * self.contact[i];
         }
@@ -375,8 +380,7 @@ impl<'a> HalfTruck<'a> {
             q[TH] += self.ext.torque_reaction * t;
         }
         if self.ext.grade_height_offset_m != 0.0 {
-            q[TH] +=
-                self.p.chassis_mass_kg * g * l.alpha_rad.sin() * self.ext.grade_height_offset_m;
+            q[TH] += self.p.chassis_mass_kg * g * l.sin_alpha * self.ext.grade_height_offset_m;
         }
         q
     }

@@ -427,7 +427,9 @@ impl<'a> FastDriveline<'a> {
                     let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
                     let mg = p.mass_kg * p.gravity_m_per_s2;
                     let drive = md1 / p.wheel_radius_m
-                        - mg * sc.slope.eval_from(&cur.slope, t1).atan().sin();
+                        - mg * crate::model::driveline::grade_sine(
+                            sc.slope.eval_from(&cur.slope, t1),
+                        );
                     let f0 = if sc.smoothing { 0.0 } else { 1.0 };
                     let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
                     if stuck {

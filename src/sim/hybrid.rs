@@ -267,7 +267,7 @@ impl<'a> HybridDriveline<'a> {
         let [_, _, _, m_d] = self.torques(fr, ClutchMode::Slipping(1.0), t, y);
         let s = fr.s.eval(t);
         let mg = p.mass_kg * p.gravity_m_per_s2;
-        let drive = m_d / p.wheel_radius_m - mg * s.atan().sin();
+        let drive = m_d / p.wheel_radius_m - mg * crate::model::driveline::grade_sine(s);
         let f0 = if self.sc.smoothing { 0.0 } else { 1.0 };
         (drive, f0 * p.c_r1 * mg + fr.fb.eval(t))
     }
@@ -594,7 +594,7 @@ pub fn steady_state_locked(
     let mg = p.mass_kg * p.gravity_m_per_s2;
     let force = f * (p.c_r1 + p.c_r2_s_per_m * v_mps) * mg
         + 0.5 * p.rho_air_kg_per_m3 * p.c_w_a_f_m2 * v_mps * v_mps
-        + mg * slope.atan().sin();
+        + mg * crate::model::driveline::grade_sine(slope);
     let m_d = p.wheel_radius_m * force;
     let m_p = (p.b_f_nm_s_per_rad * w_d + m_d) / fi;
     let m_c = (p.b_t_nm_s_per_rad * w_p + m_p) / it;

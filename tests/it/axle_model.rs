@@ -121,7 +121,7 @@ fn normal_forces_sum_to_m_g_cos_alpha_at_rest_on_a_grade_and_in_steady_accelerat
 /// (docs/models/axle.md diagram), with the bellow forces taken from the pressure outputs.
 fn check_free_bodies(p: &AxleParams, m: &HalfTruck, l: &Longitudinal, n: [f64; 3], b: [f64; 3]) {
     let g = p.gravity_m_per_s2;
-    let (ca, sa) = (l.alpha_rad.cos(), l.alpha_rad.sin());
+    let (ca, sa) = (l.cos_alpha, l.sin_alpha);
     let ax = l.accel_mps2 + g * sa; // d'Alembert + gravity along the road, per kg
     let scale = m.static_state().mass_kg * g;
     // front axle: vertical force balance
