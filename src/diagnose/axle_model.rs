@@ -9,13 +9,13 @@ use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
 use super::model_inputs::{corrected_log, filled};
 use super::slope_grid::{cured_slope, SlopeGrid};
-use crate::model::axle::AxleParams;
+use crate::model::axle::{AxleExtensions, AxleParams};
 use crate::model::catalogue::Effect;
 use crate::model::extended_vehicle::ExtendedVehicle;
-use crate::sim::axle::{HalfTruck, Start};
+use crate::sim::axle::{AxleInputs, HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
 use crate::table::DriveLog;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// The axle-load model of one recording, extended by the catalogue's axle effects (and by the
 /// longitudinal ones that change its inputs or masses).
@@ -28,6 +28,23 @@ pub struct AxleModel<'a> {
     /// The recorded slope's grid, built when a cure first asks for it ([`cured_slope`]).
     slope_grid: OnceLock<Option<SlopeGrid>>,
     cfg: AxleRecordConfig,
+    /// The simulation at the nominal parameters with what it was run on, made by the first
+    /// simulation ([`NominalRun`]); `None` when it failed.
+    nominal_run: OnceLock<Option<NominalRun>>,
+}
+
+/// A simulation of the axle model with everything it depends on: the half-truck's parameters
+/// and extensions, its inputs and their time axis. The simulation is a function of these
+/// alone, so a parameter set that builds the same ones (most longitudinal effects change
+/// neither the axle model's masses nor its inputs) has the same pressures, taken from here
+/// instead of simulated again.
+#[derive(Debug, Clone)]
+struct NominalRun {
+    params: AxleParams,
+    ext: AxleExtensions,
+    inputs: AxleInputs,
+    t_s: Arc<[f64]>,
+    pressures: [Vec<f64>; 3],
 }
 
 impl<'a> AxleModel<'a> {
@@ -61,6 +78,7 @@ impl<'a> AxleModel<'a> {
             nominal,
             slope_grid: OnceLock::new(),
             cfg: AxleRecordConfig::default(),
+            nominal_run: OnceLock::new(),
         })
     }
 
@@ -69,6 +87,25 @@ impl<'a> AxleModel<'a> {
     /// # Errors
     /// [`ExtendedError`] for parameters outside their domain or inputs that cannot be built.
     pub fn simulate(&self, theta: &Theta) -> Result<[Vec<f64>; 3], ExtendedError> {
+        let nominal = self
+            .nominal_run
+            .get_or_init(|| self.run(&self.nominal, None).ok().flatten());
+        self.run(theta, nominal.as_ref()).map(|r| match r {
+            Some(run) => run.pressures,
+            None => nominal
+                .as_ref()
+                .map(|n| n.pressures.clone())
+                .expect("a run is kept unless it matches the nominal one"),
+        })
+    }
+
+    /// Simulates at `theta`; `None` when `theta` builds exactly what `same_as` was run on (its
+    /// pressures then hold).
+    fn run(
+        &self,
+        theta: &Theta,
+        same_as: Option<&NominalRun>,
+    ) -> Result<Option<NominalRun>, ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
             if matches!(
@@ -97,11 +134,22 @@ impl<'a> AxleModel<'a> {
             None,
             &self.cfg,
         )?;
+        if same_as.is_some_and(|n| {
+            n.params == *a && n.ext == tm.axle_ext && n.inputs == rec.inputs && n.t_s == rec.t_s
+        }) {
+            return Ok(None);
+        }
         let traj = HalfTruck::new(a).with_extensions(tm.axle_ext).simulate(
             &rec.inputs,
             &rec.t_s,
             Start::Steady,
         );
-        Ok(traj.pressure_pa)
+        Ok(Some(NominalRun {
+            params: a.clone(),
+            ext: tm.axle_ext,
+            inputs: rec.inputs,
+            t_s: rec.t_s,
+            pressures: traj.pressure_pa,
+        }))
     }
 }

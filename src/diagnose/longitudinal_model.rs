@@ -33,9 +33,9 @@ use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::{interp_linear, interp_linear_at};
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
-use crate::sim::recorded::scenario_from_log;
+use crate::sim::recorded::{scenario_from_log, RecordedScenario};
 use crate::table::DriveLog;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// Settings of the windowed longitudinal simulation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -111,7 +111,34 @@ pub struct LongitudinalModel<'a> {
     w_meas: Vec<f64>,
     slip: super::tyre_slip::SlipEstimate,
     cfg: LongitudinalConfig,
+    /// The inputs as read at the nominal sensor parameters, built by the first simulation
+    /// that reads them ([`NominalInputs`]); `None` when building them failed (each
+    /// simulation then builds its own and reports the error).
+    nominal_inputs: OnceLock<Option<Arc<NominalInputs>>>,
 }
+
+/// What a simulation reads off the recording besides the plant: the inputs as a scenario and
+/// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
+/// effects (`grade_offset`, `slope_quantization`, `signal_delay`, `engine_torque_offset`,
+/// which correct the recorded inputs, [`corrected_log`]) and the final drive and wheel radius,
+/// which no catalogue effect changes; so every simulation at the nominal sensor parameters —
+/// most of a diagnosis's — reads the same, and they are built once.
+#[derive(Debug)]
+struct NominalInputs {
+    rec: RecordedScenario,
+    kappa: Vec<f64>,
+    /// The final drive ratio and wheel radius they were built with.
+    final_drive_ratio: f64,
+    wheel_radius_m: f64,
+}
+
+/// The effects that correct the recorded inputs instead of changing the plant.
+const SENSOR_EFFECTS: [Effect; 4] = [
+    Effect::GradeOffset,
+    Effect::SlopeQuantization,
+    Effect::SignalDelay,
+    Effect::EngineTorqueOffset,
+];
 
 /// Engine speed above the locked driveline's at which a window with the clutch closed starts
 /// slipping instead of locked ([`LongitudinalModel::simulate`]), rad/s (150 rpm). Why that margin:
@@ -157,6 +184,57 @@ impl<'a> LongitudinalModel<'a> {
             w_meas,
             slip,
             cfg,
+            nominal_inputs: OnceLock::new(),
+        })
+    }
+
+    /// The scenario and tyre slip `theta` reads ([`NominalInputs`]), with the plant's
+    /// driveline `p`: built for `theta` when a sensor effect departs from the nominal
+    /// parameters, else the nominal ones, built once.
+    fn read_inputs(
+        &self,
+        theta: &Theta,
+        p: &DrivelineParams,
+    ) -> Result<Arc<NominalInputs>, ExtendedError> {
+        let nominal_sensors = SENSOR_EFFECTS
+            .iter()
+            .all(|&e| theta.get(e).to_bits() == self.nominal.get(e).to_bits());
+        if nominal_sensors {
+            let cached = self
+                .nominal_inputs
+                .get_or_init(|| self.build_inputs(&self.nominal, p).ok().map(Arc::new));
+            if let Some(c) = cached.as_ref().filter(|c| {
+                c.final_drive_ratio.to_bits() == p.final_drive_ratio.to_bits()
+                    && c.wheel_radius_m.to_bits() == p.wheel_radius_m.to_bits()
+            }) {
+                return Ok(Arc::clone(c));
+            }
+        }
+        self.build_inputs(theta, p).map(Arc::new)
+    }
+
+    /// The scenario and tyre slip of the recording with `theta`'s sensor effects undone.
+    fn build_inputs(
+        &self,
+        theta: &Theta,
+        p: &DrivelineParams,
+    ) -> Result<NominalInputs, ExtendedError> {
+        let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
+        let log = corrected_log(self.log, theta, cured.as_deref());
+        let rec = scenario_from_log(
+            &log,
+            self.ratios.len(),
+            None,
+            Some(p.final_drive_ratio / p.wheel_radius_m),
+        )?;
+        // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
+        // a window's engine side starts from the recorded engine speed without it
+        let kappa = super::tyre_slip::slip_of_rows(&log, p, self.ratios, self.slip.slip_per_newton);
+        Ok(NominalInputs {
+            rec,
+            kappa,
+            final_drive_ratio: p.final_drive_ratio,
+            wheel_radius_m: p.wheel_radius_m,
         })
     }
 
@@ -301,19 +379,10 @@ impl<'a> LongitudinalModel<'a> {
     pub fn simulate(&self, theta: &Theta) -> Result<LongitudinalOutputs, ExtendedError> {
         let tm = self.plant(theta)?;
         let p: &DrivelineParams = &tm.driveline;
-        let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
-        let log = corrected_log(self.log, theta, cured.as_deref());
-        let file = log.meta.source_file.clone();
-        let rec = scenario_from_log(
-            &log,
-            self.ratios.len(),
-            None,
-            Some(p.final_drive_ratio / p.wheel_radius_m),
-        )?;
-        let sc = &rec.scenario;
-        // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
-        // a window's engine side starts from the recorded engine speed without it
-        let kappa = super::tyre_slip::slip_of_rows(&log, p, self.ratios, self.slip.slip_per_newton);
+        let file = self.log.meta.source_file.clone();
+        let inputs = self.read_inputs(theta, p)?;
+        let sc = &inputs.rec.scenario;
+        let kappa = &inputs.kappa;
         let dt = if tm.lash_rad > 0.0 {
             self.cfg.dt_s.min(FINE_STEP_S)
         } else {
@@ -355,7 +424,7 @@ impl<'a> LongitudinalModel<'a> {
             // above the gearbox slips (a worn clutch under full torque): the window starts
             // slipping from it
             let we = interp_linear(&self.t, &self.w_meas, ta)
-                / (1.0 + interp_linear(&self.t, &kappa, ta));
+                / (1.0 + interp_linear(&self.t, kappa, ta));
             let slipping = we.is_finite() && we - y0[0] > SLIP_START_MIN_RAD_S;
             let mode = if engaged && v0 >= self.cfg.min_speed_mps && !slipping {
                 ClutchMode::Locked

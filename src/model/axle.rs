@@ -121,7 +121,9 @@ pub struct DamperTable {
 fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
     // force through (0, 0) and the table; linear continuation beyond the last point
     let n = v.len();
-    let k = v.partition_point(|&x| x <= speed);
+    // the first velocity above `speed` (tables hold a handful of strictly increasing
+    // points, checked on loading: a forward scan finds it sooner than a bisection)
+    let k = v.iter().position(|&x| x > speed).unwrap_or(n);
     let (v0, f0, v1, f1) = if k == 0 {
         (0.0, 0.0, v[0], f[0])
     } else if k >= n {
