@@ -163,40 +163,46 @@ where
     let dt = grid_step_s(log)?;
     let sensors = sensor_estimates(log, cfg)?;
     let base = residuals(log)?;
-    type Run = (Vec<Compared>, Vec<(String, Vec<f64>)>);
-    let runs: Vec<Run> = (0..cfg.copies as u64)
+    let r0s: Vec<Vec<f64>> = base.iter().map(Compared::residual).collect();
+    // per copy and compared signal: the residual's change and the measurement's own change,
+    // kept alone (a copy's log and its full comparison are dropped as soon as it is read, so
+    // a long drive holds two columns per signal and copy, not every column)
+    type Run = Vec<Option<(Vec<f64>, Vec<f64>)>>;
+    let mut runs: Vec<Run> = (0..cfg.copies as u64)
         .into_par_iter()
         .map(|c| {
             let (plog, deltas) = perturbed_log(log, &sensors, cfg, c);
-            residuals(&plog).map(|r| (r, deltas))
+            let rs = residuals(&plog)?;
+            drop(plog);
+            base.iter()
+                .zip(&r0s)
+                .map(|(b, r0)| {
+                    let Some(cmp) = rs.iter().find(|x| x.name == b.name) else {
+                        return Ok(None);
+                    };
+                    let rc = cmp.residual();
+                    let n = r0.len();
+                    if rc.len() != n {
+                        return Err(NoiseError::Length {
+                            what: format!("residual of {} in a perturbed copy", b.name),
+                            expected: n,
+                            got: rc.len(),
+                        });
+                    }
+                    let meas = deltas
+                        .iter()
+                        .find(|d| d.0 == b.name)
+                        .map_or_else(|| vec![0.0; n], |d| d.1.clone());
+                    Ok(Some(((0..n).map(|i| rc[i] - r0[i]).collect(), meas)))
+                })
+                .collect()
         })
         .collect::<Result<_, _>>()?;
     let mut floors = Vec::new();
-    for b in &base {
-        let r0 = b.residual();
-        let n = r0.len();
-        let mut copies = Vec::with_capacity(runs.len());
-        let mut meas = Vec::with_capacity(runs.len());
-        for (rs, deltas) in &runs {
-            let Some(c) = rs.iter().find(|c| c.name == b.name) else {
-                continue;
-            };
-            let rc = c.residual();
-            if rc.len() != n {
-                return Err(NoiseError::Length {
-                    what: format!("residual of {} in a perturbed copy", b.name),
-                    expected: n,
-                    got: rc.len(),
-                });
-            }
-            copies.push((0..n).map(|i| rc[i] - r0[i]).collect::<Vec<f64>>());
-            meas.push(
-                deltas
-                    .iter()
-                    .find(|d| d.0 == b.name)
-                    .map_or_else(|| vec![0.0; n], |d| d.1.clone()),
-            );
-        }
+    for (k, b) in base.iter().enumerate() {
+        let n = r0s[k].len();
+        let (copies, meas): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
+            runs.iter_mut().filter_map(|r| r[k].take()).unzip();
         let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, &copies, &b.valid, cfg)?;
         // measurement / input split (RMS over the rows that count)
         let (mut sm, mut si, mut cnt) = (0.0, 0.0, 0usize);
