@@ -112,9 +112,9 @@ pub struct LongitudinalModel<'a> {
     slip: super::tyre_slip::SlipEstimate,
     cfg: LongitudinalConfig,
     /// The inputs as read at the nominal sensor parameters, built by the first simulation
-    /// that reads them ([`NominalInputs`]); `None` when building them failed (each
+    /// that reads them ([`ReadInputs`]); `None` when building them failed (each
     /// simulation then builds its own and reports the error).
-    nominal_inputs: OnceLock<Option<Arc<NominalInputs>>>,
+    nominal_inputs: OnceLock<Option<Arc<ReadInputs>>>,
 }
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
@@ -122,9 +122,10 @@ pub struct LongitudinalModel<'a> {
 /// effects (`grade_offset`, `slope_quantization`, `signal_delay`, `engine_torque_offset`,
 /// which correct the recorded inputs, [`corrected_log`]) and the final drive and wheel radius,
 /// which no catalogue effect changes; so every simulation at the nominal sensor parameters —
-/// most of a diagnosis's — reads the same, and they are built once.
+/// most of a diagnosis's — reads the same ones, built once
+/// ([`LongitudinalModel::read_inputs`]).
 #[derive(Debug)]
-struct NominalInputs {
+struct ReadInputs {
     rec: RecordedScenario,
     kappa: Vec<f64>,
     /// The final drive ratio and wheel radius they were built with.
@@ -188,14 +189,14 @@ impl<'a> LongitudinalModel<'a> {
         })
     }
 
-    /// The scenario and tyre slip `theta` reads ([`NominalInputs`]), with the plant's
+    /// The scenario and tyre slip `theta` reads ([`ReadInputs`]), with the plant's
     /// driveline `p`: built for `theta` when a sensor effect departs from the nominal
     /// parameters, else the nominal ones, built once.
     fn read_inputs(
         &self,
         theta: &Theta,
         p: &DrivelineParams,
-    ) -> Result<Arc<NominalInputs>, ExtendedError> {
+    ) -> Result<Arc<ReadInputs>, ExtendedError> {
         let nominal_sensors = SENSOR_EFFECTS
             .iter()
             .all(|&e| theta.get(e).to_bits() == self.nominal.get(e).to_bits());
@@ -218,7 +219,7 @@ impl<'a> LongitudinalModel<'a> {
         &self,
         theta: &Theta,
         p: &DrivelineParams,
-    ) -> Result<NominalInputs, ExtendedError> {
+    ) -> Result<ReadInputs, ExtendedError> {
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
         let log = corrected_log(self.log, theta, cured.as_deref());
         let rec = scenario_from_log(
@@ -230,7 +231,7 @@ impl<'a> LongitudinalModel<'a> {
         // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
         // a window's engine side starts from the recorded engine speed without it
         let kappa = super::tyre_slip::slip_of_rows(&log, p, self.ratios, self.slip.slip_per_newton);
-        Ok(NominalInputs {
+        Ok(ReadInputs {
             rec,
             kappa,
             final_drive_ratio: p.final_drive_ratio,
