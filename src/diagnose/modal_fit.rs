@@ -459,8 +459,9 @@ mod tests {
     fn the_grid_residual_equals_the_full_least_squares() {
         // the projected 2 × 2 figure against the five-column least squares, on a noisy
         // ringing and on pure noise, at grid points across the band and decays; tolerance
-        // 1e-9 of ‖y − ȳ‖²: both are exact to rounding (about 1e-15 relative for these
-        // well-conditioned windows), so any algebra error shows by many orders more
+        // 1e-9 of ‖y − ȳ‖²: both are exact up to rounding in double precision on these
+        // well-conditioned 115-sample windows, and an algebra error would show as a
+        // difference of the order of the residual itself
         for (t, y) in [window(4.3, 5.0, 3.0, 11), window(2.0, 1.0, 0.0, 12)] {
             let tau: Vec<f64> = t.iter().map(|x| x - t[0]).collect();
             let grid = GridProjection::new(&tau, &y);

@@ -126,7 +126,11 @@ fn moving_mean(x: &[f64], hw: usize) -> Vec<f64> {
 /// length `n`), by FFT: the power spectra summed, one inverse transform. The transform length
 /// is the next power of two from `n + max_lag + 1`, enough zero padding that no lag up to
 /// `max_lag` wraps around.
-fn autocov_sums<'x>(xs: impl IntoIterator<Item = &'x [f64]>, n: usize, max_lag: usize) -> Vec<f64> {
+fn autocov_sums<X: AsRef<[f64]>>(
+    xs: impl IntoIterator<Item = X>,
+    n: usize,
+    max_lag: usize,
+) -> Vec<f64> {
     if n == 0 {
         return vec![0.0; max_lag + 1];
     }
@@ -137,7 +141,7 @@ fn autocov_sums<'x>(xs: impl IntoIterator<Item = &'x [f64]>, n: usize, max_lag: 
     let mut buf = fwd.make_input_vec();
     let mut spec = fwd.make_output_vec();
     for x in xs {
-        buf[..n].copy_from_slice(&x[..n]);
+        buf[..n].copy_from_slice(&x.as_ref()[..n]);
         buf[n..].iter_mut().for_each(|v| *v = 0.0);
         fwd.process(&mut buf, &mut spec).expect("plan sizes");
         for (p, c) in power.iter_mut().zip(&spec) {
@@ -224,21 +228,19 @@ impl NoiseFloor {
             })
             .collect();
         let pairs = autocov_sums([mask.as_slice()], n, max_lag);
-        let normalised: Vec<Vec<f64>> = copies
-            .iter()
-            .map(|c| {
-                (0..n)
-                    .map(|i| {
-                        if mask[i] > 0.0 {
-                            c[i] / smooth[i].sqrt()
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let acc = autocov_sums(normalised.iter().map(Vec::as_slice), n, max_lag);
+        // each copy normalised as the sums reach it (one row vector at a time)
+        let normalised = copies.iter().map(|c| {
+            (0..n)
+                .map(|i| {
+                    if mask[i] > 0.0 {
+                        c[i] / smooth[i].sqrt()
+                    } else {
+                        0.0
+                    }
+                })
+                .collect::<Vec<f64>>()
+        });
+        let acc = autocov_sums(normalised, n, max_lag);
         let mut autocorrelation = Vec::with_capacity(max_lag + 1);
         if pairs.first().copied().unwrap_or(0.0) > 0.5 {
             let r0 = acc[0] / pairs[0];

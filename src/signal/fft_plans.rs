@@ -4,7 +4,9 @@
 //! residual's whiteness and cross-correlation). A plan depends only on the length and the
 //! processor's features, so a kept plan gives the same bits as a fresh one.
 //!
-//! Per thread because `realfft`'s planner is not `Sync`; each rayon worker keeps its own.
+//! Per thread because `realfft`'s planner is not `Sync`; each rayon worker keeps its own. The
+//! lengths asked for are powers of two (zero-padded correlations) and Welch segment lengths,
+//! so a thread holds a handful of plans whatever the number of drives it serves.
 
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use std::cell::RefCell;
