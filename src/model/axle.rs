@@ -121,10 +121,13 @@ pub struct DamperTable {
 fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
     // force through (0, 0) and the table; linear continuation beyond the last point
     let n = v.len();
-    // the first velocity above `speed` (tables hold a handful of strictly increasing
-    // points, checked on loading: a forward scan finds it sooner than a bisection)
-    let k = v.iter().position(|&x| x > speed).unwrap_or(n);
-    let (v0, f0, v1, f1) = if k == 0 {
+    // the number of velocities at or below `speed` (tables hold a handful of strictly
+    // increasing points, checked on loading: a forward scan finds it sooner than a
+    // bisection); a NaN speed counts none, and its force is NaN
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    let k = v.iter().position(|&x| !(x <= speed)).unwrap_or(n);
+    let (v0, f0, v1, f1) = if k == 0 || n == 1 {
+        // below the first point, or a one-point table: the line through (0, 0) and it
         (0.0, 0.0, v[0], f[0])
     } else if k >= n {
         (v[n - 2], f[n - 2], v[n - 1], f[n - 1])
@@ -564,5 +567,22 @@ mod tests {
             (d.force(1.0) - 2750.0).abs() < 1e-9,
             "continued at the last slope"
         );
+    }
+
+    #[test]
+    fn a_one_point_damper_table_is_the_line_through_the_origin_and_a_nan_rate_gives_nan() {
+        // a table of one point per branch passes the file checks; beyond the point the force
+        // continues on the line through (0, 0) and it, and a NaN rate (a diverged state) gives
+        // a NaN force, not a panic
+        let d = DamperTable {
+            ext_v: vec![0.2],
+            ext_f: vec![4000.0],
+            comp_v: vec![0.2],
+            comp_f: vec![1000.0],
+        };
+        assert!((d.force(0.1) - 500.0).abs() < 1e-9);
+        assert!((d.force(0.4) - 2000.0).abs() < 1e-9);
+        assert!((d.force(-0.4) + 8000.0).abs() < 1e-9);
+        assert!(d.force(f64::NAN).is_nan());
     }
 }
