@@ -7,10 +7,9 @@
 
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
-use super::model_inputs::{corrected_log, filled};
+use super::model_inputs::{corrected_log, filled, INPUT_EFFECTS};
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::axle::{AxleExtensions, AxleParams};
-use crate::model::catalogue::Effect;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::sim::axle::{AxleInputs, HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
@@ -108,13 +107,7 @@ impl<'a> AxleModel<'a> {
     ) -> Result<Option<NominalRun>, ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
-            if matches!(
-                e,
-                Effect::GradeOffset
-                    | Effect::SlopeQuantization
-                    | Effect::SignalDelay
-                    | Effect::EngineTorqueOffset
-            ) {
+            if INPUT_EFFECTS.contains(&e) {
                 continue;
             }
             tm.set(e, theta.get(e))?;

@@ -24,10 +24,9 @@
 
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
-use super::model_inputs::{corrected_log, filled};
+use super::model_inputs::{corrected_log, filled, INPUT_EFFECTS};
 use super::simulation_windows::{fine_spans, stepped_pieces, window_starts, FINE_STEP_S};
 use super::slope_grid::{cured_slope, SlopeGrid};
-use crate::model::catalogue::Effect;
 use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::{interp_linear, interp_linear_at};
@@ -119,8 +118,7 @@ pub struct LongitudinalModel<'a> {
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
-/// effects (`grade_offset`, `slope_quantization`, `signal_delay`, `engine_torque_offset`,
-/// which correct the recorded inputs, [`corrected_log`]) and the final drive and wheel radius,
+/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`corrected_log`]) and the final drive and wheel radius,
 /// which no catalogue effect changes; so every simulation at the nominal sensor parameters —
 /// most of a diagnosis's — reads the same ones, built once
 /// ([`LongitudinalModel::read_inputs`]).
@@ -132,14 +130,6 @@ struct ReadInputs {
     final_drive_ratio: f64,
     wheel_radius_m: f64,
 }
-
-/// The effects that correct the recorded inputs instead of changing the plant.
-const SENSOR_EFFECTS: [Effect; 4] = [
-    Effect::GradeOffset,
-    Effect::SlopeQuantization,
-    Effect::SignalDelay,
-    Effect::EngineTorqueOffset,
-];
 
 /// Engine speed above the locked driveline's at which a window with the clutch closed starts
 /// slipping instead of locked ([`LongitudinalModel::simulate`]), rad/s (150 rpm). Why that margin:
@@ -197,7 +187,7 @@ impl<'a> LongitudinalModel<'a> {
         theta: &Theta,
         p: &DrivelineParams,
     ) -> Result<Arc<ReadInputs>, ExtendedError> {
-        let nominal_sensors = SENSOR_EFFECTS
+        let nominal_sensors = INPUT_EFFECTS
             .iter()
             .all(|&e| theta.get(e).to_bits() == self.nominal.get(e).to_bits());
         if nominal_sensors {
@@ -282,13 +272,7 @@ impl<'a> LongitudinalModel<'a> {
     pub fn plant(&self, theta: &Theta) -> Result<ExtendedVehicle, ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
-            if matches!(
-                e,
-                Effect::GradeOffset
-                    | Effect::SlopeQuantization
-                    | Effect::SignalDelay
-                    | Effect::EngineTorqueOffset
-            ) {
+            if INPUT_EFFECTS.contains(&e) {
                 continue; // corrected on the inputs
             }
             if e.domain() == crate::model::catalogue::Domain::Longitudinal {

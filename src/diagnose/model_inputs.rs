@@ -27,6 +27,15 @@ use crate::signal::interp_linear;
 use crate::sim::axle_recorded::AxleRecordConfig;
 use crate::table::DriveLog;
 
+/// The sensor effects: they correct the recorded inputs ([`corrected_log`], and the cured slope
+/// of `slope_quantization`) instead of changing a model's plant.
+pub const INPUT_EFFECTS: [Effect; 4] = [
+    Effect::GradeOffset,
+    Effect::SlopeQuantization,
+    Effect::SignalDelay,
+    Effect::EngineTorqueOffset,
+];
+
 /// The recording with the sensor effects of `theta` undone (see the module documentation);
 /// `cured_slope` is the recording's slope with `slope_quantization` undone
 /// ([`SlopeGrid::cured`]), used when given. The slope (recorded or cured) is read half its

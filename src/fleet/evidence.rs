@@ -3,7 +3,7 @@
 //! file's tolerance, and a sentence.
 
 use super::change::{changes, segments, Change, FALSE_ALARM, MIN_SEGMENT};
-use super::pool::Pooled;
+use super::pool::{is_usable, Pooled};
 use super::series::{DriveEstimates, EstimateRow};
 use crate::model::catalogue::Effect;
 use crate::time_fmt::utc_date;
@@ -230,7 +230,7 @@ pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> Ve
         for d in &drives {
             if let Some(r) = d.rows.iter().find(|r| r.effect == e.id()) {
                 let se = r.standard_error();
-                if r.value.is_finite() && se.is_finite() && se > 0.0 && !at_domain_edge(e, r) {
+                if is_usable(&(r.value, se)) && !at_domain_edge(e, r) {
                     points.push(Point {
                         drive_id: d.drive_id.clone(),
                         start_ns: d.start_ns,
