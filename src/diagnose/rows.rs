@@ -264,7 +264,7 @@ fn drop_short_runs(ok: &mut [bool], t: &[f64], min_s: f64) {
 /// Rows of `log` not within `halfwidth_s` of a step of `column` (gaps filled linearly): a row
 /// whose value differs by more than `step` from the value `window_s` earlier. A log without
 /// the column has no steps.
-fn away_from_steps(
+pub(crate) fn away_from_steps(
     log: &DriveLog,
     column: &str,
     step: f64,

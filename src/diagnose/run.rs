@@ -36,8 +36,10 @@ use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig,
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::parameter_table::{EstimateMethod, ParameterRow};
 use super::problem::{ExplainError, Problem};
+use super::resistance_stretch::{resistance_stretch, ResistanceStretch, StretchConfig};
 use super::setup::Setup;
-use super::tyre_slip::tyre_slip_variance;
+use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsistency};
+use super::tyre_slip::{self, tyre_slip_variance};
 use crate::diagnose::compare::Comparison;
 use crate::diagnose::rows::ACTUATION_CHANNEL;
 use crate::model::catalogue::Effect;
@@ -142,6 +144,10 @@ pub struct DiagnoseConfig {
     pub locate: LocateConfig,
     /// Most findings.
     pub max_findings: usize,
+    /// The speed channels' consistency test.
+    pub consistency: ConsistencyConfig,
+    /// The force balance's stretch scan.
+    pub stretch: StretchConfig,
 }
 
 impl Default for DiagnoseConfig {
@@ -151,6 +157,8 @@ impl Default for DiagnoseConfig {
             noise: NoiseConfig::default(),
             locate: LocateConfig::default(),
             max_findings: ExplainConfig::default().max_findings,
+            consistency: ConsistencyConfig::default(),
+            stretch: StretchConfig::default(),
         }
     }
 }
@@ -187,6 +195,11 @@ pub struct Diagnosed {
     pub models: ModelsUsed,
     /// Shuffle modes per clutch engagement (`None` without an engine-speed comparison).
     pub modal: Option<ModalComparison>,
+    /// The speed channels against each other (`None` without the channels or enough usable
+    /// windows).
+    pub speed_consistency: Option<SpeedConsistency>,
+    /// The force balance's stretch scan (`None` without the channels or enough road).
+    pub resistance_stretch: Option<ResistanceStretch>,
     /// Every catalogue parameter the drive informs ([`super::parameter_table`]).
     pub parameters: Vec<ParameterRow>,
     /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
@@ -311,6 +324,47 @@ pub fn diagnose(
             }
             m
         });
+    // two tests on the recorded channels alone, with the longitudinal model's vehicle: the
+    // wheel-based speed against the engine speed through the gear, and the force balance's
+    // stretch scan; a flagged one is a located mismatch
+    let cond = &cmp.conditions;
+    let driveline = &setup.nominal_truth.driveline;
+    let (consistency, stretch) = if setup.longitudinal {
+        let slip = tyre_slip::estimate(log, driveline, &setup.ratios);
+        (
+            speed_consistency(
+                log,
+                &cond.t_s,
+                driveline,
+                &setup.ratios,
+                &slip,
+                &cfg.consistency,
+            ),
+            resistance_stretch(
+                log,
+                &cond.t_s,
+                &cond.distance_m,
+                driveline,
+                &setup.ratios,
+                setup.slope_resolution,
+                &cfg.stretch,
+            ),
+        )
+    } else {
+        (None, None)
+    };
+    let located = [
+        consistency
+            .as_ref()
+            .and_then(|s| s.mismatch(&cond.t_s, &cond.distance_m)),
+        stretch
+            .as_ref()
+            .and_then(|s| s.mismatch(&cond.t_s, &cond.distance_m)),
+    ];
+    for m in located.into_iter().flatten() {
+        location.mismatch.push(m);
+        location.any_significant = true;
+    }
     let explanation = explain(
         &problem,
         &ExplainConfig {
@@ -373,6 +427,8 @@ pub fn diagnose(
             slope_resolution: setup.slope_resolution,
         },
         modal,
+        speed_consistency: consistency,
+        resistance_stretch: stretch,
         actuation_variance,
     })
 }

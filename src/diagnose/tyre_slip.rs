@@ -15,8 +15,8 @@
 //! relative slip no larger than the bound below allows plus [`RADIUS_MARGIN`],
 //! `ω_e / (G v) − 1 = a + b·F_x` with `G = i_t i_f / r_w` and `F_x = M_e i_t i_f / r_w`
 //! from the recorded engine torque. The intercept `a` takes the rolling radius's deviation
-//! from the file's (it is not used further); `b` is kept within `[0, 1/(`[`SLIP_STIFFNESS_MIN`]
-//! `· F_z,min)]`, `F_z,min = `[`DRIVEN_LOAD_SHARE_MIN`]` · m g`. The fit is least squares
+//! from the file's (the speed-consistency test, [`super::speed_consistency`], uses it); `b` is
+//! kept within `[0, 1/(`[`SLIP_STIFFNESS_MIN`]`· F_z,min)]`, `F_z,min = `[`DRIVEN_LOAD_SHARE_MIN`]` · m g`. The fit is least squares
 //! trimmed twice at 3 × 1.4826 × the median absolute residual (a slipping clutch, a stuck
 //! speed channel or a shift's transient is not tyre slip). The longitudinal model then
 //! reports the engine speed as `ω_e (1 + κ)` with `κ = b M_d / r_w` from its own drive-shaft
@@ -70,6 +70,9 @@ pub struct SlipEstimate {
     pub normalised_stiffness: f64,
     /// Rows used after trimming.
     pub rows: usize,
+    /// Intercept `a` of the fit at the kept `b`, 1: the rolling radius's relative deviation
+    /// from the file's, seen through the speed channels (0 for the rigid model).
+    pub intercept: f64,
 }
 
 impl SlipEstimate {
@@ -78,12 +81,13 @@ impl SlipEstimate {
         slip_per_newton: 0.0,
         normalised_stiffness: f64::INFINITY,
         rows: 0,
+        intercept: 0.0,
     };
 }
 
 /// `(F_x, G)` of row `i`: traction force from the recorded torque and gear, N, and the
 /// overall ratio per metre `i_t i_f / r_w`, 1/m; `None` without a finite torque or gear.
-fn traction(
+pub(crate) fn traction(
     torque: &[f64],
     gear: &[f64],
     i: usize,
@@ -161,6 +165,8 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
         return rigid;
     };
     let b = b.clamp(0.0, b_max);
+    let n = pts.len() as f64;
+    let intercept = pts.iter().map(|(f, k)| (k - b * f) / n).sum();
     SlipEstimate {
         slip_per_newton: b,
         normalised_stiffness: if b > 0.0 {
@@ -169,6 +175,7 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
             f64::INFINITY
         },
         rows: pts.len(),
+        intercept,
     }
 }
 
@@ -232,10 +239,11 @@ pub fn tyre_slip_variance(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn truck() -> (DrivelineParams, Vec<f64>) {
+    /// The bundled 40 t truck's driveline and gear ratios.
+    pub(crate) fn truck() -> (DrivelineParams, Vec<f64>) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("fixtures/vehicles/truck-40t.toml");
         let vf = crate::model::vehicle::VehicleFile::load(&path).unwrap();

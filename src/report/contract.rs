@@ -9,8 +9,8 @@ pub use crate::diagnose::explain::Verdict;
 use crate::diagnose::explain::{ConsistentEstimate, Finding};
 use crate::diagnose::locate::Mismatch;
 use crate::diagnose::parameter_table::{parameter_columns, ParameterRow};
-use crate::diagnose::reversal_channel;
 use crate::diagnose::run::Diagnosed;
+use crate::diagnose::{resistance_stretch, reversal_channel};
 use crate::io::{config_hash, write_table, AtomicFile, OutColumn, OutData, OutputError, TableMeta};
 use crate::model::catalogue::Effect;
 use serde::Serialize;
@@ -441,6 +441,7 @@ pub fn signal_unit(signal: &str) -> &'static str {
         "vehicle_speed" => "m/s",
         "engine_speed" => "rad/s",
         reversal_channel::NAME => reversal_channel::UNIT,
+        resistance_stretch::NAME => resistance_stretch::UNIT,
         s if s.starts_with("bellow_pressure") => "Pa",
         s if s.starts_with("suspension_travel") => "m",
         _ => "1",

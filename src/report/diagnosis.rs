@@ -32,6 +32,7 @@ fn display(signal: &str) -> (f64, &'static str) {
         "Pa" => (1e-3, "kPa"),
         "rad/s" => (30.0 / std::f64::consts::PI, "rpm"),
         "m/s" => (3.6, "km/h"),
+        "N" => (1e-3, "kN"),
         _ => (1.0, "1"),
     }
 }

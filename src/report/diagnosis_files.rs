@@ -18,7 +18,9 @@ use crate::diagnose::explain::{Explanation, SignalMetrics};
 use crate::diagnose::locate::Location;
 use crate::diagnose::modal::ModalComparison;
 use crate::diagnose::noise::NoiseFloors;
+use crate::diagnose::resistance_stretch::ResistanceStretch;
 use crate::diagnose::run::{Diagnosed, ModelsUsed};
+use crate::diagnose::speed_consistency::SpeedConsistency;
 use crate::io::OutputError;
 use crate::table::DriveLog;
 use serde::Serialize;
@@ -54,6 +56,8 @@ struct Detail<'a> {
     noise_floors: &'a NoiseFloors,
     location: &'a Location,
     modal: &'a Option<ModalComparison>,
+    speed_consistency: &'a Option<SpeedConsistency>,
+    resistance_stretch: &'a Option<ResistanceStretch>,
     explanation: &'a Explanation,
 }
 
@@ -232,6 +236,8 @@ fn write_staged(
         noise_floors: &d.floors,
         location: &d.location,
         modal: &d.modal,
+        speed_consistency: &d.speed_consistency,
+        resistance_stretch: &d.resistance_stretch,
         explanation: &d.explanation,
     };
     let mut text = serde_json::to_string_pretty(&detail).map_err(|e| WriteError::Io {
