@@ -22,10 +22,9 @@
 //! them (a constant: rolling resistance, a slope offset, driveline losses; the mean speed and
 //! its square: drag area and a steady wind; the mean `g sin α + v̇`: mass, and the part of a
 //! torque-map gain that follows the load; time: tyres warming up), and scans every run of
-//! consecutive
-//! segments between [`StretchConfig::min_segments`] and [`StretchConfig::max_share`] of the
-//! drive for a step added to that regression: the F statistic of the step, one-sided (more
-//! driving force needed than on the rest of the drive). A wet or broken surface, a dragging
+//! consecutive segments between [`StretchConfig::min_segments`] and
+//! [`StretchConfig::max_share`] of the drive for a step added to that regression: the F
+//! statistic of the step, one-sided (more driving force needed than on the rest of the drive). A wet or broken surface, a dragging
 //! brake or an unreported retarder on part of the drive is such a step; a parameter off the
 //! file on the whole drive is not.
 //!
@@ -128,6 +127,8 @@ pub struct ResistanceStretch {
     /// Robust spread of the whitened residuals without the step, 1 (about 1 when the
     /// covariance model holds).
     pub whitened_spread: f64,
+    /// Standard deviation of a segment mean's white noise, N ([`covariance`]).
+    pub white_sd_n: f64,
     /// Rows of the stretch (first row of its first segment, one past its last).
     pub rows: (usize, usize),
     /// Segments in the stretch.
@@ -276,7 +277,8 @@ pub fn segments(
 /// the squared robust spread (1.4826 × median absolute value) of the differences between
 /// consecutive segments of one run, where the quantisation error cancels; with fewer than
 /// [`MIN_RUN_PAIRS`] such pairs, the robust spread of the segment means about their median.
-fn covariance(segs: &[Segment], y: &[f64], quantisation_n: f64) -> DMatrix<f64> {
+/// Returns the matrix and `σ₀²`.
+pub fn covariance(segs: &[Segment], y: &[f64], quantisation_n: f64) -> (DMatrix<f64>, f64) {
     let n = segs.len();
     let mut run = vec![0usize; n];
     for i in 1..n {
@@ -304,14 +306,15 @@ fn covariance(segs: &[Segment], y: &[f64], quantisation_n: f64) -> DMatrix<f64> 
     };
     let white = if white > 0.0 { white } else { 1.0 };
     let q2 = quantisation_n * quantisation_n / 12.0;
-    DMatrix::from_fn(n, n, |i, j| {
+    let v = DMatrix::from_fn(n, n, |i, j| {
         let shared = if run[i] == run[j] {
             q2 * segs[i].reading_share * segs[j].reading_share
         } else {
             0.0
         };
         shared + if i == j { white } else { 0.0 }
-    })
+    });
+    (v, white)
 }
 
 /// Fewest pairs of consecutive segments within one slope reading for the white variance
@@ -341,7 +344,8 @@ pub fn scan(
     ];
     let y: Vec<f64> = segs.iter().map(|s| s.force_n).collect();
     // whitening W = L⁻¹ of the covariance's Cholesky factor
-    let chol = covariance(segs, &y, quantisation_n).cholesky()?;
+    let (v, white) = covariance(segs, &y, quantisation_n);
+    let chol = v.cholesky()?;
     let w = chol.l().try_inverse()?;
     // each column scaled to its largest magnitude, whitened, then an orthonormal basis
     let mut x = DMatrix::<f64>::zeros(n, columns.len());
@@ -413,6 +417,7 @@ pub fn scan(
         f,
         step_n: step,
         whitened_spread: 1.4826 * abs[n / 2],
+        white_sd_n: white.sqrt(),
         rows: (segs[i].start_row, segs[j - 1].end_row),
         stretch_segments: j - i,
         p_value: (candidates as f64 * f_sf(f, 1.0, dof)).min(1.0),
@@ -468,7 +473,7 @@ impl ResistanceStretch {
             ),
             rms_residual: self.step_n,
             significance: self.p_value,
-            floor_rms: f64::NAN,
+            floor_rms: self.white_sd_n,
             windows: self.stretch_segments,
         })
     }

@@ -12,14 +12,15 @@
 //!
 //! and `e` stays within the channels' noise, the shuffle's ringing and the slip's transients.
 //! A speed channel that freezes, drifts or scales on part of a drive, a clutch that slips with
-//! the pedal released and a wheel that spins all move `e` away from the rest of the drive for
-//! as long as they last. [`speed_consistency`] averages `e` over [`ConsistencyConfig::window_s`]
+//! the pedal released, a wheel that spins and a braking force at the wheels the log does not
+//! report (the tyres slip under it) all move `e` away from the rest of the drive for as long
+//! as they last. [`speed_consistency`] averages `e` over [`ConsistencyConfig::window_s`]
 //! windows of usable rows (clutch closed, a gear held and no engine-torque step of more than
 //! [`TORQUE_STEP_NM`] within [`STEP_WINDOW_S`] for [`ConsistencyConfig::guard_s`] on either
 //! side, at least [`ConsistencyConfig::min_speed_mps`]), takes each window's departure
 //! from the median window, and flags the drive when the largest departure exceeds
-//! [`ConsistencyConfig::threshold_mps`]. A constant scale error (a rolling radius off the
-//! file's) moves every window alike and is left to the catalogue.
+//! [`ConsistencyConfig::threshold_mps`]. A rolling radius off the file's is taken up by the
+//! slip fit's intercept `a` and moves no window.
 //!
 //! The threshold is calibrated, not derived: the largest departure over the no-effect drives
 //! of the twelve calibration seeds of the truth plant (docs/diagnosis/method.md, rule 6),

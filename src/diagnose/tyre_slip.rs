@@ -16,8 +16,8 @@
 //! `ω_e / (G v) − 1 = a + b·F_x` with `G = i_t i_f / r_w` and `F_x = M_e i_t i_f / r_w`
 //! from the recorded engine torque. The intercept `a` takes the rolling radius's deviation
 //! from the file's (the speed-consistency test, [`super::speed_consistency`], uses it); `b` is
-//! kept within `[0, 1/(`[`SLIP_STIFFNESS_MIN`]`· F_z,min)]`, `F_z,min = `[`DRIVEN_LOAD_SHARE_MIN`]` · m g`. The fit is least squares
-//! trimmed twice at 3 × 1.4826 × the median absolute residual (a slipping clutch, a stuck
+//! kept within `[0, 1/(`[`SLIP_STIFFNESS_MIN`]`· F_z,min)]`,
+//! `F_z,min = `[`DRIVEN_LOAD_SHARE_MIN`]` · m g`. The fit is least squares trimmed twice at 3 × 1.4826 × the median absolute residual (a slipping clutch, a stuck
 //! speed channel or a shift's transient is not tyre slip). The longitudinal model then
 //! reports the engine speed as `ω_e (1 + κ)` with `κ = b M_d / r_w` from its own drive-shaft
 //! torque, and starts each window's engine side from the recorded engine speed divided by
