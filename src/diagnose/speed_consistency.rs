@@ -98,6 +98,8 @@ pub struct SpeedConsistency {
     pub p_value: f64,
     /// Threshold used, m/s.
     pub threshold_mps: f64,
+    /// Averaging window used, s.
+    pub window_s: f64,
     /// The departure exceeds the threshold.
     pub flagged: bool,
 }
@@ -222,6 +224,7 @@ pub fn speed_consistency(
         gears,
         p_value,
         threshold_mps: cfg.threshold_mps,
+        window_s: cfg.window_s,
         flagged,
     })
 }
@@ -242,14 +245,12 @@ impl SpeedConsistency {
             end_s: at(t_s, b),
             start_m: at(distance_m, a),
             end_m: at(distance_m, b),
-            band_hz: [
-                0.0,
-                0.5 / (at(t_s, a + 1) - at(t_s, a)).max(f64::MIN_POSITIVE),
-            ],
+            // window means resolve periods down to two windows
+            band_hz: [0.0, 0.5 / self.window_s],
             condition: format!(
                 "clutch closed in gear {}: the wheel-based speed reads {:+.2} m/s against the \
-                 engine speed through the gear (a faulty speed channel, a slipping clutch or a \
-                 spinning wheel)",
+                 engine speed through the gear (a faulty speed channel, a slipping clutch, a \
+                 spinning wheel or an unreported brake)",
                 gears.join(", "),
                 self.departure_mps
             ),
