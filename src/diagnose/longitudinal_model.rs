@@ -118,8 +118,8 @@ pub struct LongitudinalModel<'a> {
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
-/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`corrected_log`]) and the final drive and wheel radius,
-/// which no catalogue effect changes; so every simulation at the nominal sensor parameters —
+/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`corrected_log`]) and the
+/// final drive and wheel radius, which no catalogue effect changes; so every simulation at the nominal sensor parameters —
 /// most of a diagnosis's — reads the same ones, built once
 /// ([`LongitudinalModel::read_inputs`]).
 #[derive(Debug)]

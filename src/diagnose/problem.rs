@@ -560,6 +560,12 @@ impl<'a> Problem<'a> {
         &self.left_out
     }
 
+    /// The drive's tyre-slip fit the longitudinal model uses ([`super::tyre_slip::estimate`]);
+    /// `None` without the longitudinal model.
+    pub fn slip(&self) -> Option<super::tyre_slip::SlipEstimate> {
+        self.long.as_ref().map(LongitudinalModel::slip)
+    }
+
     /// The share of the driveline's main flexibility the driven tyres take, estimated on this
     /// drive's shuffle modes ([`super::modal_channel::fit_tyre_share`]; 0 without enough).
     pub fn tyre_share(&self) -> f64 {

@@ -42,6 +42,8 @@
 //! `F(1, ν)`, Bonferroni over the runs scanned) orders stretches but does not decide: a true
 //! grade that changes within one reading still leaves a step the covariance does not hold.
 
+use std::ops::Range;
+
 use nalgebra::DMatrix;
 use serde::Serialize;
 
@@ -130,7 +132,7 @@ pub struct ResistanceStretch {
     /// Standard deviation of a segment mean's white noise, N ([`covariance`]).
     pub white_sd_n: f64,
     /// Rows of the stretch (first row of its first segment, one past its last).
-    pub rows: (usize, usize),
+    pub rows: Range<usize>,
     /// Segments in the stretch.
     pub stretch_segments: usize,
     /// Nominal p-value (module documentation).
@@ -359,6 +361,8 @@ pub fn scan(
     let svd = x.svd(true, false);
     let u = svd.u?;
     let s_max = svd.singular_values.max();
+    // the columns are scaled to at most 1: a direction 10⁻⁹ of the largest is collinear up to
+    // rounding, and fitting it would only fit noise
     let basis: Vec<usize> = (0..svd.singular_values.len())
         .filter(|&k| svd.singular_values[k] > 1e-9 * s_max)
         .collect();
@@ -390,6 +394,7 @@ pub fn scan(
             let proj: f64 = (0..rank).map(|r| (qc[(r, i)] - qc[(r, j)]).powi(2)).sum();
             let norm = gram[(i, i)] + gram[(j, j)] - 2.0 * gram[(i, j)];
             let sms = norm - proj;
+            // a run the regression already spans (to rounding) adds no step
             if sms <= 1e-9 * norm {
                 continue;
             }
@@ -418,7 +423,7 @@ pub fn scan(
         step_n: step,
         whitened_spread: 1.4826 * abs[n / 2],
         white_sd_n: white.sqrt(),
-        rows: (segs[i].start_row, segs[j - 1].end_row),
+        rows: segs[i].start_row..segs[j - 1].end_row,
         stretch_segments: j - i,
         p_value: (candidates as f64 * f_sf(f, 1.0, dof)).min(1.0),
         threshold_f: cfg.threshold_f,
@@ -452,7 +457,7 @@ impl ResistanceStretch {
         if !self.flagged {
             return None;
         }
-        let (a, b) = (self.rows.0, self.rows.1.saturating_sub(1));
+        let (a, b) = (self.rows.start, self.rows.end.saturating_sub(1));
         let at = |x: &[f64], i: usize| x.get(i).copied().unwrap_or(f64::NAN);
         let (start_s, end_s) = (at(t_s, a), at(t_s, b));
         // the segment means resolve periods down to two segments' duration

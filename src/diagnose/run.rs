@@ -330,7 +330,11 @@ pub fn diagnose(
     let cond = &cmp.conditions;
     let driveline = &setup.nominal_truth.driveline;
     let (consistency, stretch) = if setup.longitudinal {
-        let slip = tyre_slip::estimate(log, driveline, &setup.ratios);
+        // the longitudinal model's own fit; estimated here only when the explain step left
+        // that model out
+        let slip = problem
+            .slip()
+            .unwrap_or_else(|| tyre_slip::estimate(log, driveline, &setup.ratios));
         (
             speed_consistency(
                 log,

@@ -104,8 +104,8 @@ pub struct SpeedConsistency {
     pub flagged: bool,
 }
 
-/// Runs the test on `log` (module documentation) with the driveline `p`, gear `ratios` and
-/// the drive's slip fit `slip`. `None` without the engine speed, vehicle speed, gear or clutch
+/// Runs the test on `log` (module documentation), whose rows are at `t_s` (s from the first),
+/// with the driveline `p`, gear `ratios` and the drive's slip fit `slip`. `None` without the engine speed, vehicle speed, gear or clutch
 /// column, or with fewer than [`ConsistencyConfig::min_windows`] usable windows.
 pub fn speed_consistency(
     log: &DriveLog,
