@@ -23,7 +23,7 @@
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
 use crate::model::catalogue::Effect;
-use crate::signal::interp_linear;
+use crate::signal::interp_linear_at;
 use crate::sim::axle_recorded::AxleRecordConfig;
 use crate::table::DriveLog;
 
@@ -159,7 +159,8 @@ fn windowed_max(t: &[f64], v: &[f64], half_s: f64) -> Vec<f64> {
 
 /// `v(t + tau)` on the grid `t` (linear between finite samples, held at the ends, NaN kept).
 pub(crate) fn shifted(t: &[f64], v: &[f64], tau: f64) -> Vec<f64> {
-    t.iter().map(|&x| interp_linear(t, v, x + tau)).collect()
+    let at: Vec<f64> = t.iter().map(|&x| x + tau).collect();
+    interp_linear_at(t, v, &at)
 }
 
 pub(super) fn filled(log: &DriveLog, name: &str) -> Result<Vec<f64>, ExtendedError> {

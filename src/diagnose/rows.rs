@@ -282,8 +282,19 @@ pub(crate) fn away_from_steps(
     };
     let t: Vec<f64> = log.seconds_from_start();
     let mut ok = vec![true; n];
+    // the first row within the window before row i; on time stamps that never decrease it
+    // only moves forward, so one walk finds it for every row (`partition_point` otherwise)
+    let sorted = t.windows(2).all(|w| w[0] <= w[1]);
+    let mut j = 0;
     for i in 0..n {
-        let j = t.partition_point(|&x| x < t[i] - window_s);
+        let from = t[i] - window_s;
+        if sorted {
+            while j < n && t[j] < from {
+                j += 1;
+            }
+        } else {
+            j = t.partition_point(|&x| x < from);
+        }
         if (m[i] - m[j]).abs() > step {
             clear_around(&mut ok, &t, t[i], halfwidth_s);
         }
