@@ -51,8 +51,11 @@ pub struct Eval {
     pub outputs: Vec<Arc<Vec<Vec<f64>>>>,
     /// Weighted train mean square per model.
     pub train: Vec<f64>,
-    /// Weighted held-out mean square per model.
+    /// Weighted held-out mean square per model (NaN when `train_only`).
     pub heldout: Vec<f64>,
+    /// Simulated on the train part alone ([`Evaluator::eval_train`]): the outputs outside the
+    /// longitudinal model's train windows are NaN.
+    pub train_only: bool,
 }
 
 /// Which models an effect changes (its fit and score use their outputs).
@@ -143,6 +146,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             outputs,
             train,
             heldout,
+            train_only: false,
         }
     }
 
@@ -167,6 +171,42 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             .map(|(y, b)| y.map_or_else(|| b.clone(), Arc::new))
             .collect();
         Ok(self.eval_outputs(value, outputs))
+    }
+
+    /// [`Evaluator::eval`] for a train cost: the longitudinal model simulated on the windows the
+    /// train part reads ([`Problem::train_windows`]), the held-out mean squares NaN. Its train
+    /// mean squares and its outputs on the train rows are [`Evaluator::eval`]'s, bit for bit,
+    /// at about half the simulation (the parts alternate block by block); what reads the
+    /// held-out part (the acceptance rule, the whiteness, the next round's base) takes a whole
+    /// evaluation.
+    ///
+    /// # Errors
+    /// [`ExtendedError`] from a model.
+    pub fn eval_train(
+        &self,
+        base: &Eval,
+        active: &[bool],
+        e: Effect,
+        value: f64,
+    ) -> Result<Eval, ExtendedError> {
+        let mut th = self.theta;
+        th.set(e, value);
+        let sims = self.problem.simulate_views_on(active, &th, true)?;
+        let outputs: Vec<Arc<Vec<Vec<f64>>>> = sims
+            .into_iter()
+            .zip(&base.outputs)
+            .map(|(y, b)| y.map_or_else(|| b.clone(), Arc::new))
+            .collect();
+        let train = (0..self.models.len())
+            .map(|m| self.ms(m, &outputs[m], Part::Train))
+            .collect();
+        Ok(Eval {
+            value,
+            outputs,
+            train,
+            heldout: vec![f64::NAN; self.models.len()],
+            train_only: true,
+        })
     }
 
     /// Whether model view `m`'s outputs differ materially between `a` and `b`: the weighted

@@ -81,7 +81,7 @@ pub fn fit_effect(
             };
             let v = (base.value + c).clamp(spec.lo, spec.hi);
             evaluations += 1;
-            ev.eval(base, active, e, v)
+            ev.eval_train(base, active, e, v)
                 .ok()
                 .filter(|x| cost(x).is_finite())
         }
@@ -97,7 +97,13 @@ pub fn fit_effect(
     let probe = &probe;
     if spec.switch {
         let best = if cost(probe) < cost(base) {
-            probe.clone()
+            if probe.train_only {
+                evaluations += 1;
+                ev.eval(base, active, e, probe.value)
+                    .unwrap_or_else(|_| base.clone())
+            } else {
+                probe.clone()
+            }
         } else {
             base.clone()
         };
@@ -126,7 +132,7 @@ pub fn fit_effect(
         let costs: Vec<f64> = (0..n)
             .into_par_iter()
             .map(|k| {
-                ev.eval(base, active, e, grid_lo + k as f64 * grid_step)
+                ev.eval_train(base, active, e, grid_lo + k as f64 * grid_step)
                     .map_or(f64::INFINITY, |x| cost(&x))
             })
             .collect();
@@ -140,7 +146,7 @@ pub fn fit_effect(
                 (a, b) => a.or(b),
             };
             let at = |j: usize| {
-                ev.eval(base, active, e, grid_lo + j as f64 * grid_step)
+                ev.eval_train(base, active, e, grid_lo + j as f64 * grid_step)
                     .ok()
             };
             if let Some(x) = at(k) {
@@ -188,9 +194,27 @@ pub fn fit_effect(
     } else {
         None
     };
+    // the fitted point on every row: the acceptance rule reads its held-out part (the train
+    // part comes out the same, bit for bit)
+    let (best, whole) = if cur.train_only {
+        match ev.eval(base, active, e, cur.value) {
+            Ok(x) => (x, 1),
+            // a window the train part does not read fails: the fit stays at the base
+            Err(_) => {
+                return FitResult {
+                    best: base.clone(),
+                    evaluations: evaluations + grid_evaluations + 1,
+                    curvature: 0.0,
+                    cluster: None,
+                }
+            }
+        }
+    } else {
+        (cur, 0)
+    };
     FitResult {
-        best: cur,
-        evaluations: evaluations + grid_evaluations,
+        best,
+        evaluations: evaluations + grid_evaluations + whole,
         curvature,
         cluster,
     }
@@ -233,7 +257,7 @@ impl LeastSquares for SecantFit<'_, '_, '_> {
         self.trial = None;
         let t = self
             .ev
-            .eval(self.base, self.active, self.effect, p[0])
+            .eval_train(self.base, self.active, self.effect, p[0])
             .ok()?;
         let c = self.ev.cost(&t, self.active, Part::Train);
         self.trial = Some(t);

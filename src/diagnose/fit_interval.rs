@@ -87,7 +87,7 @@ pub fn profile_interval(
         let bound = if s > 0.0 { spec.hi } else { spec.lo };
         let f = |p: f64| -> f64 {
             // the deviance above the threshold, on the scale of ln J
-            match ev.eval(base, active, e, p) {
+            match ev.eval_train(base, active, e, p) {
                 Ok(x) => {
                     let d = ev.deviance(&x, best, active, n_eff, Part::Train);
                     if d.is_finite() {

@@ -362,6 +362,29 @@ impl<'a> LongitudinalModel<'a> {
     /// # Errors
     /// [`ExtendedError`] for parameters outside their domain or a failed simulation.
     pub fn simulate(&self, theta: &Theta) -> Result<LongitudinalOutputs, ExtendedError> {
+        self.simulate_windows(theta, None)
+    }
+
+    /// Index of the window ([`LongitudinalModel::window_starts`]) that time `t` (s from the
+    /// first row) falls in: the last start at or before it.
+    pub fn window_of(&self, t: f64) -> usize {
+        self.starts.partition_point(|&s| s <= t).saturating_sub(1)
+    }
+
+    /// [`LongitudinalModel::simulate`] on the windows `needed` marks (one flag per window;
+    /// `None`: every window). A window left out is not integrated: its rows read NaN, and
+    /// only its first sample — the state it starts from, which needs no integration — is kept
+    /// for the rows of the window before that interpolate towards it. Every window starts from
+    /// the measured state, so the outputs on the rows of the windows simulated are those of
+    /// the whole simulation, bit for bit.
+    ///
+    /// # Errors
+    /// As [`LongitudinalModel::simulate`] (a window left out fails nothing).
+    pub fn simulate_windows(
+        &self,
+        theta: &Theta,
+        needed: Option<&[bool]>,
+    ) -> Result<LongitudinalOutputs, ExtendedError> {
         let tm = self.plant(theta)?;
         let p: &DrivelineParams = &tm.driveline;
         let file = self.log.meta.source_file.clone();
@@ -429,6 +452,13 @@ impl<'a> LongitudinalModel<'a> {
                 // the steady twist carries the drive torque: in contact on its side
                 y0[6] += 0.5 * tm.lash_rad * y0[6].signum();
             }
+            if needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true)) {
+                // the sample the window's first piece would start with
+                ts.push(ta);
+                vs.push(p.wheel_radius_m * y0[7]);
+                ws.push(y0[0] * (1.0 + slip_of(&y0)));
+                continue;
+            }
             // the window piece by piece, each from the state and mode the last ended in
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
             let (mut y, mut mode) = (y0, mode);
@@ -461,9 +491,18 @@ impl<'a> LongitudinalModel<'a> {
                 }
             }
         }
-        Ok(LongitudinalOutputs {
+        let mut out = LongitudinalOutputs {
             vehicle_speed: interp_linear_at(&ts, &vs, &self.t),
             engine_speed: interp_linear_at(&ts, &ws, &self.t),
-        })
+        };
+        if let Some(nd) = needed {
+            for (i, &t) in self.t.iter().enumerate() {
+                if !nd.get(self.window_of(t)).copied().unwrap_or(true) {
+                    out.vehicle_speed[i] = f64::NAN;
+                    out.engine_speed[i] = f64::NAN;
+                }
+            }
+        }
+        Ok(out)
     }
 }

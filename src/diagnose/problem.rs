@@ -87,6 +87,11 @@ pub enum ExplainError {
 /// Fewest valid samples a compared signal needs in each part.
 pub const MIN_SAMPLES_PER_PART: usize = 100;
 
+/// How far from a torque reversal's row its feature reads the simulated speeds, s, at most:
+/// the reference window's 0.5 s before it and the peak window's 0.4 s after, each widened by
+/// the 0.04 s smoothing ([`super::reversal_channel`]), rounded up.
+pub const REVERSAL_READ_S: f64 = 1.0;
+
 /// A recording bound to the extended models, split and ready to be explained.
 #[derive(Debug)]
 pub struct Problem<'a> {
@@ -104,6 +109,7 @@ pub struct Problem<'a> {
     tyre_share: f64,
     reversals: Vec<ReversalSample>,
     views: Vec<View>,
+    train_windows: std::sync::OnceLock<Vec<bool>>,
 }
 
 fn long_channel_names() -> [(&'static str, &'static str); 2] {
@@ -406,6 +412,7 @@ impl<'a> Problem<'a> {
             tyre_share,
             reversals,
             views,
+            train_windows: std::sync::OnceLock::new(),
         })
     }
 
@@ -480,6 +487,8 @@ impl<'a> Problem<'a> {
             }
         }
         self.channels.insert(at, ch);
+        // the new channel's train rows may need windows the old ones did not
+        self.train_windows = std::sync::OnceLock::new();
         let vat = self
             .views
             .iter()
@@ -610,6 +619,58 @@ impl<'a> Problem<'a> {
         which: &[bool],
         theta: &Theta,
     ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
+        self.simulate_views_on(which, theta, false)
+    }
+
+    /// The longitudinal model's windows a train cost reads ([`Problem::simulate_views_on`]):
+    /// those holding a train row of one of its channels, and for a torque reversal's sample
+    /// every window within [`REVERSAL_READ_S`] of it (its feature reads the simulated speeds
+    /// around the reversal). Empty without the longitudinal model.
+    pub fn train_windows(&self) -> &[bool] {
+        self.train_windows.get_or_init(|| {
+            let Some(m) = &self.long else {
+                return Vec::new();
+            };
+            let mut need = vec![false; m.window_starts().len()];
+            let reversal_chans: Vec<usize> = self
+                .views
+                .iter()
+                .filter(|v| v.kind == ViewKind::Reversals)
+                .flat_map(|v| v.chans.iter().copied())
+                .collect();
+            for (c, ch) in self.channels.iter().enumerate() {
+                if ch.domain != Domain::Longitudinal {
+                    continue;
+                }
+                let reach = if reversal_chans.contains(&c) {
+                    REVERSAL_READ_S
+                } else {
+                    0.0
+                };
+                for &i in &ch.train_idx {
+                    let t = self.t_s[i];
+                    let (a, b) = (m.window_of(t - reach), m.window_of(t + reach));
+                    for w in need.iter_mut().take(b + 1).skip(a) {
+                        *w = true;
+                    }
+                }
+            }
+            need
+        })
+    }
+
+    /// [`Problem::simulate_views`], with `train_only` the longitudinal model on
+    /// [`Problem::train_windows`] alone (its outputs elsewhere NaN): what a cost of the train
+    /// part reads (a fit's grid points and trials, an interval's probes).
+    ///
+    /// # Errors
+    /// [`ExtendedError`] from a model.
+    pub fn simulate_views_on(
+        &self,
+        which: &[bool],
+        theta: &Theta,
+        train_only: bool,
+    ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
         let wants = |k: ViewKind| self.views.iter().zip(which).any(|(v, w)| *w && v.kind == k);
         let long = match &self.long {
             Some(m)
@@ -617,7 +678,8 @@ impl<'a> Problem<'a> {
                     || wants(ViewKind::Reversals)
                     || wants(ViewKind::ClutchActuation) =>
             {
-                Some(m.simulate(theta)?)
+                let needed = train_only.then(|| self.train_windows());
+                Some(m.simulate_windows(theta, needed)?)
             }
             _ => None,
         };

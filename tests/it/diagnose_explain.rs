@@ -662,3 +662,67 @@ fn the_clutch_actuation_view_is_weighted_per_row_and_serves_its_own_effects() {
     let sim = p.simulate_views(&which, &nominal).unwrap();
     assert_eq!(sim[k].as_ref().unwrap()[0], p.nominal_outputs()[k][0]);
 }
+
+/// A fit's train-only evaluation (`Evaluator::eval_train`) simulates the longitudinal model on
+/// the windows the train part reads and gives the whole evaluation's outputs on every train
+/// row and its train mean squares, bit for bit; its held-out part is NaN, and so is every row
+/// of a window it leaves out. Checked for a continuous effect, a threshold one (the clutch),
+/// lash (the fine step at reversals) and a delay (shifted inputs).
+#[test]
+fn a_train_only_evaluation_is_the_whole_one_on_the_train_rows() {
+    use fleetdyn::diagnose::fit::{fit_spec, Evaluator};
+    use fleetdyn::diagnose::problem::Part;
+    let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
+    let cfg = LongitudinalConfig::default();
+    let n = d.log.len();
+    let p = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None)
+        .unwrap()
+        .with_actuation(&vec![4.0; n]);
+    let (ev, base) = Evaluator::at_nominal(&p, None);
+    let windows = p.train_windows();
+    let skipped = windows.iter().filter(|w| !**w).count();
+    assert!(
+        skipped > 0 && skipped < windows.len(),
+        "{skipped} of {} windows left out",
+        windows.len()
+    );
+    let all: Vec<bool> = vec![true; ev.models.len()];
+    for e in [
+        Effect::AeroDrag,
+        Effect::ClutchSlip,
+        Effect::DrivelineBacklash,
+        Effect::SignalDelay,
+    ] {
+        let spec = fit_spec(e, nominal.get(e), p.slope_step());
+        let v = (nominal.get(e) + spec.step).clamp(spec.lo, spec.hi);
+        let whole = ev.eval(&base, &all, e, v).unwrap();
+        let train = ev.eval_train(&base, &all, e, v).unwrap();
+        assert!(train.train_only && !whole.train_only);
+        for m in 0..ev.models.len() {
+            assert_eq!(
+                train.train[m].to_bits(),
+                whole.train[m].to_bits(),
+                "{e:?} view {m}"
+            );
+            assert!(train.heldout[m].is_nan());
+            for (k, &c) in ev.models[m].chans.iter().enumerate() {
+                for &i in p.channels()[c].rows(Part::Train) {
+                    assert_eq!(
+                        train.outputs[m][k][i].to_bits(),
+                        whole.outputs[m][k][i].to_bits(),
+                        "{e:?} view {m} channel {k} row {i}"
+                    );
+                }
+            }
+        }
+        // the rows of a window left out read NaN in the speeds
+        let speeds = p
+            .views()
+            .iter()
+            .position(|v| v.kind == fleetdyn::diagnose::problem::ViewKind::Speeds)
+            .unwrap();
+        let y = &train.outputs[speeds][0];
+        let nan_rows = y.iter().filter(|x| x.is_nan()).count();
+        assert!(nan_rows > 0, "{e:?}");
+    }
+}
