@@ -26,6 +26,12 @@
 //! have side basins (a delay's about 0.05 s wide, a clutch's about 3 % of its capacity), in
 //! which the secant from the probe stops.
 //!
+//! The cost reads the train part alone, so the start grid's points, the trials and the
+//! interval's probes simulate the longitudinal model on the train windows only
+//! ([`Evaluator::eval_train`]: the same train outputs, bit for bit, for about half the
+//! simulation); the fitted point is simulated once more on every row, as the acceptance rule
+//! reads its held-out part, and that simulation is counted in `FitResult::evaluations`.
+//!
 //! Values in the parameter's SI unit; the cost is the weighted train mean square
 //! (dimensionless).
 
