@@ -162,15 +162,29 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         e: Effect,
         value: f64,
     ) -> Result<Eval, ExtendedError> {
+        let outputs = self.outputs_at(base, active, e, value, false)?;
+        Ok(self.eval_outputs(value, outputs))
+    }
+
+    /// The outputs per model view with `e`'s parameter at `value`: the views of `active`
+    /// simulated (the longitudinal model on its train windows alone when `train_only`), the
+    /// others `base`'s.
+    fn outputs_at(
+        &self,
+        base: &Eval,
+        active: &[bool],
+        e: Effect,
+        value: f64,
+        train_only: bool,
+    ) -> Result<Vec<Arc<Vec<Vec<f64>>>>, ExtendedError> {
         let mut th = self.theta;
         th.set(e, value);
-        let sims = self.problem.simulate_views(active, &th)?;
-        let outputs = sims
+        let sims = self.problem.simulate_views_on(active, &th, train_only)?;
+        Ok(sims
             .into_iter()
             .zip(&base.outputs)
             .map(|(y, b)| y.map_or_else(|| b.clone(), Arc::new))
-            .collect();
-        Ok(self.eval_outputs(value, outputs))
+            .collect())
     }
 
     /// [`Evaluator::eval`] for a train cost: the longitudinal model simulated on the windows the
@@ -189,14 +203,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         e: Effect,
         value: f64,
     ) -> Result<Eval, ExtendedError> {
-        let mut th = self.theta;
-        th.set(e, value);
-        let sims = self.problem.simulate_views_on(active, &th, true)?;
-        let outputs: Vec<Arc<Vec<Vec<f64>>>> = sims
-            .into_iter()
-            .zip(&base.outputs)
-            .map(|(y, b)| y.map_or_else(|| b.clone(), Arc::new))
-            .collect();
+        let outputs = self.outputs_at(base, active, e, value, true)?;
         let train = (0..self.models.len())
             .map(|m| self.ms(m, &outputs[m], Part::Train))
             .collect();

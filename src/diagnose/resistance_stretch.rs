@@ -442,6 +442,16 @@ impl RunCovariance {
 /// ([`covariance`]).
 pub const MIN_RUN_PAIRS: usize = 6;
 
+/// The regressors of the scan's regression, per segment: a constant, the mean speed and its
+/// square, the mean `g sin α + v̇`, the mid time (module documentation).
+pub const REGRESSORS: [fn(&Segment) -> f64; 5] = [
+    |_| 1.0,
+    |s| s.speed_mps,
+    |s| s.speed2_m2ps2,
+    |s| s.grade_accel_mps2,
+    |s| s.t_s,
+];
+
 /// Scans `segs` for the stretch whose step most reduces the regression's residual (module
 /// documentation), by generalised least squares with [`covariance`]; `quantisation_n` is
 /// `m g q`, the force of one step of the slope sensor. `None` with fewer than
@@ -455,14 +465,7 @@ pub fn scan(
     if n < cfg.min_total_segments.max(3) {
         return None;
     }
-    type Column = fn(&Segment) -> f64;
-    let columns: [Column; 5] = [
-        |_| 1.0,
-        |s| s.speed_mps,
-        |s| s.speed2_m2ps2,
-        |s| s.grade_accel_mps2,
-        |s| s.t_s,
-    ];
+    let columns = &REGRESSORS;
     let y: Vec<f64> = segs.iter().map(|s| s.force_n).collect();
     // the whitening W = V^{-1/2} (symmetric) by the covariance's run structure
     let white = white_variance(&y, &runs(segs));
@@ -697,20 +700,14 @@ mod tests {
 
     /// The scan's F, step and stretch by the dense generalised least squares: the whole
     /// covariance matrix ([`covariance`]), its Cholesky factor's inverse as the whitening, and
-    /// every run's whitened indicator from cumulative columns.
+    /// every run's indicator whitened by that inverse.
     fn dense_scan(
         segs: &[Segment],
         quantisation_n: f64,
         cfg: &StretchConfig,
     ) -> (f64, f64, usize, usize) {
         let n = segs.len();
-        let columns: [fn(&Segment) -> f64; 5] = [
-            |_| 1.0,
-            |s| s.speed_mps,
-            |s| s.speed2_m2ps2,
-            |s| s.grade_accel_mps2,
-            |s| s.t_s,
-        ];
+        let columns = &REGRESSORS;
         let y: Vec<f64> = segs.iter().map(|s| s.force_n).collect();
         let (v, _) = covariance(segs, &y, quantisation_n);
         let w = v.cholesky().unwrap().l().try_inverse().unwrap();
