@@ -42,6 +42,7 @@ pub mod resistance_stretch;
 pub mod reversal_channel;
 pub mod rows;
 pub mod run;
+pub mod run_covariance;
 pub mod screen;
 pub mod setup;
 pub mod shaft_stiffness;

@@ -32,13 +32,12 @@
 //! percent on a J1939 bus) leaves an unknown error of up to `m g q/2` (±2 kN for 40 t) on every
 //! stretch of constant reading, the same on all its segments, and a step of that size is what
 //! the scan looks for. The regression and the scan are therefore generalised least squares
-//! with the covariance of [`covariance`]: white noise plus one such error per run of segments
-//! sharing their slope reading. A step that coincides with one run is discounted by that
-//! run's error; one that splits a run or spans several is not. The covariance is block
-//! diagonal, a scaled identity plus one rank-one term per run, so the scan whitens with its
-//! closed-form inverse square root and reads every run's statistics from prefix sums: linear
-//! memory and time in the number of segments (plus the scan's runs), where the dense matrix
-//! would take cubic time and quadratic memory (about 3 000 segments on a 10-hour drive).
+//! with the covariance of [`super::run_covariance`]: white noise plus one such error per run of
+//! segments sharing their slope reading. A step that coincides with one run is discounted by
+//! that run's error; one that splits a run or spans several is not. The scan whitens with the
+//! covariance's closed-form inverse square root and reads every candidate stretch's statistics
+//! from prefix sums ([`RunCovariance`]): linear time and memory in the number of segments,
+//! plus the candidates.
 //!
 //! The threshold is calibrated, not derived: the largest F over the no-effect drives of the
 //! twelve calibration seeds of the truth plant (docs/diagnosis/method.md, rule 6), which no
@@ -52,6 +51,7 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use super::locate::Mismatch;
+use super::run_covariance::{white_variance, RunCovariance};
 use crate::model::driveline::DrivelineParams;
 use crate::signal::stats::f_sf;
 use crate::table::DriveLog;
@@ -133,7 +133,7 @@ pub struct ResistanceStretch {
     /// Robust spread of the whitened residuals without the step, 1 (about 1 when the
     /// covariance model holds).
     pub whitened_spread: f64,
-    /// Standard deviation of a segment mean's white noise, N ([`covariance`]).
+    /// Standard deviation of a segment mean's white noise, N ([`white_variance`]).
     pub white_sd_n: f64,
     /// Rows of the stretch (first row of its first segment, one past its last).
     pub rows: Range<usize>,
@@ -276,32 +276,8 @@ pub fn segments(
     Some(out)
 }
 
-/// The segment means' covariance, N² (module documentation): white noise of variance `σ₀²`
-/// plus one unknown slope-quantisation error per run of consecutive segments that share their
-/// most frequent slope reading, of variance `(m g q)²/12 · share_i · share_j` (`q` the slope
-/// sensor's resolution, `share` the part of a segment's rows at that reading). `σ₀²` is half
-/// the squared robust spread (1.4826 × median absolute value) of the differences between
-/// consecutive segments of one run, where the quantisation error cancels; with fewer than
-/// [`MIN_RUN_PAIRS`] such pairs, the robust spread of the segment means about their median.
-/// Returns the matrix and `σ₀²`.
-pub fn covariance(segs: &[Segment], y: &[f64], quantisation_n: f64) -> (DMatrix<f64>, f64) {
-    let n = segs.len();
-    let run = runs(segs);
-    let white = white_variance(y, &run);
-    let q2 = quantisation_n * quantisation_n / 12.0;
-    let v = DMatrix::from_fn(n, n, |i, j| {
-        let shared = if run[i] == run[j] {
-            q2 * segs[i].reading_share * segs[j].reading_share
-        } else {
-            0.0
-        };
-        shared + if i == j { white } else { 0.0 }
-    });
-    (v, white)
-}
-
-/// Per segment, the index of its run: consecutive segments (the one starting where the last
-/// ended) that share their slope reading.
+/// Per segment, the index of its run ([`RunCovariance`]): consecutive segments (the one
+/// starting where the last ended) that share their slope reading.
 fn runs(segs: &[Segment]) -> Vec<usize> {
     let mut run = vec![0usize; segs.len()];
     for i in 1..segs.len() {
@@ -311,136 +287,6 @@ fn runs(segs: &[Segment]) -> Vec<usize> {
     }
     run
 }
-
-/// `σ₀²` of [`covariance`] for the segment means `y` in the runs `run`.
-fn white_variance(y: &[f64], run: &[usize]) -> f64 {
-    let median = |mut x: Vec<f64>| -> f64 {
-        x.sort_by(f64::total_cmp);
-        if x.is_empty() {
-            0.0
-        } else {
-            x[x.len() / 2]
-        }
-    };
-    let diffs: Vec<f64> = (1..y.len())
-        .filter(|&i| run[i] == run[i - 1])
-        .map(|i| (y[i] - y[i - 1]).abs())
-        .collect();
-    let white = if diffs.len() >= MIN_RUN_PAIRS {
-        (1.4826 * median(diffs)).powi(2) / 2.0
-    } else {
-        let m = median(y.to_vec());
-        (1.4826 * median(y.iter().map(|v| (v - m).abs()).collect())).powi(2)
-    };
-    if white > 0.0 {
-        white
-    } else {
-        1.0
-    }
-}
-
-/// The covariance of [`covariance`] by its structure: block diagonal, one block per run,
-/// each `V_B = σ₀² I + q² s sᵀ` (`q² = (m g q)²/12`, `s` the run's reading shares). Its
-/// inverse square root and the quadratic form of its inverse on a run of segments then cost
-/// linear time, where the dense matrix costs cubic time and quadratic memory (a 10-hour drive
-/// has about 3 000 segments).
-struct RunCovariance {
-    white: f64,
-    /// Per segment its block.
-    block_of: Vec<usize>,
-    /// Per block its segments.
-    blocks: Vec<Range<usize>>,
-    /// Per block `γ = 1 − 1/√(1 + q² sᵀs / σ₀²)` of `V_B^{-1/2} = (I − γ s sᵀ/sᵀs)/σ₀`.
-    gamma: Vec<f64>,
-    /// Per block `κ = q² / (σ₀² + q² sᵀs)` of `V_B⁻¹ = (I − κ s sᵀ)/σ₀²` (Sherman–Morrison).
-    kappa: Vec<f64>,
-    /// Per block `sᵀs`.
-    ss: Vec<f64>,
-    /// Reading shares.
-    share: Vec<f64>,
-    /// Prefix sums of the shares (`n + 1`).
-    share_sum: Vec<f64>,
-    /// Prefix sums over the blocks of `κ (Σ_B s)²` (`blocks + 1`).
-    whole_blocks: Vec<f64>,
-}
-
-impl RunCovariance {
-    fn new(segs: &[Segment], white: f64, quantisation_n: f64) -> Self {
-        let run = runs(segs);
-        let q2 = quantisation_n * quantisation_n / 12.0;
-        let share: Vec<f64> = segs.iter().map(|s| s.reading_share).collect();
-        let mut share_sum = vec![0.0; segs.len() + 1];
-        for (k, s) in share.iter().enumerate() {
-            share_sum[k + 1] = share_sum[k] + s;
-        }
-        let mut blocks: Vec<Range<usize>> = Vec::new();
-        for (k, &r) in run.iter().enumerate() {
-            match blocks.last_mut() {
-                Some(b) if r == run[b.start] => b.end = k + 1,
-                _ => blocks.push(k..k + 1),
-            }
-        }
-        let (mut gamma, mut kappa, mut ss) = (vec![], vec![], vec![]);
-        let mut whole_blocks = vec![0.0];
-        for b in &blocks {
-            let s2: f64 = share[b.clone()].iter().map(|x| x * x).sum();
-            let k = q2 / (white + q2 * s2);
-            gamma.push(1.0 - 1.0 / (1.0 + q2 * s2 / white).sqrt());
-            kappa.push(k);
-            ss.push(s2);
-            let total = share_sum[b.end] - share_sum[b.start];
-            let last = whole_blocks[whole_blocks.len() - 1];
-            whole_blocks.push(last + k * total * total);
-        }
-        Self {
-            white,
-            block_of: run,
-            blocks,
-            gamma,
-            kappa,
-            ss,
-            share,
-            share_sum,
-            whole_blocks,
-        }
-    }
-
-    /// `V^{-1/2} u`, the symmetric whitening.
-    fn whiten(&self, u: &[f64]) -> Vec<f64> {
-        let sd = self.white.sqrt();
-        let mut out = vec![0.0; u.len()];
-        for (b, r) in self.blocks.iter().enumerate() {
-            let d: f64 = r.clone().map(|k| self.share[k] * u[k]).sum();
-            let c = if self.ss[b] > 0.0 {
-                self.gamma[b] * d / self.ss[b]
-            } else {
-                0.0
-            };
-            for k in r.clone() {
-                out[k] = (u[k] - c * self.share[k]) / sd;
-            }
-        }
-        out
-    }
-
-    /// `1ᵀ V⁻¹ 1` over the segments `[i, j)` (`i < j`).
-    fn inverse_form(&self, i: usize, j: usize) -> f64 {
-        let (bi, bj) = (self.block_of[i], self.block_of[j - 1]);
-        let ps = &self.share_sum;
-        let part = if bi == bj {
-            self.kappa[bi] * (ps[j] - ps[i]).powi(2)
-        } else {
-            self.kappa[bi] * (ps[self.blocks[bi].end] - ps[i]).powi(2)
-                + (self.whole_blocks[bj] - self.whole_blocks[bi + 1])
-                + self.kappa[bj] * (ps[j] - ps[self.blocks[bj].start]).powi(2)
-        };
-        ((j - i) as f64 - part) / self.white
-    }
-}
-
-/// Fewest pairs of consecutive segments within one slope reading for the white variance
-/// ([`covariance`]).
-pub const MIN_RUN_PAIRS: usize = 6;
 
 /// The regressors of the scan's regression, per segment: a constant, the mean speed and its
 /// square, the mean `g sin α + v̇`, the mid time (module documentation).
@@ -453,7 +299,7 @@ pub const REGRESSORS: [fn(&Segment) -> f64; 5] = [
 ];
 
 /// Scans `segs` for the stretch whose step most reduces the regression's residual (module
-/// documentation), by generalised least squares with [`covariance`]; `quantisation_n` is
+/// documentation), by generalised least squares with [`RunCovariance`]; `quantisation_n` is
 /// `m g q`, the force of one step of the slope sensor. `None` with fewer than
 /// [`StretchConfig::min_total_segments`] segments or no degrees of freedom left.
 pub fn scan(
@@ -468,8 +314,9 @@ pub fn scan(
     let columns = &REGRESSORS;
     let y: Vec<f64> = segs.iter().map(|s| s.force_n).collect();
     // the whitening W = V^{-1/2} (symmetric) by the covariance's run structure
-    let white = white_variance(&y, &runs(segs));
-    let cov = RunCovariance::new(segs, white, quantisation_n);
+    let run = runs(segs);
+    let share: Vec<f64> = segs.iter().map(|s| s.reading_share).collect();
+    let cov = RunCovariance::new(&run, &share, white_variance(&y, &run), quantisation_n);
     // each column scaled to its largest magnitude, whitened, then an orthonormal basis
     let mut x = DMatrix::<f64>::zeros(n, columns.len());
     for (c, col) in columns.iter().enumerate() {
@@ -548,7 +395,7 @@ pub fn scan(
         f,
         step_n: step,
         whitened_spread: 1.4826 * abs[n / 2],
-        white_sd_n: white.sqrt(),
+        white_sd_n: cov.white().sqrt(),
         rows: segs[i].start_row..segs[j - 1].end_row,
         stretch_segments: j - i,
         p_value: (candidates as f64 * f_sf(f, 1.0, dof)).min(1.0),
@@ -698,6 +545,21 @@ mod tests {
         assert_eq!(m.signal, NAME);
     }
 
+    /// The covariance of [`super::super::run_covariance`] as a dense matrix.
+    fn covariance(segs: &[Segment], y: &[f64], quantisation_n: f64) -> DMatrix<f64> {
+        let run = runs(segs);
+        let white = white_variance(y, &run);
+        let q2 = quantisation_n * quantisation_n / 12.0;
+        DMatrix::from_fn(segs.len(), segs.len(), |i, j| {
+            let shared = if run[i] == run[j] {
+                q2 * segs[i].reading_share * segs[j].reading_share
+            } else {
+                0.0
+            };
+            shared + if i == j { white } else { 0.0 }
+        })
+    }
+
     /// The scan's F, step and stretch by the dense generalised least squares: the whole
     /// covariance matrix ([`covariance`]), its Cholesky factor's inverse as the whitening, and
     /// every run's indicator whitened by that inverse.
@@ -709,7 +571,7 @@ mod tests {
         let n = segs.len();
         let columns = &REGRESSORS;
         let y: Vec<f64> = segs.iter().map(|s| s.force_n).collect();
-        let (v, _) = covariance(segs, &y, quantisation_n);
+        let v = covariance(segs, &y, quantisation_n);
         let w = v.cholesky().unwrap().l().try_inverse().unwrap();
         let x = DMatrix::from_fn(n, 5, |r, c| {
             let scale = segs.iter().map(|s| columns[c](s).abs()).fold(0.0, f64::max);
