@@ -103,13 +103,8 @@ pub fn fit_effect(
     let probe = &probe;
     if spec.switch {
         let best = if cost(probe) < cost(base) {
-            if probe.train_only {
-                evaluations += 1;
-                ev.eval(base, active, e, probe.value)
-                    .unwrap_or_else(|_| base.clone())
-            } else {
-                probe.clone()
-            }
+            evaluations += usize::from(probe.train_only);
+            whole(ev, base, active, e, probe.clone()).unwrap_or_else(|| base.clone())
         } else {
             base.clone()
         };
@@ -200,29 +195,32 @@ pub fn fit_effect(
     } else {
         None
     };
-    // the fitted point on every row: the acceptance rule reads its held-out part (the train
-    // part comes out the same, bit for bit)
-    let (best, whole) = if cur.train_only {
-        match ev.eval(base, active, e, cur.value) {
-            Ok(x) => (x, 1),
-            // a window the train part does not read fails: the fit stays at the base
-            Err(_) => {
-                return FitResult {
-                    best: base.clone(),
-                    evaluations: evaluations + grid_evaluations + 1,
-                    curvature: 0.0,
-                    cluster: None,
-                }
-            }
-        }
+    let evaluations = evaluations + grid_evaluations + usize::from(cur.train_only);
+    match whole(ev, base, active, e, cur) {
+        Some(best) => FitResult {
+            best,
+            evaluations,
+            curvature,
+            cluster,
+        },
+        None => FitResult {
+            best: base.clone(),
+            evaluations,
+            curvature: 0.0,
+            cluster: None,
+        },
+    }
+}
+
+/// `x` on every row: a train-only evaluation ([`Evaluator::eval_train`]) simulated once more
+/// whole, as the acceptance rule reads its held-out part (the train part comes out the same,
+/// bit for bit); `None` when a window the train part does not read fails, and the fit then
+/// stays at the base.
+fn whole(ev: &Evaluator<'_, '_>, base: &Eval, active: &[bool], e: Effect, x: Eval) -> Option<Eval> {
+    if x.train_only {
+        ev.eval(base, active, e, x.value).ok()
     } else {
-        (cur, 0)
-    };
-    FitResult {
-        best,
-        evaluations: evaluations + grid_evaluations + whole,
-        curvature,
-        cluster,
+        Some(x)
     }
 }
 

@@ -495,12 +495,20 @@ impl<'a> LongitudinalModel<'a> {
             vehicle_speed: interp_linear_at(&ts, &vs, &self.t),
             engine_speed: interp_linear_at(&ts, &ws, &self.t),
         };
-        if let Some(nd) = needed {
-            for (i, &t) in self.t.iter().enumerate() {
-                if !nd.get(self.window_of(t)).copied().unwrap_or(true) {
-                    out.vehicle_speed[i] = f64::NAN;
-                    out.engine_speed[i] = f64::NAN;
-                }
+        // the rows of each window left out (a window's rows: from its start to the next one's;
+        // the first window's from the first row), found per window, not per row
+        for (w, _) in needed
+            .into_iter()
+            .flatten()
+            .enumerate()
+            .filter(|(_, need)| !**need)
+        {
+            let row_at = |s: f64| self.t.partition_point(|&x| x < s);
+            let lo = if w == 0 { 0 } else { row_at(starts[w]) };
+            let hi = starts.get(w + 1).map_or(self.t.len(), |&s| row_at(s));
+            for i in lo..hi {
+                out.vehicle_speed[i] = f64::NAN;
+                out.engine_speed[i] = f64::NAN;
             }
         }
         Ok(out)
