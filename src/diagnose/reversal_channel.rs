@@ -306,6 +306,20 @@ mod tests {
         depth * (1.0 - ((t - tc) / half).abs()).max(0.0)
     }
 
+    /// The train-only simulation keeps every window within
+    /// [`crate::diagnose::problem::REVERSAL_READ_S`] of a train reversal: that reach covers
+    /// the rows the feature reads (its reference and peak windows, the peak's smoothing).
+    #[test]
+    fn the_train_windows_reach_covers_what_the_feature_reads() {
+        let before = -REF_WINDOW_S.0.min(PEAK_WINDOW_S.0 - SMOOTHING_HALFWIDTH_S);
+        let after = REF_WINDOW_S.1.max(PEAK_WINDOW_S.1 + SMOOTHING_HALFWIDTH_S);
+        let reach = crate::diagnose::problem::REVERSAL_READ_S;
+        assert!(
+            reach >= before && reach >= after,
+            "{reach} {before} {after}"
+        );
+    }
+
     #[test]
     fn the_feature_ignores_the_vehicles_acceleration_and_measures_the_dip() {
         let t = times(250);
