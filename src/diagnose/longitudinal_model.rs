@@ -29,7 +29,7 @@ use super::simulation_windows::{fine_spans, stepped_pieces, window_starts, FINE_
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
-use crate::signal::{interp_linear, interp_linear_at};
+use crate::signal::{interp_linear, LinearResampler};
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::{scenario_from_log, RecordedScenario};
@@ -402,7 +402,9 @@ impl<'a> LongitudinalModel<'a> {
         let fine_spans: &[(f64, f64)] = if fine.is_some() { &self.fine } else { &[] };
         let starts = &self.starts;
         let n_win = starts.len();
-        let (mut ts, mut vs, mut ws) = (Vec::new(), Vec::new(), Vec::new());
+        // the integration samples go straight onto the rows (the 1 ms samples of a long drive
+        // are never held)
+        let mut rows = LinearResampler::<2>::new(&self.t);
         // the driven tyres' slip of a sample, from the model's drive-shaft torque
         // M_d = k_d·(twist beyond the lash) + c_d·(ω_d − ω_w), F_x = M_d / r_w
         let slip_of = |y: &[f64; crate::sim::hybrid::N_STATES]| {
@@ -454,9 +456,7 @@ impl<'a> LongitudinalModel<'a> {
             }
             if needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true)) {
                 // the sample the window's first piece would start with
-                ts.push(ta);
-                vs.push(p.wheel_radius_m * y0[7]);
-                ws.push(y0[0] * (1.0 + slip_of(&y0)));
+                rows.push(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
                 continue;
             }
             // the window piece by piece, each from the state and mode the last ended in
@@ -484,16 +484,21 @@ impl<'a> LongitudinalModel<'a> {
                     tr.t.len() - 1
                 };
                 for k in 0..keep {
-                    ts.push(tr.t[k]);
-                    vs.push(p.wheel_radius_m * tr.y[k][7]);
                     // the engine turns faster than the vehicle's speed carries it by the slip
-                    ws.push(tr.y[k][0] * (1.0 + slip_of(&tr.y[k])));
+                    rows.push(
+                        tr.t[k],
+                        [
+                            p.wheel_radius_m * tr.y[k][7],
+                            tr.y[k][0] * (1.0 + slip_of(&tr.y[k])),
+                        ],
+                    );
                 }
             }
         }
+        let [vehicle_speed, engine_speed] = rows.finish();
         let mut out = LongitudinalOutputs {
-            vehicle_speed: interp_linear_at(&ts, &vs, &self.t),
-            engine_speed: interp_linear_at(&ts, &ws, &self.t),
+            vehicle_speed,
+            engine_speed,
         };
         // the rows of each window left out (a window's rows: from its start to the next one's;
         // the first window's from the first row), found per window, not per row

@@ -89,60 +89,79 @@ pub fn sensor_estimates(log: &DriveLog, cfg: &NoiseConfig) -> Result<Vec<SensorN
 
 /// Copy `copy` of `log` with every sensed column perturbed by a draw of its sensor error,
 /// clamped into its physical range, rows at rest set to the rest state
-/// ([`SensorNoise::draw_in`]; NaN stays NaN). Returns the log and the perturbation of
-/// each column (for the measurement / input split).
+/// ([`SensorNoise::draw_in`]; NaN stays NaN). The perturbation of a column:
+/// [`column_perturbation`].
 pub fn perturbed_log(
     log: &DriveLog,
     sensors: &[SensorNoise],
     cfg: &NoiseConfig,
     copy: u64,
-) -> (DriveLog, Vec<(String, Vec<f64>)>) {
+) -> DriveLog {
     let mut out = log.clone();
-    let mut deltas = Vec::new();
     for s in sensors {
-        let Some(col) = out.signals.iter_mut().find(|c| c.name == s.column) else {
-            continue;
-        };
-        let range = cfg.columns.iter().find(|c| c.column == s.column);
-        let (lo, hi) = (
-            range.and_then(|r| r.min).unwrap_or(f64::NEG_INFINITY),
-            range.and_then(|r| r.max).unwrap_or(f64::INFINITY),
-        );
-        let (d, rest) = s.draw_in(
-            col.values.len(),
-            &mut stream(cfg.seed, copy, &s.column),
-            lo,
-            hi,
-        );
-        let mut applied = vec![0.0; d.len()];
-        for (i, v) in col.values.iter_mut().enumerate() {
-            if v.is_finite() {
-                let nv = rest[i].unwrap_or_else(|| (*v + d[i]).clamp(lo, hi));
-                applied[i] = nv - *v;
-                *v = nv;
-            }
+        if let Some(col) = out.signals.iter_mut().find(|c| c.name == s.column) {
+            perturb_column(&mut col.values, log, s, cfg, copy);
         }
-        if cfg.phase_jitter_columns.contains(&s.column) && s.native_rate_hz > 0.0 {
-            // sample-phase uncertainty of an event channel: the copy's samples stand for events
-            // up to half a native period earlier or later
-            let half = 0.5 / s.native_rate_hz;
-            let tau = stream(cfg.seed, copy, &format!("{}/phase", s.column)).uniform(-half, half);
-            let t: Vec<f64> = log.seconds_from_start();
-            let before = col.values.clone();
-            col.values = super::extended::shifted(&t, &before, tau)
-                .into_iter()
-                .zip(&before)
-                .map(|(x, b)| if b.is_finite() { x.clamp(lo, hi) } else { *b })
-                .collect();
-            for ((a, b), x) in applied.iter_mut().zip(&before).zip(&col.values) {
-                if b.is_finite() && x.is_finite() {
-                    *a += x - b;
-                }
-            }
-        }
-        deltas.push((s.column.clone(), applied));
     }
-    (out, deltas)
+    out
+}
+
+/// The perturbation copy `copy` of [`perturbed_log`] applies to the column of `s` (zero
+/// where the column is NaN; `None` without the column): the same draw, made again from the
+/// copy's seeded stream, so it need not be kept while the copy's models run.
+pub fn column_perturbation(
+    log: &DriveLog,
+    s: &SensorNoise,
+    cfg: &NoiseConfig,
+    copy: u64,
+) -> Option<Vec<f64>> {
+    let col = log.signals.iter().find(|c| c.name == s.column)?;
+    let mut values = col.values.clone();
+    Some(perturb_column(&mut values, log, s, cfg, copy))
+}
+
+/// Perturbs `values` (the column of `s` in `log`) as copy `copy` does; returns the change
+/// applied to each row.
+fn perturb_column(
+    values: &mut Vec<f64>,
+    log: &DriveLog,
+    s: &SensorNoise,
+    cfg: &NoiseConfig,
+    copy: u64,
+) -> Vec<f64> {
+    let range = cfg.columns.iter().find(|c| c.column == s.column);
+    let (lo, hi) = (
+        range.and_then(|r| r.min).unwrap_or(f64::NEG_INFINITY),
+        range.and_then(|r| r.max).unwrap_or(f64::INFINITY),
+    );
+    let (d, rest) = s.draw_in(values.len(), &mut stream(cfg.seed, copy, &s.column), lo, hi);
+    let mut applied = vec![0.0; d.len()];
+    for (i, v) in values.iter_mut().enumerate() {
+        if v.is_finite() {
+            let nv = rest[i].unwrap_or_else(|| (*v + d[i]).clamp(lo, hi));
+            applied[i] = nv - *v;
+            *v = nv;
+        }
+    }
+    if cfg.phase_jitter_columns.contains(&s.column) && s.native_rate_hz > 0.0 {
+        // sample-phase uncertainty of an event channel: the copy's samples stand for events
+        // up to half a native period earlier or later
+        let half = 0.5 / s.native_rate_hz;
+        let tau = stream(cfg.seed, copy, &format!("{}/phase", s.column)).uniform(-half, half);
+        let t: Vec<f64> = log.seconds_from_start();
+        let before = std::mem::take(values);
+        *values = super::extended::shifted(&t, &before, tau)
+            .into_iter()
+            .zip(&before)
+            .map(|(x, b)| if b.is_finite() { x.clamp(lo, hi) } else { *b })
+            .collect();
+        for ((a, b), x) in applied.iter_mut().zip(&before).zip(values.iter()) {
+            if b.is_finite() && x.is_finite() {
+                *a += x - b;
+            }
+        }
+    }
+    applied
 }
 
 /// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
@@ -164,14 +183,14 @@ where
     let sensors = sensor_estimates(log, cfg)?;
     let base = residuals(log)?;
     let r0s: Vec<Vec<f64>> = base.iter().map(Compared::residual).collect();
-    // per copy and compared signal: the residual's change and the measurement's own change,
-    // kept alone (a copy's log and its full comparison are dropped as soon as it is read, so
-    // a long drive holds two columns per signal and copy, not every column)
-    type Run = Vec<Option<(Vec<f64>, Vec<f64>)>>;
+    // per copy and compared signal: the residual's change alone (a copy's log and its full
+    // comparison are dropped as soon as it is read, and the measurement's own change is drawn
+    // again for the split below, so a long drive holds one column per signal and copy)
+    type Run = Vec<Option<Vec<f64>>>;
     let mut runs: Vec<Run> = (0..cfg.copies as u64)
         .into_par_iter()
         .map(|c| {
-            let (plog, deltas) = perturbed_log(log, &sensors, cfg, c);
+            let plog = perturbed_log(log, &sensors, cfg, c);
             let rs = residuals(&plog)?;
             drop(plog);
             base.iter()
@@ -189,11 +208,7 @@ where
                             got: rc.len(),
                         });
                     }
-                    let meas = deltas
-                        .iter()
-                        .find(|d| d.0 == b.name)
-                        .map_or_else(|| vec![0.0; n], |d| d.1.clone());
-                    Ok(Some(((0..n).map(|i| rc[i] - r0[i]).collect(), meas)))
+                    Ok(Some((0..n).map(|i| rc[i] - r0[i]).collect()))
                 })
                 .collect()
         })
@@ -201,16 +216,23 @@ where
     let mut floors = Vec::new();
     for (k, b) in base.iter().enumerate() {
         let n = r0s[k].len();
-        let (copies, meas): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
-            runs.iter_mut().filter_map(|r| r[k].take()).unzip();
+        let (index, copies): (Vec<u64>, Vec<Vec<f64>>) = runs
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(c, r)| r[k].take().map(|e| (c as u64, e)))
+            .unzip();
         let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, &copies, &b.valid, cfg)?;
         // measurement / input split (RMS over the rows that count)
+        let sensor = sensors.iter().find(|s| s.column == b.name);
         let (mut sm, mut si, mut cnt) = (0.0, 0.0, 0usize);
-        for (c, m) in copies.iter().zip(&meas) {
+        for (c, e) in index.iter().zip(&copies) {
+            let meas = sensor
+                .and_then(|s| column_perturbation(log, s, cfg, *c))
+                .unwrap_or_else(|| vec![0.0; n]);
             for i in 0..n {
                 if f.null_variance[i].is_finite() {
-                    sm += m[i] * m[i];
-                    si += (c[i] - m[i]).powi(2);
+                    sm += meas[i] * meas[i];
+                    si += (e[i] - meas[i]).powi(2);
                     cnt += 1;
                 }
             }
@@ -219,7 +241,7 @@ where
             f.measurement_rms = Some((sm / cnt as f64).sqrt());
             f.input_rms = Some((si / cnt as f64).sqrt());
         }
-        f.sensor = sensors.iter().find(|s| s.column == b.name).cloned();
+        f.sensor = sensor.cloned();
         floors.push(f);
     }
     Ok(NoiseFloors {
@@ -278,8 +300,20 @@ mod tests {
         let cfg = NoiseConfig::default();
         let mut moved = 0;
         for copy in 0..12 {
-            let (_, deltas) = perturbed_log(&log, std::slice::from_ref(&s), &cfg, copy);
-            let d = &deltas[0].1;
+            let plog = perturbed_log(&log, std::slice::from_ref(&s), &cfg, copy);
+            let d = column_perturbation(&log, &s, &cfg, copy).expect("the column");
+            for ((p, v), x) in plog.signals[0]
+                .values
+                .iter()
+                .zip(&log.signals[0].values)
+                .zip(&d)
+            {
+                // the copy's column is the recording's plus its perturbation (to rounding)
+                assert!(
+                    (p - (v + x)).abs() <= 1e-9,
+                    "copy {copy}: {p} against {v} + {x}"
+                );
+            }
             for (i, x) in d.iter().enumerate() {
                 if i == 499 || i == 500 {
                     assert!(x.abs() <= 500.0 + 1e-9, "copy {copy} row {i}: {x}");

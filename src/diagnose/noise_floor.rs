@@ -466,6 +466,16 @@ impl NoiseFloors {
         self.floors.iter().find(|f| f.signal == signal)
     }
 
+    /// Drops every floor's null copies (a long drive's largest part of the floors: one f32 row
+    /// per copy and row), which only [`NoiseFloor::window_dof`] reads; after it a window's
+    /// degrees of freedom come from the autocorrelation alone. The diagnosis releases them once
+    /// the mismatch is located.
+    pub fn release_copies(&mut self) {
+        for f in &mut self.floors {
+            f.null_copies = Vec::new();
+        }
+    }
+
     /// `{"<signal>": floor}` of diagnosis.json, unit of each signal.
     pub fn summary(&self) -> BTreeMap<String, f64> {
         self.floors

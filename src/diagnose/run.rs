@@ -109,22 +109,28 @@ pub fn tolerance_variance(
                 }
             })
             .collect();
-        let moved: Vec<Vec<Vec<f64>>> = edges
-            .par_iter()
-            .map(|&(e, v)| {
-                let mut theta = nominal;
-                theta.set(e, v);
-                problem.simulate(domain, &theta)
-            })
-            .collect::<Result<_, _>>()?;
-        for (k, &c) in idx.iter().enumerate() {
-            let mut var = vec![0.0; base[k].len()];
+        // the edges' simulations in parallel a thread's worth at a time, added in edge order
+        // (the same sums whatever the thread count; a long drive never holds them all)
+        let mut vars: Vec<Vec<f64>> = base.iter().map(|b| vec![0.0; b.len()]).collect();
+        for chunk in edges.chunks(rayon::current_num_threads().max(1)) {
+            let moved: Vec<Vec<Vec<f64>>> = chunk
+                .par_iter()
+                .map(|&(e, v)| {
+                    let mut theta = nominal;
+                    theta.set(e, v);
+                    problem.simulate(domain, &theta)
+                })
+                .collect::<Result<_, _>>()?;
             for m in &moved {
-                for (i, v) in var.iter_mut().enumerate() {
-                    let d = m[k][i] - base[k][i];
-                    *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                for (k, var) in vars.iter_mut().enumerate() {
+                    for (i, v) in var.iter_mut().enumerate() {
+                        let d = m[k][i] - base[k][i];
+                        *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                    }
                 }
             }
+        }
+        for (&c, var) in idx.iter().zip(vars) {
             out.insert(problem.channels()[c].name.clone(), var);
         }
     }
@@ -181,7 +187,7 @@ pub struct Diagnosed {
     pub drive_id: String,
     /// The verdict of step 5 ([`verdict`]).
     pub verdict: Verdict,
-    /// Step 3.
+    /// Step 3, without the null copies ([`NoiseFloors::release_copies`]: step 4 read them).
     pub floors: NoiseFloors,
     /// Step 4.
     pub location: Location,
@@ -279,6 +285,8 @@ pub fn diagnose(
         }
     }
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
+    // the null copies serve the location's window test alone
+    floors.release_copies();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
     // flagged drive is a located engine-speed mismatch

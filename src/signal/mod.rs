@@ -39,7 +39,7 @@ pub use filtfilt::{
     impulse_decay_len, matched_default_fit_len, ramp_zi, scipy_default_padlen, sosfiltfilt,
     EdgeMode, MATCHED_DECAY_THRESHOLD,
 };
-pub use interp::{interp_linear, interp_linear_at};
+pub use interp::{interp_linear, interp_linear_at, LinearResampler};
 pub use sos::{
     sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FREE_RESPONSE_FLOOR,
     FUSED_SECTIONS, LANES, LOCKSTEP_MIN, SOSFILT_BLOCK,
