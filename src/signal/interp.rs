@@ -69,7 +69,9 @@ impl<'a, const N: usize> LinearResampler<'a, N> {
         let sorted = queries.windows(2).all(|w| w[0] <= w[1]);
         LinearResampler {
             queries,
-            out: std::array::from_fn(|_| Vec::with_capacity(queries.len())),
+            out: std::array::from_fn(|_| {
+                Vec::with_capacity(if sorted { queries.len() } else { 0 })
+            }),
             next: 0,
             last: None,
             kept: (!sorted).then(|| (Vec::new(), std::array::from_fn(|_| Vec::new()))),
@@ -78,6 +80,11 @@ impl<'a, const N: usize> LinearResampler<'a, N> {
 
     /// The next sample: time `t` (not before the last one's) and the value of each series.
     pub fn push(&mut self, t: f64, y: [f64; N]) {
+        debug_assert!(
+            self.last
+                .is_none_or(|(t0, _)| t >= t0 || t.is_nan() || t0.is_nan()),
+            "a sample at {t} s after one at a later time"
+        );
         if let Some((ts, ys)) = &mut self.kept {
             ts.push(t);
             for (k, v) in ys.iter_mut().zip(y) {
