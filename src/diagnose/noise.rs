@@ -241,7 +241,7 @@ where
             f.measurement_rms = Some((sm / cnt as f64).sqrt());
             f.input_rms = Some((si / cnt as f64).sqrt());
         }
-        f.sensor = sensor.cloned();
+        f.sensor = sensor.map(SensorNoise::without_samples);
         floors.push(f);
     }
     Ok(NoiseFloors {

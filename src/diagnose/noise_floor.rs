@@ -81,7 +81,8 @@ pub struct NoiseFloor {
     /// Squared-correlation time of the null, `dt·Σ_k ρ(k)²` over |k| ≤ the kept lags, s: a long
     /// window holds about `T / τ` degrees of freedom.
     pub correlation_time_s: f64,
-    /// The output's own sensor estimate, when it is a recorded column.
+    /// The output's own sensor estimate, when it is a recorded column (its figures, without
+    /// the native samples: [`SensorNoise::without_samples`]).
     pub sensor: Option<SensorNoise>,
     /// Per-row null variance `mean_c e_c²`, unit² (NaN where the row does not count).
     #[serde(skip)]
@@ -341,7 +342,7 @@ impl NoiseFloor {
         )?;
         f.measurement_rms = Some(f.floor);
         f.input_rms = Some(0.0);
-        f.sensor = Some(sensor.clone());
+        f.sensor = Some(sensor.without_samples());
         Ok(f)
     }
 
@@ -466,13 +467,18 @@ impl NoiseFloors {
         self.floors.iter().find(|f| f.signal == signal)
     }
 
-    /// Drops every floor's null copies (a long drive's largest part of the floors: one f32 row
-    /// per copy and row), which only [`NoiseFloor::window_dof`] reads; after it a window's
-    /// degrees of freedom come from the autocorrelation alone. The diagnosis releases them once
+    /// Drops what only the floors' making and the window test read: every floor's null copies
+    /// (a long drive's largest part of the floors: one f32 row per copy and row), which only
+    /// [`NoiseFloor::window_dof`] reads, after which a window's degrees of freedom come from
+    /// the autocorrelation alone; and the sensor estimates' native-sample records, which only
+    /// a copy's draw reads ([`SensorNoise::without_samples`]). The diagnosis releases them once
     /// the mismatch is located.
-    pub fn release_copies(&mut self) {
+    pub fn release_samples(&mut self) {
         for f in &mut self.floors {
             f.null_copies = Vec::new();
+        }
+        for s in &mut self.sensors {
+            *s = s.without_samples();
         }
     }
 

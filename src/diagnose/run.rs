@@ -187,7 +187,8 @@ pub struct Diagnosed {
     pub drive_id: String,
     /// The verdict of step 5 ([`verdict`]).
     pub verdict: Verdict,
-    /// Step 3, without the null copies ([`NoiseFloors::release_copies`]: step 4 read them).
+    /// Step 3, without the null copies and the sensors' sample records
+    /// ([`NoiseFloors::release_samples`]: steps 3 and 4 read them).
     pub floors: NoiseFloors,
     /// Step 4.
     pub location: Location,
@@ -286,7 +287,7 @@ pub fn diagnose(
     }
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
     // the null copies serve the location's window test alone
-    floors.release_copies();
+    floors.release_samples();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
     // flagged drive is a located engine-speed mismatch

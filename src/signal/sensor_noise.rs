@@ -177,6 +177,22 @@ impl SensorNoise {
         })
     }
 
+    /// The estimate's figures without its record of native samples (their positions, runs,
+    /// levels and values: 24 bytes or more per native sample): what a report or a floor reads,
+    /// and what the estimate is after a round trip through its serialised form. Draws from it
+    /// have no native samples ([`SensorNoise::draw`]).
+    pub fn without_samples(&self) -> SensorNoise {
+        SensorNoise {
+            column: self.column.clone(),
+            unit: self.unit.clone(),
+            positions: Vec::new(),
+            run: Vec::new(),
+            run_level: Vec::new(),
+            native_values: Vec::new(),
+            ..*self
+        }
+    }
+
     /// One draw of the sensor error on an `n_rows` grid: `σ_w·N(0,1)` per native sample plus
     /// `U(−h, h)` per run of equal recorded level, interpolated or held onto the rows like the
     /// recording. Rows before the first native sample take its value, after the last the last's.
