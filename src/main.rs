@@ -23,7 +23,7 @@ fn main() -> ExitCode {
 /// One glibc malloc arena per core instead of glibc's default of up to eight: a long drive's
 /// diagnosis frees and allocates full-length columns (14 MB per channel for 10 hours) on its
 /// worker threads, and columns freed into arenas that are no longer asked for stay resident.
-/// Measured on a 10-hour drive (docs/validation/benchmarks.md): peak 2.11–2.15 GB against
+/// Measured on a 10-hour drive (docs/validation/benchmarks.md): peak 2.10–2.17 GB against
 /// 2.40–2.46 GB, with less system time; the nightly job's time is unchanged. Set before any
 /// thread starts.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]

@@ -342,4 +342,17 @@ mod tests {
         assert_eq!(d[0], d[4]);
         assert_ne!(d[4], d[5]);
     }
+
+    #[test]
+    fn without_samples_is_the_serialised_estimate() {
+        let s = SensorNoise::given("x", "1", SampleKind::Hold, 10_000, 0.02, 5, 0.2, Some(0.1))
+            .unwrap();
+        assert!(!s.positions.is_empty());
+        let bare = s.without_samples();
+        let json = serde_json::to_string(&s).unwrap();
+        let back: SensorNoise = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, bare);
+        assert_eq!(serde_json::to_string(&bare).unwrap(), json);
+        assert!(bare.positions.is_empty() && bare.native_values.is_empty());
+    }
 }
