@@ -128,17 +128,6 @@ impl DriveLog {
             .map(|s| s.values.as_slice())
     }
 
-    /// Values of a column with its gaps (NaN) filled as the canonical schema's interpolation
-    /// kind says (linear for pass-through columns; [`crate::signal::distance::fill_gaps`]);
-    /// borrowed when nothing is missing. `None` when the column is absent or has no finite
-    /// value.
-    pub fn filled_signal(&self, name: &str) -> Option<std::borrow::Cow<'_, [f64]>> {
-        let kind = drive_log()
-            .column(name)
-            .map_or(crate::schema::Interpolation::Linear, |c| c.interpolation);
-        crate::signal::distance::fill_gaps_borrowed(self.signal(name)?, kind)
-    }
-
     /// Values of a column to change in place, if present.
     pub fn signal_mut(&mut self, name: &str) -> Option<&mut [f64]> {
         self.signals

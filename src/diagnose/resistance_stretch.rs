@@ -53,6 +53,7 @@ use serde::Serialize;
 use super::locate::Mismatch;
 use super::run_covariance::{white_variance, RunCovariance};
 use crate::model::driveline::DrivelineParams;
+use crate::signal::distance::filled_column;
 use crate::signal::stats::f_sf;
 use crate::table::DriveLog;
 
@@ -183,7 +184,7 @@ fn derivative(x: &[f64], t: &[f64]) -> Vec<f64> {
 
 /// The segment means of `log` (module documentation): rows grouped by `distance_m` into
 /// [`StretchConfig::segment_m`] bins, the channels' gaps filled as the schema says
-/// ([`DriveLog::filled_signal`]: a CAN dropout costs its own rows' precision, not the
+/// ([`filled_column`]: a CAN dropout costs its own rows' precision, not the
 /// segment); a bin counts when at least [`StretchConfig::min_moving_share`] of its rows move
 /// above 1 m/s. `None` without the engine torque, engine speed, vehicle speed, gear, slope or
 /// brake-force column.
@@ -196,19 +197,19 @@ pub fn segments(
     cfg: &StretchConfig,
 ) -> Option<Vec<Segment>> {
     let (tq, w, v, gear, slope, brake) = (
-        log.filled_signal("engine_torque")?,
-        log.filled_signal("engine_speed")?,
-        log.filled_signal("vehicle_speed")?,
-        log.filled_signal("gear")?,
-        log.filled_signal("road_slope")?,
-        log.filled_signal("brake_force")?,
+        filled_column(log, "engine_torque")?,
+        filled_column(log, "engine_speed")?,
+        filled_column(log, "vehicle_speed")?,
+        filled_column(log, "gear")?,
+        filled_column(log, "road_slope")?,
+        filled_column(log, "brake_force")?,
     );
     let (tq, w, v, gear, slope, brake) = (&*tq, &*w, &*v, &*gear, &*slope, &*brake);
     let n = log.len();
     if n < 3 || t_s.len() != n || distance_m.len() != n {
         return None;
     }
-    let retarder = log.filled_signal("retarder_torque");
+    let retarder = filled_column(log, "retarder_torque");
     let retarder = retarder.as_deref();
     let (r_w, i_f) = (p.wheel_radius_m, p.final_drive_ratio);
     let g = p.gravity_m_per_s2;

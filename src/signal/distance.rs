@@ -216,6 +216,16 @@ pub fn fill_gaps_borrowed(values: &[f64], interpolation: Interpolation) -> Optio
     }
 }
 
+/// The column `name` of `log` with its gaps (NaN) filled as the canonical schema's
+/// interpolation kind says (linear for pass-through columns; [`fill_gaps`]); borrowed when
+/// nothing is missing. `None` when the column is absent or has no finite value.
+pub fn filled_column<'a>(log: &'a DriveLog, name: &str) -> Option<Cow<'a, [f64]>> {
+    let kind = drive_log()
+        .column(name)
+        .map_or(Interpolation::Linear, |c| c.interpolation);
+    fill_gaps_borrowed(log.signal(name)?, kind)
+}
+
 impl DistanceMap {
     /// Builds the map of a drive per the module rules.
     ///
