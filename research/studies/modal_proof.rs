@@ -252,13 +252,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 struct Totals {
     modal_s: f64,
     drive_s: f64,
-    /// Clean drives: mean shift against the linearised modes.
-    clean_means: Vec<f64>,
+    /// Clean drives: mean relative shift against the linearised modes (fraction).
+    clean_mean_shifts: Vec<f64>,
     /// Clean drives, per gear: Δf against the linearised and the simulated modes, Δσ against
     /// the simulated.
-    clean_df_lin: Vec<f64>,
-    clean_df_sim: Vec<f64>,
-    clean_dsigma_sim: Vec<f64>,
+    clean_df_lin_hz: Vec<f64>,
+    clean_df_sim_hz: Vec<f64>,
+    clean_dsigma_sim_per_s: Vec<f64>,
     /// `(R², ln f_measured − ln f_linearised)` of each engagement of a drive whose hidden
     /// effect leaves the driveline's mode alone.
     log_ratio: Vec<(f64, f64)>,
@@ -286,12 +286,13 @@ impl Totals {
         self.modal_s += modal_s;
         self.drive_s += drive_s;
         if label == "none" {
-            self.clean_means.extend(by_lin.test.map(|t| t.mean_shift));
-            self.clean_df_lin
+            self.clean_mean_shifts
+                .extend(by_lin.test.map(|t| t.mean_shift));
+            self.clean_df_lin_hz
                 .extend(by_lin.gears.iter().map(|g| g.delta_f_hz));
-            self.clean_df_sim
+            self.clean_df_sim_hz
                 .extend(by_sim.gears.iter().map(|g| g.delta_f_hz));
-            self.clean_dsigma_sim
+            self.clean_dsigma_sim_per_s
                 .extend(by_sim.gears.iter().map(|g| g.delta_decay_per_s));
         }
         let leaves_modes = match effect {
@@ -324,9 +325,9 @@ impl Totals {
             hours,
             self.modal_s / hours
         );
-        let means = finite(&self.clean_means);
-        let lin = finite(&self.clean_df_lin);
-        let dsig = finite(&self.clean_dsigma_sim);
+        let means = finite(&self.clean_mean_shifts);
+        let lin = finite(&self.clean_df_lin_hz);
+        let dsig = finite(&self.clean_dsigma_sim_per_s);
         println!(
             "clean drives: {} drive means against the linearised modes from {:+.1} % to {:+.1} %; per gear |Δf| ≤ 0.03 Hz on {} of {} (largest {:.3} Hz); against the simulated engine speed largest |Δf| {:.3} Hz, mean Δσ {:+.2} 1/s (median {:+.2})",
             means.len(),
@@ -335,7 +336,7 @@ impl Totals {
             lin.iter().filter(|x| x.abs() <= 0.03).count(),
             lin.len(),
             max_abs(&lin),
-            max_abs(&self.clean_df_sim),
+            max_abs(&self.clean_df_sim_hz),
             dsig.iter().sum::<f64>() / dsig.len().max(1) as f64,
             median(&dsig),
         );

@@ -286,7 +286,8 @@ pub fn diagnose(
         }
     }
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
-    // the null copies serve the location's window test alone
+    // the null copies serve the location's window test alone, the sensors' sample records the
+    // noise floor's draws
     floors.release_samples();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
