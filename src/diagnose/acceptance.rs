@@ -99,7 +99,9 @@
 //! is 0.01 with the reversals averaged in (held-out 2.404 → 2.410) and 0.17 on the speeds
 //! alone (0.162 → 0.112). At the truth on the 336 effect drives of the proof's seven seeds
 //! (`fleetdyn prove --seed S`, drawn driving; `research/studies/oracle_folds.rs` prints each
-//! view's change), 35 of the 508 changed (effect, view) pairs move less than 10⁻²: the
+//! view's change; the mass's shuffle modes counted, though the rules do not score them for the
+//! mass: [`super::problem::ViewKind::only_for`]), 35 of the 508 changed (effect, view) pairs
+//! move less than 10⁻²: the
 //! reversals under the slope cure (13 of 13, at most 4.7·10⁻³) and under the mass (15 of
 //! 18) and the torque offset (2 of 6), the speeds under three worn clutches that hardly
 //! slip on the road, one mass drive's shuffle modes (6.4·10⁻³) and one stiffness drive's

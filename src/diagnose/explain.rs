@@ -31,7 +31,8 @@
 //! [`super::problem::ViewKind::only_for`]), the
 //! axle model's bellow pressures.
 //! An effect is fitted and scored on the views it changes, so the shuffle modes count for the
-//! shaft stiffness and the mass (which move them) and the reversals for the lash, the
+//! shaft stiffness (the mass moves them too, but is read off the speeds:
+//! [`super::problem::ViewKind::only_for`]) and the reversals for the lash, the
 //! stiffness and the torque signal's delay, and neither dilutes the speeds' figures for an
 //! effect that leaves them alone (drag, rolling resistance, …). The cost is the mean over
 //! those views of each view's weighted mean square; within a view every signal counts alike

@@ -37,11 +37,11 @@ pub struct FitSpec {
     /// starts from the grid's best point ([`fit_effect`](super::fit::fit_effect)).
     pub grid: Option<[f64; 3]>,
     /// Multiples of `step` the screen probes: the candidate test and the ranking take the
-    /// largest share of train SSE any rung's sensitivity removes
-    /// ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER) for the effects whose
+    /// largest share of train SSE any rung's sensitivity removes, its change kept within the
+    /// domain ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER) for the effects whose
     /// outputs are not near-linear in the parameter over its realistic range; `[1]` for the
-    /// others); the full fit starts from the step's own probe (or the start
-    /// grid's best point, `grid`).
+    /// others); the full fit starts from the step's own probe (or the start grid's best point,
+    /// `grid`).
     pub ladder: &'static [f64],
 }
 

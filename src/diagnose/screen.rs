@@ -10,8 +10,9 @@
 //! a threshold or a shift (`clutch_slip`, `driveline_backlash`, `signal_delay`) one step reads
 //! a curved response at one arbitrary point, so the screen also probes ½ and 1½ times the
 //! step and judges the effect by the rung whose sensitivity removes the most train SSE
-//! ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER)); its full fit starts from the
-//! step's probe as every other's does
+//! ([`SCREEN_LADDER`](crate::model::catalogue::SCREEN_LADDER)), each rung's change projected
+//! on the domain (a lash cannot fall below 0, so a rung whose fit asks for less lash removes
+//! nothing); its full fit starts from the step's probe as every other's does
 //! (or from a start grid's best point where that is lower: `signal_delay`, `clutch_slip`).
 //! Steps and domains are the catalogue's ([`crate::model::catalogue::FitRule`], the "fit step"
 //! and "fit domain" columns of docs/diagnosis/catalogue.md; θ₀ the vehicle file's value)
@@ -70,13 +71,14 @@ pub struct Probe {
     /// Taken in the current round (then `outputs` is a simulation of the current round's
     /// parameters and starts the full fit).
     pub fresh: bool,
-    /// The largest single-effect reduction over the rungs of the effect's
-    /// [`FitSpec::ladder`](super::fit_spec::FitSpec::ladder) (0 without a ladder): what makes
-    /// it a candidate when larger than this probe's own. Measured against the train residual
-    /// of the round that took the probe (the first) and, like the probe, reused by later
-    /// rounds — which recompute the step's own reduction against their residual but not the
-    /// rungs' (their probes are not kept), so after an accepted finding a ladder effect may be
-    /// fitted once more than a fresh screen would ask; the acceptance rule still decides.
+    /// The largest single-effect reduction (the change projected on the domain) over the
+    /// rungs of the effect's [`FitSpec::ladder`](super::fit_spec::FitSpec::ladder) (0 without
+    /// a ladder): what makes it a candidate when larger than this probe's own. Measured against
+    /// the train residual of the round that took the probe (the first) and, like the probe,
+    /// reused by later rounds — which recompute the step's own reduction against their residual
+    /// but not the rungs' (their probes are not kept), so after an accepted finding a ladder
+    /// effect may be fitted once more than a fresh screen would ask; the acceptance rule still
+    /// decides.
     pub ladder_reduction: f64,
 }
 
@@ -233,10 +235,12 @@ pub fn screen(
             let ladder_reduction = rungs
                 .iter()
                 .chain(step.as_ref())
-                .map(|p| single_reduction(ev, p, &r))
+                .map(|p| single_reduction(ev, p, &r, cur, &spec))
                 .fold(0.0, f64::max);
-            // the fit starts from the step's probe as for every effect (from a rung only
-            // where the step itself does not run)
+            // the fit and the linearised estimate start from the step's probe as for every
+            // effect (from a rung only where the step itself does not run): a rung far beyond
+            // a threshold sees a steep local response, and its linearised estimate would claim
+            // a precision the parameter does not have near its current value
             let p = step.or_else(|| rungs.into_iter().next());
             (
                 e,
@@ -278,30 +282,14 @@ pub fn screen(
         } else {
             rr_all
         };
-        let (mut change, mut red) = if ss > 0.0 && rr > 0.0 {
-            (sr / ss, sr * sr / (ss * rr))
-        } else {
-            (0.0, 0.0)
-        };
         let cur = ev.theta.get(e);
+        let (mut change, mut red) = projected_fit(ScreenSums { ss, sr, rr }, cur, &spec);
         if spec.switch {
             // only "on" is a value: a negative coefficient means the filter makes it worse
             if change <= 0.0 {
                 red = 0.0;
             }
             change = if change > 0.0 { probe.h } else { 0.0 };
-        } else {
-            let target = cur + change;
-            if target < spec.lo || target > spec.hi {
-                let c = target.clamp(spec.lo, spec.hi) - cur;
-                // the reduction of the clamped (projected) change
-                red = if rr > 0.0 {
-                    ((2.0 * c * sr - c * c * ss) / rr).max(0.0)
-                } else {
-                    0.0
-                };
-                change = c;
-            }
         }
         // a threshold or shift effect that a rung of its ladder shows more clearly
         let red_screen = red.max(probe.ladder_reduction);
@@ -375,23 +363,90 @@ pub fn screen(
     }
 }
 
-/// The share of the weighted train SSE of `p`'s models that a least-squares multiple of its
-/// sensitivity removes, `⟨S, r⟩² / (⟨S, S⟩ ⟨r, r⟩)` ([`screen`]'s single-effect reduction
-/// before any clamping to the domain); 0 for a zero sensitivity or residual.
+/// The single-effect least-squares change `δ = ⟨S, r⟩ / ⟨S, S⟩` from `cur` and the share of
+/// the SSE `⟨r, r⟩` it removes, `⟨S, r⟩² / (⟨S, S⟩ ⟨r, r⟩)`; a change that leaves the
+/// physical domain `[lo, hi]` of `spec` is projected on it and removes
+/// `(2δ⟨S, r⟩ − δ²⟨S, S⟩) / ⟨r, r⟩` (at least 0). `(0, 0)` for a zero sensitivity or residual.
+/// For a switch the change is not projected (its sign says "on" or "off").
+fn projected_fit(sums: ScreenSums, cur: f64, spec: &super::fit_spec::FitSpec) -> (f64, f64) {
+    let ScreenSums { ss, sr, rr } = sums;
+    if !(ss > 0.0 && rr > 0.0) {
+        return (0.0, 0.0);
+    }
+    let (change, red) = (sr / ss, sr * sr / (ss * rr));
+    let target = cur + change;
+    if spec.switch || (target >= spec.lo && target <= spec.hi) {
+        return (change, red);
+    }
+    let c = target.clamp(spec.lo, spec.hi) - cur;
+    (c, ((2.0 * c * sr - c * c * ss) / rr).max(0.0))
+}
+
+/// The share of the weighted train SSE of `p`'s models that the single-effect fit on its
+/// sensitivity removes from `cur`, the change projected on the domain of `spec`
+/// ([`projected_fit`]): the reduction a rung of the ladder is judged by.
 fn single_reduction(
     ev: &Evaluator<'_, '_>,
     p: &Probe,
     r: &impl Fn(usize, usize, usize) -> f64,
+    cur: f64,
+    spec: &super::fit_spec::FitSpec,
 ) -> f64 {
     let s = |m: usize, k: usize, i: usize| p.s(m, k, i);
-    let (ss, sr, rr) = (
-        ev.inner(&p.active, s, s),
-        ev.inner(&p.active, s, r),
-        ev.inner(&p.active, r, r),
-    );
-    if ss > 0.0 && rr > 0.0 {
-        sr * sr / (ss * rr)
-    } else {
-        0.0
+    let sums = ScreenSums {
+        ss: ev.inner(&p.active, s, s),
+        sr: ev.inner(&p.active, s, r),
+        rr: ev.inner(&p.active, r, r),
+    };
+    projected_fit(sums, cur, spec).1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::fit_spec::FitSpec;
+
+    fn spec(lo: f64, hi: f64, switch: bool) -> FitSpec {
+        FitSpec {
+            step: 1.0,
+            lo,
+            hi,
+            switch,
+            grid: None,
+            ladder: &[1.0],
+        }
+    }
+
+    /// The projected single-effect fit: inside the domain the least-squares change and the
+    /// squared correlation; at a bound the clamped change and the cost it removes,
+    /// `(2δ⟨S, r⟩ − δ²⟨S, S⟩) / ⟨r, r⟩` (exact for a quadratic cost); nothing when the fit
+    /// asks to leave the domain from its bound.
+    #[test]
+    fn the_projected_fit_keeps_the_change_in_the_domain() {
+        let sums = ScreenSums {
+            ss: 4.0,
+            sr: 2.0,
+            rr: 2.0,
+        };
+        // δ = 0.5 inside [0, 1]: reduction ⟨S,r⟩²/(⟨S,S⟩⟨r,r⟩) = 4/8
+        assert_eq!(projected_fit(sums, 0.0, &spec(0.0, 1.0, false)), (0.5, 0.5));
+        // the domain ends at 0.2: δ = 0.2 removes (2·0.2·2 − 0.04·4)/2 = 0.32
+        let (c, red) = projected_fit(sums, 0.0, &spec(0.0, 0.2, false));
+        assert_eq!(c, 0.2);
+        assert!((red - 0.32).abs() < 1e-15, "{red}");
+        // a fit toward less lash from a lash of 0 removes nothing, however well it correlates
+        let against = ScreenSums { sr: -2.0, ..sums };
+        assert_eq!(
+            projected_fit(against, 0.0, &spec(0.0, 1.0, false)),
+            (0.0, 0.0)
+        );
+        // a switch keeps the sign of its coefficient (it says whether the cure helps)
+        assert_eq!(
+            projected_fit(against, 0.0, &spec(0.0, 1.0, true)),
+            (-0.5, 0.5)
+        );
+        // no sensitivity or no residual: no change
+        let flat = ScreenSums { ss: 0.0, ..sums };
+        assert_eq!(projected_fit(flat, 0.0, &spec(0.0, 1.0, false)), (0.0, 0.0));
     }
 }
