@@ -20,6 +20,7 @@ use fleetdyn::diagnose::modal::{
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::diagnose::shaft_stiffness::fit_shaft_stiffness;
 use fleetdyn::model::catalogue::Effect;
+use fleetdyn::signal::stats::median;
 use std::path::PathBuf;
 
 #[path = "common/proof_dir.rs"]
@@ -338,7 +339,7 @@ impl Totals {
             max_abs(&lin),
             max_abs(&self.clean_df_sim_hz),
             dsig.iter().sum::<f64>() / dsig.len().max(1) as f64,
-            median(&dsig),
+            median(&mut dsig.clone()),
         );
         println!(
             "engagements of drives whose hidden effect leaves the modes alone (clean and catalogue drives but {:?}): {}",
@@ -360,15 +361,5 @@ impl Totals {
                 100.0 * rms
             );
         }
-    }
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    match s.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => s[n / 2],
-        n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
     }
 }
