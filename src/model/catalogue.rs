@@ -308,6 +308,14 @@ pub const DELAY_GRID_S: [f64; 3] = [0.0, 0.6, 0.025];
 /// domain.
 pub const CLUTCH_GRID: [f64; 3] = [0.5, 1.0, 0.015];
 
+/// Upper end of `rolling_resistance`'s fit domain, as a multiple of the vehicle file's `c_r1`:
+/// the span of the EU tyre label's rolling-resistance classes for truck tyres (class A at most
+/// 4.0 N/kN, class E at least 7.1 N/kN; Regulation (EU) 2020/740), so a truck on the label's
+/// worst tyres against a file of its best, with a wet road or low pressure on top. A constant
+/// force ∝ m·g beyond it is not a rolling resistance; it is left to the effects with the same
+/// fingerprint (a slope-sensor mounting angle, `grade_offset`) or to `unexplained`.
+pub const ROLLING_RESISTANCE_MAX: f64 = 2.5;
+
 /// One row of the catalogue.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EffectSpec {
@@ -400,7 +408,7 @@ pub const CATALOGUE: [EffectSpec; 16] = [
         tolerance: ToleranceKind::RollingResistance,
         model_form: Tolerance::Relative(0.26),
         draw: rel_draw(0.20, 0.50),
-        fit: rel_fit(0.30, 0.25, 4.0),
+        fit: rel_fit(0.30, 0.25, ROLLING_RESISTANCE_MAX),
     },
     EffectSpec {
         effect: Effect::VehicleMass,
