@@ -85,8 +85,8 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
     assert!(md.contains("--truth independent") && md.contains("independent truth plant"));
 }
 
-/// The reduced independent-truth proof: seed 1's plan, drives 2, 7, 10–12, 24, 26, 33, 49, 58
-/// and 60 (3–6 km each). The
+/// The reduced independent-truth proof: seed 1's plan, drives 2, 7, 10–12, 20, 24, 26, 33, 49,
+/// 58 and 60 (3–6 km each). The
 /// clean drives' trucks are drawn within their tolerances (so their parameters are not the
 /// file's) and their plant has the structure the diagnosis leaves out or estimates (split
 /// shafts and tyres that slip, a two-stage damper, engine lag, wind); the diagnosis must say
@@ -95,6 +95,9 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
 /// the hidden change (the clutch's capacity is read off its slip directly, the mass off the
 /// speeds alone — the shuffle modes, whose tyre share is fitted at the file's mass, are not
 /// scored for it; the shaft through the shuffle modes, whose tyre share is itself estimated).
+/// A slope sensor mounted 0.019 rad nose-down must be named `grade_offset`, its angle within
+/// 15 %: its force is a constant ∝ m·g, which a rolling resistance could only match at about
+/// four times the file's coefficient, outside that effect's fit domain (2.5 times).
 /// Two shafts 31 % and 35 % softer are read within 25 % as well, but their intervals reach
 /// into the band of acceptance rule 4 (the file's ±10 % widened by the model-form allowance of
 /// ±20 %): each is reported as an estimate consistent with the file, not named. On the 3.4 km
@@ -104,7 +107,7 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
 #[test]
 fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() {
     let cfg = ProofConfig {
-        only: vec![2, 7, 10, 11, 12, 24, 26, 33, 49, 58, 60],
+        only: vec![2, 7, 10, 11, 12, 20, 24, 26, 33, 49, 58, 60],
         ..ProofConfig::independent()
     };
     let vehicle = fixture("fixtures/vehicles/truck-40t.toml");
@@ -143,6 +146,7 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         (60, "clutch_slip", 0.15),
         (2, "vehicle_mass", 0.15),
         (7, "driveline_compliance", 0.25),
+        (20, "grade_offset", 0.15),
     ] {
         let s = by(i);
         assert_eq!(s.hidden, effect);
@@ -150,6 +154,21 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         assert_eq!(s.verdict, Verdict::Explained);
         let e = s.parameter_error.unwrap();
         assert!(e < max_error, "{effect}: parameter error {e}");
+    }
+    // no rolling-resistance fit of the mounting-angle drive leaves its fit domain
+    let nominal_c_r1 = 0.006; // truck-40t.toml
+    for f in detail(20)["explanation"]["rounds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r["fits"].as_array().unwrap())
+        .filter(|f| f["effect"] == "rolling_resistance")
+    {
+        let v = f["value"].as_f64().unwrap();
+        assert!(
+            v <= fleetdyn::model::catalogue::ROLLING_RESISTANCE_MAX * nominal_c_r1 * (1.0 + 1e-12),
+            "{v}"
+        );
     }
     // the mass is fitted and scored on the speeds, not on the shuffle modes
     let d = detail(2);
