@@ -328,7 +328,9 @@ impl Totals {
         );
         let means = finite(&self.clean_mean_shifts);
         let lin = finite(&self.clean_df_lin_hz);
-        let dsig = finite(&self.clean_dsigma_sim_per_s);
+        let mut dsig = finite(&self.clean_dsigma_sim_per_s);
+        let dsig_mean = dsig.iter().sum::<f64>() / dsig.len().max(1) as f64;
+        let dsig_median = median(&mut dsig);
         println!(
             "clean drives: {} drive means against the linearised modes from {:+.1} % to {:+.1} %; per gear |Δf| ≤ 0.03 Hz on {} of {} (largest {:.3} Hz); against the simulated engine speed largest |Δf| {:.3} Hz, mean Δσ {:+.2} 1/s (median {:+.2})",
             means.len(),
@@ -338,8 +340,8 @@ impl Totals {
             lin.len(),
             max_abs(&lin),
             max_abs(&self.clean_df_sim_hz),
-            dsig.iter().sum::<f64>() / dsig.len().max(1) as f64,
-            median(&mut dsig.clone()),
+            dsig_mean,
+            dsig_median,
         );
         println!(
             "engagements of drives whose hidden effect leaves the modes alone (clean and catalogue drives but {:?}): {}",

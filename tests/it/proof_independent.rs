@@ -156,7 +156,11 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         assert!(e < max_error, "{effect}: parameter error {e}");
     }
     // no rolling-resistance fit of the mounting-angle drive leaves its fit domain
-    let nominal_c_r1 = 0.006; // truck-40t.toml
+    let nominal_c_r1 = fleetdyn::model::vehicle::VehicleFile::load(&vehicle)
+        .unwrap()
+        .driveline
+        .unwrap()
+        .c_r1;
     for f in detail(20)["explanation"]["rounds"]
         .as_array()
         .unwrap()
