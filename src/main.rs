@@ -23,8 +23,8 @@ fn main() -> ExitCode {
 /// One glibc malloc arena per core instead of glibc's default of up to eight: a long drive's
 /// diagnosis frees and allocates full-length columns (14 MB per channel for 10 hours) on its
 /// worker threads, and columns freed into arenas that are no longer asked for stay resident.
-/// Measured on a 10-hour drive (docs/validation/benchmarks.md): peak 2.05–2.14 GB against
-/// 2.29–2.32 GB, system time 4.9–7.2 s against 8.4–9.5 s; the nightly job's time is
+/// Measured on a 10-hour drive's diagnosis (docs/validation/benchmarks.md): a peak about
+/// 0.2 GB lower and 2–4 s less system time than with glibc's default; the nightly job's time is
 /// unchanged. Set before any thread starts.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn limit_malloc_arenas() {

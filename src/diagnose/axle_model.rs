@@ -115,7 +115,7 @@ impl<'a> AxleModel<'a> {
         let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
         let d = &tm.driveline;
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
-        let log = corrected_log(self.log, theta, cured.as_deref());
+        let log = corrected_log(self.log, theta, cured.as_deref(), None);
         let rec = axle_inputs_from_log(
             &log,
             a.mass_kg(),

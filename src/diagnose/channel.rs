@@ -17,6 +17,7 @@
 
 use super::split::Part;
 use crate::model::catalogue::Domain;
+use std::ops::Index;
 
 /// One compared output.
 #[derive(Debug, Clone)]
@@ -84,7 +85,11 @@ pub struct Metrics {
 }
 
 /// [`Metrics`] of `sim` against the channel's measurement on `part`.
-pub fn metrics(ch: &Channel, sim: &[f64], part: Part) -> Metrics {
+pub fn metrics<Y: Index<usize, Output = f64> + ?Sized>(
+    ch: &Channel,
+    sim: &Y,
+    part: Part,
+) -> Metrics {
     let rows = ch.rows(part);
     let n = rows.len().max(1) as f64;
     let mean = rows.iter().map(|&i| ch.measured[i]).sum::<f64>() / n;
@@ -108,11 +113,11 @@ pub fn metrics(ch: &Channel, sim: &[f64], part: Part) -> Metrics {
 
 /// Weighted mean square (module documentation) of `outputs` (one per channel of `chans`) with
 /// weights `sigmas`, on `part`.
-pub fn weighted_ms(
+pub fn weighted_ms<Y: Index<usize, Output = f64>>(
     channels: &[Channel],
     chans: &[usize],
     sigmas: &[f64],
-    outputs: &[Vec<f64>],
+    outputs: &[Y],
     part: Part,
 ) -> f64 {
     let mut j = 0.0;

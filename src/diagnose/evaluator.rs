@@ -9,6 +9,7 @@
 use super::deviance::events_deviance;
 use super::extended::{ExtendedError, Theta};
 use super::problem::{effective_samples, weighted_ms, whiteness, Part, Problem, Whiteness};
+use super::row_column::RowColumn;
 use crate::model::catalogue::{Domain, Effect};
 use std::sync::Arc;
 
@@ -48,7 +49,7 @@ pub struct Eval {
     /// Parameter value (NaN for the round's base).
     pub value: f64,
     /// Outputs per model view, per channel.
-    pub outputs: Vec<Arc<Vec<Vec<f64>>>>,
+    pub outputs: Vec<Arc<Vec<RowColumn>>>,
     /// Weighted train mean square per model.
     pub train: Vec<f64>,
     /// Weighted held-out mean square per model (NaN when `train_only`).
@@ -81,7 +82,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     pub fn new(
         problem: &'p Problem<'a>,
         theta: Theta,
-        base: &[Arc<Vec<Vec<f64>>>],
+        base: &[Arc<Vec<RowColumn>>],
         noise_floor: Option<&std::collections::BTreeMap<String, f64>>,
         dt_s: f64,
     ) -> Self {
@@ -112,7 +113,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         problem: &'p Problem<'a>,
         noise_floor: Option<&std::collections::BTreeMap<String, f64>>,
     ) -> (Self, Eval) {
-        let bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+        let bases: Vec<Arc<Vec<RowColumn>>> = problem
             .nominal_outputs()
             .iter()
             .map(|y| Arc::new(y.clone()))
@@ -128,13 +129,13 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         (ev, base)
     }
 
-    fn ms(&self, m: usize, y: &[Vec<f64>], part: Part) -> f64 {
+    fn ms(&self, m: usize, y: &[RowColumn], part: Part) -> f64 {
         let v = &self.models[m];
         weighted_ms(self.problem.channels(), &v.chans, &v.sigmas, y, part)
     }
 
     /// The evaluation of outputs `outputs` (one per model).
-    pub fn eval_outputs(&self, value: f64, outputs: Vec<Arc<Vec<Vec<f64>>>>) -> Eval {
+    pub fn eval_outputs(&self, value: f64, outputs: Vec<Arc<Vec<RowColumn>>>) -> Eval {
         let train = (0..self.models.len())
             .map(|m| self.ms(m, &outputs[m], Part::Train))
             .collect();
@@ -176,7 +177,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
         e: Effect,
         value: f64,
         train_only: bool,
-    ) -> Result<Vec<Arc<Vec<Vec<f64>>>>, ExtendedError> {
+    ) -> Result<Vec<Arc<Vec<RowColumn>>>, ExtendedError> {
         let mut th = self.theta;
         th.set(e, value);
         let sims = self.problem.simulate_views_on(active, &th, train_only)?;

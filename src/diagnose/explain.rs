@@ -57,6 +57,7 @@ use super::fit::{
 };
 use super::linearised::linearised_estimates;
 use super::problem::{ExplainError, Part, Problem};
+use super::row_column::RowColumn;
 use super::signal_fits::signal_fits;
 use crate::model::catalogue::Effect;
 use std::collections::BTreeMap;
@@ -97,7 +98,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
     let mut probes: BTreeMap<Effect, Arc<super::fit::Probe>> = BTreeMap::new();
     let mut linearised = Vec::new();
     // outputs of every model at the round's parameters
-    let mut bases: Vec<Arc<Vec<Vec<f64>>>> = problem
+    let mut bases: Vec<Arc<Vec<RowColumn>>> = problem
         .nominal_outputs()
         .iter()
         .map(|y| Arc::new(y.clone()))

@@ -26,6 +26,7 @@ use super::deviance::deviance_threshold;
 use super::evaluator::{Eval, Evaluator};
 use super::fit_spec::fit_spec;
 use super::problem::Part;
+use super::row_column::RowColumn;
 use super::screen::Screen;
 use crate::model::catalogue::Effect;
 use serde::Serialize;
@@ -77,20 +78,19 @@ pub fn linearised_estimates(
         let value = centre.clamp(spec.lo, spec.hi);
         // the outputs at the estimate, extrapolated along the sensitivity
         let delta = value - nominal;
-        let outputs: Vec<Arc<Vec<Vec<f64>>>> = (0..ev.models.len())
+        let outputs: Vec<Arc<Vec<RowColumn>>> = (0..ev.models.len())
             .map(|m| {
                 if !probe.active[m] {
                     return base.outputs[m].clone();
                 }
-                let y: Vec<Vec<f64>> = (0..base.outputs[m].len())
+                let y: Vec<RowColumn> = (0..base.outputs[m].len())
                     .map(|k| {
-                        (0..base.outputs[m][k].len())
-                            .map(|i| {
-                                let b0 = base.outputs[m][k][i];
-                                b0 + delta * (probe.outputs[m][k][i] - probe.base[m][k][i])
-                                    / probe.h
-                            })
-                            .collect()
+                        RowColumn::map3(
+                            &base.outputs[m][k],
+                            &probe.outputs[m][k],
+                            &probe.base[m][k],
+                            |b0, p, pb| b0 + delta * (p - pb) / probe.h,
+                        )
                     })
                     .collect();
                 Arc::new(y)

@@ -93,6 +93,17 @@ pub struct LongitudinalOutputs {
     pub engine_speed: Vec<f64>,
 }
 
+/// The columns a simulation reads off the (corrected) recording as its inputs
+/// ([`scenario_from_log`] and the tyres' slip, [`super::tyre_slip::slip_of_rows`]).
+pub const INPUT_COLUMNS: [&str; 6] = [
+    "road_slope",
+    "engine_torque",
+    "gear",
+    "clutch_position",
+    "brake_force",
+    "retarder_torque",
+];
+
 /// The driveline model of one recording, extended by the catalogue's longitudinal effects.
 #[derive(Debug, Clone)]
 pub struct LongitudinalModel<'a> {
@@ -211,7 +222,7 @@ impl<'a> LongitudinalModel<'a> {
         p: &DrivelineParams,
     ) -> Result<ReadInputs, ExtendedError> {
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
-        let log = corrected_log(self.log, theta, cured.as_deref());
+        let log = corrected_log(self.log, theta, cured.as_deref(), Some(&INPUT_COLUMNS));
         let rec = scenario_from_log(
             &log,
             self.ratios.len(),

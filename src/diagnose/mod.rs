@@ -40,6 +40,7 @@ pub mod parameter_table;
 pub mod problem;
 pub mod resistance_stretch;
 pub mod reversal_channel;
+pub mod row_column;
 pub mod rows;
 pub mod run;
 pub mod run_covariance;

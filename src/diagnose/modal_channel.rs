@@ -133,10 +133,13 @@ pub fn measure(
         .collect()
 }
 
+/// The simulated channel's value on every row without a sample ([`simulate`]).
+pub const FILL: f64 = 0.0;
+
 /// The simulated channel on `n` rows for the driveline `p` whose driven tyres take the share
 /// `tyre_share` of the main flexibility ([`fit_tyre_share`]): `ln f` of the linearised mode
 /// ([`tyre_mode`], at the sample's speed and engine torque) on each sample's row, 0 on every
-/// other row (not valid there). Where the linearised driveline of `p` has no oscillating mode
+/// other row ([`FILL`]; not valid there). Where the linearised driveline of `p` has no oscillating mode
 /// (parameters far outside any truck's), the sample's measured value minus 10 stands in: a
 /// residual far outside any floor, rather than a NaN or −∞ that would poison the sums.
 pub fn simulate(
@@ -146,7 +149,7 @@ pub fn simulate(
     tyre_share: f64,
     n: usize,
 ) -> Vec<f64> {
-    let mut out = vec![0.0; n];
+    let mut out = vec![FILL; n];
     for s in samples {
         if let Some(v) = out.get_mut(s.row) {
             *v = match sample_mode(s, p, ratios, tyre_share) {

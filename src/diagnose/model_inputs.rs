@@ -52,9 +52,26 @@ pub const INPUT_EFFECTS: [Effect; 4] = [
 /// model, fed every input at its truth, 2.4 kPa above the rear bellow's true pressure for as
 /// long as the truck stands.
 ///
+/// `only` names the columns the caller reads (`None`: every column); the others are left out
+/// of the copy, which on a long drive is most of its size.
+///
 /// [`SlopeGrid::cured`]: super::slope_grid::SlopeGrid::cured
-pub fn corrected_log(log: &DriveLog, theta: &Theta, cured_slope: Option<&[f64]>) -> DriveLog {
-    let mut out = log.clone();
+pub fn corrected_log(
+    log: &DriveLog,
+    theta: &Theta,
+    cured_slope: Option<&[f64]>,
+    only: Option<&[&str]>,
+) -> DriveLog {
+    let mut out = DriveLog {
+        meta: log.meta.clone(),
+        timestamp_ns: log.timestamp_ns.clone(),
+        signals: log
+            .signals
+            .iter()
+            .filter(|s| only.is_none_or(|o| o.contains(&s.name.as_str())))
+            .cloned()
+            .collect(),
+    };
     let t: Vec<f64> = log.seconds_from_start();
     let delta = theta.get(Effect::GradeOffset);
     let offset = theta.get(Effect::EngineTorqueOffset);
@@ -203,7 +220,7 @@ mod tests {
             ],
         };
         // no sensor effect: grade offset, torque offset and delay 0
-        let out = corrected_log(&log, &Theta([0.0; 16]), None);
+        let out = corrected_log(&log, &Theta([0.0; 16]), None, None);
         let b = out.signal("brake_force").unwrap();
         assert!(b[..500].iter().all(|&x| x == 800.0), "{:?}", &b[..5]);
         assert!(b[500..].iter().all(|&x| x == 0.0), "{:?}", &b[500..505]);
@@ -232,7 +249,7 @@ mod tests {
                 values: held.clone(),
             }],
         };
-        let out = corrected_log(&log, &Theta([0.0; 16]), None);
+        let out = corrected_log(&log, &Theta([0.0; 16]), None, None);
         let read = out.signal("road_slope").unwrap();
         let mean_err = |v: &[f64]| {
             let r = 10..n - 10;

@@ -30,11 +30,13 @@ use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, Longitudinal
 use super::modal::ModalConfig;
 use super::modal_channel::{self, ModeSample};
 use super::reversal_channel::{self, ReversalSample};
+use super::row_column::RowColumn;
 use crate::model::catalogue::Domain;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::quantization::estimate_quantization;
 use crate::table::DriveLog;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use thiserror::Error;
 
 pub use super::channel::{metrics, weighted_ms, Channel, EventWeights, Metrics};
@@ -104,12 +106,25 @@ pub struct Problem<'a> {
     t_s: Vec<f64>,
     slope_step: Option<f64>,
     left_out: Vec<String>,
-    nominal_outputs: Vec<Vec<Vec<f64>>>,
+    nominal_outputs: Vec<Vec<RowColumn>>,
     modes: Vec<ModeSample>,
+    /// The rows of the shuffle modes' samples (sorted, unique): their view's stored rows.
+    mode_rows: Arc<[usize]>,
     tyre_share: f64,
     reversals: Vec<ReversalSample>,
+    /// The rows of the torque reversals' samples (sorted, unique).
+    reversal_rows: Arc<[usize]>,
     views: Vec<View>,
     train_windows: std::sync::OnceLock<Vec<bool>>,
+}
+
+/// The rows of a view's samples below `n`, sorted and unique: where its simulation writes
+/// ([`RowColumn::sparse`]).
+fn sample_rows(rows: impl Iterator<Item = usize>, n: usize) -> Arc<[usize]> {
+    let mut r: Vec<usize> = rows.filter(|&i| i < n).collect();
+    r.sort_unstable();
+    r.dedup();
+    Arc::from(r)
 }
 
 fn long_channel_names() -> [(&'static str, &'static str); 2] {
@@ -162,18 +177,25 @@ impl<'a> Problem<'a> {
             || {
                 LongitudinalModel::new(log, nominal_truth, ratios, nominal, long_cfg).and_then(
                     |m| {
-                        m.simulate(&nominal)
-                            .map(|o| (m, vec![o.vehicle_speed, o.engine_speed]))
+                        m.simulate(&nominal).map(|o| {
+                            let y = vec![
+                                RowColumn::dense(o.vehicle_speed),
+                                RowColumn::dense(o.engine_speed),
+                            ];
+                            (m, y)
+                        })
                     },
                 )
             },
             || {
-                AxleModel::new(log, nominal_truth, ratios, nominal)
-                    .and_then(|m| m.simulate(&nominal).map(|p| (m, Vec::from(p))))
+                AxleModel::new(log, nominal_truth, ratios, nominal).and_then(|m| {
+                    m.simulate(&nominal)
+                        .map(|p| (m, Vec::from(p).into_iter().map(RowColumn::dense).collect()))
+                })
             },
         );
         // (view, its nominal outputs) in view order
-        let mut views: Vec<(View, Vec<Vec<f64>>)> = Vec::new();
+        let mut views: Vec<(View, Vec<RowColumn>)> = Vec::new();
         let mut long_nominal = Vec::new();
         let mut axle_nominal = Vec::new();
         let long = match long {
@@ -255,8 +277,10 @@ impl<'a> Problem<'a> {
             Some(ch)
         };
         let mut modes = Vec::new();
+        let mut mode_rows: Arc<[usize]> = Arc::from(Vec::new());
         let mut tyre_share = 0.0;
         let mut reversals = Vec::new();
+        let mut reversal_rows: Arc<[usize]> = Arc::from(Vec::new());
         if let Some(m) = &long {
             let steady = super::rows::longitudinal_rows(log);
             let moving: Vec<bool> = m
@@ -304,18 +328,24 @@ impl<'a> Problem<'a> {
             if let Some(ch) = events_channel(modal_channel::NAME, modal_channel::UNIT, min, &events)
             {
                 let n = log.len();
+                mode_rows = sample_rows(samples.iter().map(|s| s.row), n);
+                let y = modal_channel::simulate(
+                    &samples,
+                    &nominal_truth.driveline,
+                    ratios,
+                    tyre_share,
+                    n,
+                );
                 views.push((
                     View {
                         domain: Domain::Longitudinal,
                         kind: ViewKind::ShuffleModes,
                         chans: vec![channels.len()],
                     },
-                    vec![modal_channel::simulate(
-                        &samples,
-                        &nominal_truth.driveline,
-                        ratios,
-                        tyre_share,
-                        n,
+                    vec![RowColumn::sparse(
+                        &y,
+                        mode_rows.clone(),
+                        modal_channel::FILL,
                     )],
                 ));
                 channels.push(ch);
@@ -340,16 +370,21 @@ impl<'a> Problem<'a> {
                 let y = reversal_channel::simulate(
                     &samples,
                     &t_s,
-                    &speeds_nominal[1],
-                    &speeds_nominal[0],
+                    &speeds_nominal[1].values(),
+                    &speeds_nominal[0].values(),
                 );
+                reversal_rows = sample_rows(samples.iter().map(|s| s.row), log.len());
                 views.push((
                     View {
                         domain: Domain::Longitudinal,
                         kind: ViewKind::Reversals,
                         chans: vec![channels.len()],
                     },
-                    vec![y],
+                    vec![RowColumn::sparse(
+                        &y,
+                        reversal_rows.clone(),
+                        reversal_channel::FILL,
+                    )],
                 ));
                 channels.push(ch);
                 reversals = samples;
@@ -392,7 +427,7 @@ impl<'a> Problem<'a> {
                 });
             }
         }
-        let (views, nominal_outputs): (Vec<View>, Vec<Vec<Vec<f64>>>) = views.into_iter().unzip();
+        let (views, nominal_outputs): (Vec<View>, Vec<Vec<RowColumn>>) = views.into_iter().unzip();
         let slope_step = log
             .signal("road_slope")
             .and_then(estimate_quantization)
@@ -408,6 +443,8 @@ impl<'a> Problem<'a> {
             slope_step,
             left_out,
             nominal_outputs,
+            mode_rows,
+            reversal_rows,
             modes,
             tyre_share,
             reversals,
@@ -508,7 +545,7 @@ impl<'a> Problem<'a> {
 
     /// Outputs of every view at the nominal parameters ([`Problem::views`] order; per view its
     /// channels' simulations).
-    pub fn nominal_outputs(&self) -> &[Vec<Vec<f64>>] {
+    pub fn nominal_outputs(&self) -> &[Vec<RowColumn>] {
         &self.nominal_outputs
     }
 
@@ -598,7 +635,7 @@ impl<'a> Problem<'a> {
     ///
     /// # Errors
     /// [`ExtendedError`] from the model.
-    pub fn simulate(&self, domain: Domain, theta: &Theta) -> Result<Vec<Vec<f64>>, ExtendedError> {
+    pub fn simulate(&self, domain: Domain, theta: &Theta) -> Result<Vec<RowColumn>, ExtendedError> {
         let which: Vec<bool> = self.views.iter().map(|v| v.domain == domain).collect();
         Ok(self
             .simulate_views(&which, theta)?
@@ -618,7 +655,7 @@ impl<'a> Problem<'a> {
         &self,
         which: &[bool],
         theta: &Theta,
-    ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
+    ) -> Result<Vec<Option<Vec<RowColumn>>>, ExtendedError> {
         self.simulate_views_on(which, theta, false)
     }
 
@@ -670,7 +707,7 @@ impl<'a> Problem<'a> {
         which: &[bool],
         theta: &Theta,
         train_only: bool,
-    ) -> Result<Vec<Option<Vec<Vec<f64>>>>, ExtendedError> {
+    ) -> Result<Vec<Option<Vec<RowColumn>>>, ExtendedError> {
         let wants = |k: ViewKind| self.views.iter().zip(which).any(|(v, w)| *w && v.kind == k);
         let long = match &self.long {
             Some(m)
@@ -684,18 +721,52 @@ impl<'a> Problem<'a> {
             _ => None,
         };
         let axle = match &self.axle {
-            Some(m) if wants(ViewKind::Pressures) => Some(Vec::from(m.simulate(theta)?)),
+            Some(m) if wants(ViewKind::Pressures) => Some(
+                Vec::from(m.simulate(theta)?)
+                    .into_iter()
+                    .map(RowColumn::dense)
+                    .collect::<Vec<_>>(),
+            ),
             _ => None,
         };
+        // the reversals' feature reads the simulated speeds, which the speeds view and the
+        // clutch-actuation view then share
+        let reversal = match &long {
+            Some(o) if wants(ViewKind::Reversals) => {
+                let y = reversal_channel::simulate(
+                    &self.reversals,
+                    &self.t_s,
+                    &o.engine_speed,
+                    &o.vehicle_speed,
+                );
+                Some(RowColumn::sparse(
+                    &y,
+                    self.reversal_rows.clone(),
+                    reversal_channel::FILL,
+                ))
+            }
+            _ => None,
+        };
+        let long = long.map(|o| {
+            (
+                RowColumn::dense(o.vehicle_speed),
+                RowColumn::dense(o.engine_speed),
+            )
+        });
         let modes = match &self.long {
             Some(m) if wants(ViewKind::ShuffleModes) => {
                 let p = m.plant(theta)?.driveline;
-                Some(modal_channel::simulate(
+                let y = modal_channel::simulate(
                     &self.modes,
                     &p,
                     m.ratios(),
                     self.tyre_share,
                     self.log.len(),
+                );
+                Some(RowColumn::sparse(
+                    &y,
+                    self.mode_rows.clone(),
+                    modal_channel::FILL,
                 ))
             }
             _ => None,
@@ -704,22 +775,11 @@ impl<'a> Problem<'a> {
         for (v, w) in self.views.iter().zip(which) {
             out.push(match (w, v.kind) {
                 (false, _) => None,
-                (true, ViewKind::Speeds) => long
-                    .as_ref()
-                    .map(|o| vec![o.vehicle_speed.clone(), o.engine_speed.clone()]),
+                (true, ViewKind::Speeds) => long.as_ref().map(|(v, w)| vec![v.clone(), w.clone()]),
                 (true, ViewKind::ShuffleModes) => modes.clone().map(|y| vec![y]),
-                (true, ViewKind::Reversals) => long.as_ref().map(|o| {
-                    vec![reversal_channel::simulate(
-                        &self.reversals,
-                        &self.t_s,
-                        &o.engine_speed,
-                        &o.vehicle_speed,
-                    )]
-                }),
+                (true, ViewKind::Reversals) => reversal.clone().map(|y| vec![y]),
                 (true, ViewKind::Pressures) => axle.clone(),
-                (true, ViewKind::ClutchActuation) => {
-                    long.as_ref().map(|o| vec![o.engine_speed.clone()])
-                }
+                (true, ViewKind::ClutchActuation) => long.as_ref().map(|(_, w)| vec![w.clone()]),
             });
         }
         Ok(out)
@@ -729,10 +789,10 @@ impl<'a> Problem<'a> {
     /// per channel): 1 for an events channel; the noise floor where `noise_floor` has a finite
     /// positive value for the channel; else its train RMS residual against `outputs` (1 when
     /// that is 0).
-    pub fn sigmas(
+    pub fn sigmas<Y: std::ops::Index<usize, Output = f64>>(
         &self,
         chans: &[usize],
-        outputs: &[Vec<f64>],
+        outputs: &[Y],
         noise_floor: Option<&BTreeMap<String, f64>>,
     ) -> Vec<f64> {
         chans

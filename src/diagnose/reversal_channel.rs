@@ -274,10 +274,13 @@ pub fn measure(
         .collect()
 }
 
+/// The simulated channel's value on every row without a sample ([`simulate`]).
+pub const FILL: f64 = 0.0;
+
 /// The simulated channel on the log's rows `t` for the simulated engine and vehicle speeds
-/// `w`, `v`: the feature on each sample's row, 0 on every other row (not valid there).
+/// `w`, `v`: the feature on each sample's row, 0 on every other row ([`FILL`]; not valid there).
 pub fn simulate(samples: &[ReversalSample], t: &[f64], w: &[f64], v: &[f64]) -> Vec<f64> {
-    let mut out = vec![0.0; t.len()];
+    let mut out = vec![FILL; t.len()];
     for s in samples {
         if let Some(o) = out.get_mut(s.row) {
             let f = feature(t, w, v, t[s.row], s.direction, s.ratio_rad_per_m);

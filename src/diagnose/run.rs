@@ -37,6 +37,7 @@ use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors}
 use super::parameter_table::{EstimateMethod, ParameterRow};
 use super::problem::{ExplainError, Problem};
 use super::resistance_stretch::{resistance_stretch, ResistanceStretch, StretchConfig};
+use super::row_column::RowColumn;
 use super::setup::Setup;
 use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsistency};
 use super::tyre_slip::{self, tyre_slip_variance};
@@ -113,7 +114,7 @@ pub fn tolerance_variance(
         // (the same sums whatever the thread count; a long drive never holds them all)
         let mut vars: Vec<Vec<f64>> = base.iter().map(|b| vec![0.0; b.len()]).collect();
         for chunk in edges.chunks(rayon::current_num_threads().max(1)) {
-            let moved: Vec<Vec<Vec<f64>>> = chunk
+            let moved: Vec<Vec<RowColumn>> = chunk
                 .par_iter()
                 .map(|&(e, v)| {
                     let mut theta = nominal;
@@ -123,9 +124,20 @@ pub fn tolerance_variance(
                 .collect::<Result<_, _>>()?;
             for m in &moved {
                 for (k, var) in vars.iter_mut().enumerate() {
-                    for (i, v) in var.iter_mut().enumerate() {
-                        let d = m[k][i] - base[k][i];
-                        *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                    let add =
+                        |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                    match (m[k].sparse_parts(), base[k].sparse_parts()) {
+                        // an events view: no change off its rows (equal fills) adds nothing
+                        (Some((ra, va, fa)), Some((rb, vb, fb))) if ra == rb && fa == fb => {
+                            for ((&i, a), b) in ra.iter().zip(va).zip(vb) {
+                                add(&mut var[i], a - b);
+                            }
+                        }
+                        _ => {
+                            for (i, v) in var.iter_mut().enumerate() {
+                                add(v, m[k][i] - base[k][i]);
+                            }
+                        }
                     }
                 }
             }
@@ -402,7 +414,7 @@ pub fn diagnose(
             let r = ch
                 .measured
                 .iter()
-                .zip(&sim)
+                .zip(sim.values().iter())
                 .zip(&ch.valid)
                 .map(|((m, s), ok)| if *ok { m - s } else { f64::NAN })
                 .collect();

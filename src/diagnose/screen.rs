@@ -40,6 +40,7 @@
 use super::evaluator::{Active, Eval, Evaluator};
 use super::fit_spec::fit_spec;
 use super::problem::Part;
+use super::row_column::RowColumn;
 use crate::model::catalogue::{Domain, Effect};
 use serde::Serialize;
 use std::sync::Arc;
@@ -65,9 +66,9 @@ pub struct Probe {
     /// Models whose outputs the effect changes.
     pub active: Active,
     /// Outputs at the base.
-    pub base: Vec<Arc<Vec<Vec<f64>>>>,
+    pub base: Vec<Arc<Vec<RowColumn>>>,
     /// Outputs at the base plus `h`.
-    pub outputs: Vec<Arc<Vec<Vec<f64>>>>,
+    pub outputs: Vec<Arc<Vec<RowColumn>>>,
     /// Taken in the current round (then `outputs` is a simulation of the current round's
     /// parameters and starts the full fit).
     pub fresh: bool,

@@ -9,6 +9,7 @@
 
 use super::acceptance::own_model_at;
 use super::problem::{metrics, ExplainError, Part, Problem};
+use super::row_column::RowColumn;
 use crate::model::catalogue::Effect;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -88,8 +89,8 @@ pub fn fits_against(
 /// row, on the channel's own rows and parts) for the signals it names, the others left out.
 pub(super) fn signal_fits(
     problem: &Problem<'_>,
-    before: &[Arc<Vec<Vec<f64>>>],
-    after: &[Arc<Vec<Vec<f64>>>],
+    before: &[Arc<Vec<RowColumn>>],
+    after: &[Arc<Vec<RowColumn>>],
     reference: Option<&BTreeMap<String, Vec<f64>>>,
 ) -> (BTreeMap<String, SignalFit>, BTreeMap<String, SignalMetrics>) {
     let mut fit = BTreeMap::new();

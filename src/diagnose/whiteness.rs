@@ -17,6 +17,7 @@ use crate::signal::whiteness::{
     effective_samples as signal_effective_samples, mean_squared_autocorrelation,
 };
 use serde::Serialize;
+use std::ops::Index;
 
 /// Lags (s) of the whiteness statistic: 0.1 s to 2 s in 0.1 s steps — from the driveline's
 /// shuffle band (a few Hz) to the seconds over which a missing force drifts the speed.
@@ -53,11 +54,11 @@ pub struct Whiteness {
 /// between them) is scored on its standardised residuals `z_i = r_i √w_i` in event order, at
 /// the lags of 1 … min(20, n − 1) events ([`event_whiteness`]): a shift common to the events
 /// (a wrong shaft stiffness moves every engagement's frequency) is non-white as a bias is.
-pub fn whiteness(
+pub fn whiteness<Y: Index<usize, Output = f64>>(
     channels: &[Channel],
     chans: &[usize],
     sigmas: &[f64],
-    outputs: &[Vec<f64>],
+    outputs: &[Y],
     part: Part,
     dt_s: f64,
 ) -> Whiteness {
@@ -111,7 +112,11 @@ pub fn event_whiteness(z: &[f64]) -> f64 {
 /// Sokal's automatic window (the smallest `M ≥ 5 τ(M)`), `τ ≥ 1`. The samples of an events
 /// channel ([`Channel::events`]: engagements tens of seconds apart, each from its own fit)
 /// count as independent: `N`.
-pub fn effective_samples(ch: &Channel, sim: &[f64], part: Part) -> f64 {
+pub fn effective_samples<Y: Index<usize, Output = f64> + ?Sized>(
+    ch: &Channel,
+    sim: &Y,
+    part: Part,
+) -> f64 {
     let rows = ch.rows(part);
     if ch.events.is_some() {
         return rows.len() as f64;

@@ -614,7 +614,7 @@ fn the_clutch_actuation_view_is_weighted_per_row_and_serves_its_own_effects() {
         .position(|v| v.kind == ViewKind::ClutchActuation)
         .unwrap();
     // the evaluator fits and scores the view for its own effects only
-    let bases: Vec<std::sync::Arc<Vec<Vec<f64>>>> = p
+    let bases: Vec<std::sync::Arc<Vec<fleetdyn::diagnose::row_column::RowColumn>>> = p
         .nominal_outputs()
         .iter()
         .map(|y| std::sync::Arc::new(y.clone()))
@@ -722,7 +722,7 @@ fn a_train_only_evaluation_is_the_whole_one_on_the_train_rows() {
             .position(|v| v.kind == fleetdyn::diagnose::problem::ViewKind::Speeds)
             .unwrap();
         let y = &train.outputs[speeds][0];
-        let nan_rows = y.iter().filter(|x| x.is_nan()).count();
+        let nan_rows = y.values().iter().filter(|x| x.is_nan()).count();
         assert!(nan_rows > 0, "{e:?}");
     }
 }
