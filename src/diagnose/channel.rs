@@ -15,6 +15,7 @@
 //! standardised residual series. RMSE, MAE and fit % per signal are unweighted, in the
 //! signal's SI unit ([`metrics`]).
 
+use super::row_column::RowColumn;
 use super::split::Part;
 use crate::model::catalogue::Domain;
 use std::ops::Index;
@@ -31,8 +32,9 @@ pub struct Channel {
     pub unit: &'static str,
     /// Model whose output it is.
     pub domain: Domain,
-    /// Measured values (gaps filled; see `valid`).
-    pub measured: Vec<f64>,
+    /// Measured values (gaps filled; see `valid`): sparse on its samples for an events channel,
+    /// shared with the engine speed's channel for the clutch-actuation one.
+    pub measured: RowColumn,
     /// Rows that count.
     pub valid: Vec<bool>,
     /// Valid train rows.
@@ -43,14 +45,14 @@ pub struct Channel {
     /// variance (the clutch-actuation view,
     /// [`Problem::with_actuation`](super::problem::Problem::with_actuation); the channel's
     /// `σ_c` is 1); `None`: every row weighs 1.
-    pub row_weights: Option<Vec<f64>>,
+    pub row_weights: Option<RowColumn>,
 }
 
 /// The per-sample weights of an events channel ([`Channel::events`]): `w_i = 1/s_i²` for a
 /// sample with standard deviation `s_i` (0 on rows without a sample). The channel's own weight
 /// `σ_c` is 1, so `w_i r_i²` is the squared standardised residual.
 #[derive(Debug, Clone, PartialEq)]
-pub struct EventWeights(pub Vec<f64>);
+pub struct EventWeights(pub RowColumn);
 
 impl Channel {
     /// Weight of row `i` within the channel: 1 for a time series, the sample's `1/s_i²` for
@@ -146,7 +148,7 @@ pub(super) mod tests {
             name: "x".into(),
             unit: "1",
             domain: Domain::Longitudinal,
-            measured,
+            measured: RowColumn::dense(measured),
             valid: vec![true; n],
             train_idx: (0..n).collect(),
             held_idx: Vec::new(),

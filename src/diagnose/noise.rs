@@ -183,10 +183,11 @@ where
     let sensors = sensor_estimates(log, cfg)?;
     let base = residuals(log)?;
     let r0s: Vec<Vec<f64>> = base.iter().map(Compared::residual).collect();
-    // per copy and compared signal: the residual's change alone (a copy's log and its full
-    // comparison are dropped as soon as it is read, and the measurement's own change is drawn
-    // again for the split below, so a long drive holds one column per signal and copy)
-    type Run = Vec<Option<Vec<f64>>>;
+    // per copy and compared signal: the residual's change alone, in single precision as the
+    // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
+    // are dropped as soon as it is read, and the measurement's own change is drawn again for
+    // the split below, so a long drive holds one column per signal and copy)
+    type Run = Vec<Option<Vec<f32>>>;
     let mut runs: Vec<Run> = (0..cfg.copies as u64)
         .into_par_iter()
         .map(|c| {
@@ -208,7 +209,7 @@ where
                             got: rc.len(),
                         });
                     }
-                    Ok(Some((0..n).map(|i| rc[i] - r0[i]).collect()))
+                    Ok(Some((0..n).map(|i| (rc[i] - r0[i]) as f32).collect()))
                 })
                 .collect()
         })
@@ -216,23 +217,24 @@ where
     let mut floors = Vec::new();
     for (k, b) in base.iter().enumerate() {
         let n = r0s[k].len();
-        let (index, copies): (Vec<u64>, Vec<Vec<f64>>) = runs
+        let (index, copies): (Vec<u64>, Vec<Vec<f32>>) = runs
             .iter_mut()
             .enumerate()
             .filter_map(|(c, r)| r[k].take().map(|e| (c as u64, e)))
             .unzip();
-        let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, &copies, &b.valid, cfg)?;
-        // measurement / input split (RMS over the rows that count)
+        let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, copies, &b.valid, cfg)?;
+        // measurement / input split (RMS over the rows that count, where the floor keeps the
+        // copies)
         let sensor = sensors.iter().find(|s| s.column == b.name);
         let (mut sm, mut si, mut cnt) = (0.0, 0.0, 0usize);
-        for (c, e) in index.iter().zip(&copies) {
+        for (c, e) in index.iter().zip(&f.null_copies) {
             let meas = sensor
                 .and_then(|s| column_perturbation(log, s, cfg, *c))
                 .unwrap_or_else(|| vec![0.0; n]);
             for i in 0..n {
                 if f.null_variance[i].is_finite() {
                     sm += meas[i] * meas[i];
-                    si += (e[i] - meas[i]).powi(2);
+                    si += (f64::from(e[i]) - meas[i]).powi(2);
                     cnt += 1;
                 }
             }

@@ -230,7 +230,7 @@ impl<'a> Problem<'a> {
         let mk = |name: &str,
                   unit: &'static str,
                   domain: Domain,
-                  measured: Vec<f64>,
+                  measured: RowColumn,
                   valid: Vec<bool>| {
             let (mut train_idx, mut held_idx) = (Vec::new(), Vec::new());
             for (i, v) in valid.iter().enumerate() {
@@ -272,8 +272,11 @@ impl<'a> Problem<'a> {
                 valid[row] = true;
                 w[row] = weight;
             }
+            // stored on the samples' rows alone (0 on every other)
+            let rows = sample_rows(samples.iter().map(|s| s.0), n);
+            let meas = RowColumn::sparse(&meas, rows.clone(), 0.0);
             let mut ch = mk(name, unit, Domain::Longitudinal, meas, valid);
-            ch.events = Some(EventWeights(w));
+            ch.events = Some(EventWeights(RowColumn::sparse(&w, rows, 0.0)));
             Some(ch)
         };
         let mut modes = Vec::new();
@@ -299,7 +302,8 @@ impl<'a> Problem<'a> {
                 let valid: Vec<bool> = (0..log.len())
                     .map(|i| moving[i] && coupled(i) && raw.get(i).is_some_and(|x| x.is_finite()))
                     .collect();
-                channels.push(mk(name, unit, Domain::Longitudinal, meas.to_vec(), valid));
+                let meas = RowColumn::dense(meas.to_vec());
+                channels.push(mk(name, unit, Domain::Longitudinal, meas, valid));
             }
             views.push((
                 View {
@@ -408,7 +412,7 @@ impl<'a> Problem<'a> {
                 let valid: Vec<bool> = (0..log.len())
                     .map(|i| steady[i] && raw.get(i).is_some_and(|x| x.is_finite()))
                     .collect();
-                channels.push(mk(name, "Pa", Domain::Axle, meas, valid));
+                channels.push(mk(name, "Pa", Domain::Axle, RowColumn::dense(meas), valid));
             }
         }
         // the speeds and pressures must have data; an own-term view is used only when it has
@@ -465,9 +469,9 @@ impl<'a> Problem<'a> {
     /// `signal_delay` alone ([`ViewKind::only_for`]), and used when each part has at least
     /// [`MIN_SAMPLES_PER_PART`] such rows; otherwise the problem is returned unchanged.
     pub fn with_actuation(mut self, variance: &[f64]) -> Self {
-        let Some(m) = &self.long else {
+        if self.long.is_none() {
             return self;
-        };
+        }
         let n = self.log.len();
         if variance.len() != n {
             return self;
@@ -479,15 +483,16 @@ impl<'a> Problem<'a> {
             self.log,
             LongitudinalConfig::default().min_speed_mps,
         );
-        let w = m.measured_engine_speed();
         let mut weights = vec![0.0; n];
         let mut valid = vec![false; n];
+        let mut rows = Vec::new();
         let (mut train_idx, mut held_idx) = (Vec::new(), Vec::new());
         for i in 0..n {
             let var = variance[i];
             if act[i] && var.is_finite() && var > 0.0 {
                 weights[i] = 1.0 / var;
                 valid[i] = true;
+                rows.push(i);
                 if self.split.heldout[i] {
                     held_idx.push(i);
                 } else {
@@ -499,13 +504,16 @@ impl<'a> Problem<'a> {
             return self;
         }
         let engine = self.nominal_outputs[speeds][1].clone();
+        // the measured engine speed is the speeds view's (shared); the weights are stored on
+        // the actuated rows alone (0 on every other)
+        let measured = self.channels[self.views[speeds].chans[1]].measured.clone();
         let ch = Channel {
             events: None,
-            row_weights: Some(weights),
+            row_weights: Some(RowColumn::sparse(&weights, Arc::from(rows), 0.0)),
             name: super::rows::ACTUATION_CHANNEL.into(),
             unit: "rad/s",
             domain: Domain::Longitudinal,
-            measured: w.to_vec(),
+            measured,
             valid,
             train_idx,
             held_idx,

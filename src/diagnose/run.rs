@@ -257,6 +257,8 @@ pub fn diagnose(
         ..ModelSet::for_log(log, &setup.nominal_truth, &setup.ratios, setup.nominal)
     };
     let mut floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
+    // the sensors' sample records serve the noise floor's draws alone
+    floors.release_sensor_samples();
     // the clutch-actuated engine speed is not located: its floor only weights the explain
     // step's clutch-actuation view
     let actuation_variance = floors
@@ -297,9 +299,9 @@ pub fn diagnose(
             }
         }
     }
+    drop(allowed);
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
-    // the null copies serve the location's window test alone, the sensors' sample records the
-    // noise floor's draws
+    // the null copies serve the location's window test alone
     floors.release_samples();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
@@ -413,6 +415,7 @@ pub fn diagnose(
             let ch = &problem.channels()[*k];
             let r = ch
                 .measured
+                .values()
                 .iter()
                 .zip(sim.values().iter())
                 .zip(&ch.valid)

@@ -108,7 +108,7 @@ pub(super) fn signal_fits(
                 Some(r) => match r.get(&recorded.name) {
                     Some(values) if values.len() == recorded.measured.len() => {
                         swapped = super::problem::Channel {
-                            measured: values.clone(),
+                            measured: RowColumn::dense(values.clone()),
                             ..recorded.clone()
                         };
                         &swapped

@@ -199,7 +199,9 @@ mod tests {
         let mut ch = channel(measured);
         ch.valid = valid;
         ch.train_idx = (0..6).map(|k| 10 * k).collect();
-        ch.events = Some(EventWeights(w));
+        ch.events = Some(EventWeights(crate::diagnose::row_column::RowColumn::dense(
+            w,
+        )));
         let zero = vec![vec![0.0; n]];
         // mean of w r²: (3·1e4 + 3·2.5e3)·0.0025 / 6 = 15.625
         let ms = weighted_ms(std::slice::from_ref(&ch), &[0], &[1.0], &zero, Part::Train);

@@ -127,7 +127,7 @@ fn run(dir: &Path, road: Road, hidden: Option<(Effect, f64)>) -> Run {
         let recorded: BTreeMap<String, Vec<f64>> = p
             .channels()
             .iter()
-            .map(|c| (c.name.clone(), c.measured.clone()))
+            .map(|c| (c.name.clone(), c.measured.to_vec()))
             .collect();
         fits_against(&p, e, f.parameters[e.parameter()].value, &recorded).unwrap()
     });
