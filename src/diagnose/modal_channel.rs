@@ -138,10 +138,11 @@ pub const FILL: f64 = 0.0;
 
 /// The simulated channel on `n` rows for the driveline `p` whose driven tyres take the share
 /// `tyre_share` of the main flexibility ([`fit_tyre_share`]): `ln f` of the linearised mode
-/// ([`tyre_mode`], at the sample's speed and engine torque) on each sample's row, 0 on every
-/// other row ([`FILL`]; not valid there). Where the linearised driveline of `p` has no oscillating mode
-/// (parameters far outside any truck's), the sample's measured value minus 10 stands in: a
-/// residual far outside any floor, rather than a NaN or −∞ that would poison the sums.
+/// ([`tyre_mode`], at the sample's speed and engine torque) on each sample's row, [`FILL`] (0)
+/// on every other row (not valid there). Where the linearised driveline of `p` has no
+/// oscillating mode (parameters far outside any truck's), the sample's measured value minus 10
+/// stands in: a residual far outside any floor, rather than a NaN or −∞ that would poison the
+/// sums.
 pub fn simulate(
     samples: &[ModeSample],
     p: &DrivelineParams,

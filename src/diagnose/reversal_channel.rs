@@ -278,7 +278,8 @@ pub fn measure(
 pub const FILL: f64 = 0.0;
 
 /// The simulated channel on the log's rows `t` for the simulated engine and vehicle speeds
-/// `w`, `v`: the feature on each sample's row, 0 on every other row ([`FILL`]; not valid there).
+/// `w`, `v`: the feature on each sample's row, [`FILL`] (0) on every other row (not valid
+/// there).
 pub fn simulate(samples: &[ReversalSample], t: &[f64], w: &[f64], v: &[f64]) -> Vec<f64> {
     let mut out = vec![FILL; t.len()];
     for s in samples {

@@ -45,7 +45,7 @@ impl RowColumn {
     /// on every row outside `rows`: reading any row then gives `dense`'s value.
     ///
     /// # Panics
-    /// In debug builds, when a row is out of range or `rows` is not strictly increasing.
+    /// When a row is out of range; in debug builds also when `rows` is not strictly increasing.
     pub fn sparse(dense: &[f64], rows: Arc<[usize]>, fill: f64) -> Self {
         debug_assert!(rows.windows(2).all(|w| w[0] < w[1]));
         debug_assert!(rows.last().is_none_or(|&r| r < dense.len()));
@@ -71,14 +71,6 @@ impl RowColumn {
     /// The stored rows of a sparse column (`None` for a dense one).
     pub fn stored_rows(&self) -> Option<&Arc<[usize]>> {
         self.rows.as_ref()
-    }
-
-    /// Value on row `i`.
-    ///
-    /// # Panics
-    /// When `i >= len`.
-    pub fn get(&self, i: usize) -> f64 {
-        self[i]
     }
 
     /// Every row's value: borrowed from a dense column, built for a sparse one.

@@ -133,6 +133,7 @@ mod tests {
     use super::*;
     use crate::diagnose::channel::tests::channel;
     use crate::diagnose::channel::{weighted_ms, EventWeights};
+    use crate::diagnose::row_column::RowColumn;
     use crate::rng::Xoshiro256StarStar;
 
     fn gauss(rng: &mut Xoshiro256StarStar) -> f64 {
@@ -199,9 +200,7 @@ mod tests {
         let mut ch = channel(measured);
         ch.valid = valid;
         ch.train_idx = (0..6).map(|k| 10 * k).collect();
-        ch.events = Some(EventWeights(crate::diagnose::row_column::RowColumn::dense(
-            w,
-        )));
+        ch.events = Some(EventWeights(RowColumn::dense(w)));
         let zero = vec![vec![0.0; n]];
         // mean of w r²: (3·1e4 + 3·2.5e3)·0.0025 / 6 = 15.625
         let ms = weighted_ms(std::slice::from_ref(&ch), &[0], &[1.0], &zero, Part::Train);
