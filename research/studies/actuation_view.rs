@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         };
         let act = rows::actuation_channel_rows(&log, min_speed);
-        let floors = noise_floors_with(&log, &NoiseConfig::default(), |l| {
+        let floors = noise_floors_with(&log, &NoiseConfig::default(), None, |l| {
             Ok(vec![Compared {
                 name: "engine_speed".into(),
                 unit: "rad/s".into(),

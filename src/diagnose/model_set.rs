@@ -43,6 +43,25 @@ fn has(log: &DriveLog, c: &str) -> bool {
 }
 
 impl<'a> ModelSet<'a> {
+    /// Every column [`ModelSet::compared`] reads off a recording, whichever models run: the
+    /// models' inputs ([`super::rows::MODEL_INPUTS`]), the compared outputs and the axle
+    /// model's acceleration and bellow pressures. A noise copy holds these alone
+    /// ([`super::noise::noise_floors`]).
+    pub const READ_COLUMNS: [&'static str; 12] = [
+        "engine_torque",
+        "gear",
+        "clutch_position",
+        "brake_force",
+        "retarder_torque",
+        "road_slope",
+        "vehicle_speed",
+        "engine_speed",
+        "longitudinal_acceleration",
+        "bellow_pressure_front",
+        "bellow_pressure_rear",
+        "bellow_pressure_tag",
+    ];
+
     /// The models `log` can drive: longitudinal with vehicle and engine speed, engine torque
     /// and gear; axle with the three bellow pressures and a vehicle with axles.
     pub fn for_log(

@@ -90,14 +90,26 @@ pub fn sensor_estimates(log: &DriveLog, cfg: &NoiseConfig) -> Result<Vec<SensorN
 /// Copy `copy` of `log` with every sensed column perturbed by a draw of its sensor error,
 /// clamped into its physical range, rows at rest set to the rest state
 /// ([`SensorNoise::draw_in`]; NaN stays NaN). The perturbation of a column:
-/// [`column_perturbation`].
+/// [`column_perturbation`]. With `keep`, the copy holds those columns alone (what the models
+/// read: a recording's other columns, GNSS or a bus's further signals, would be copied for
+/// nothing).
 pub fn perturbed_log(
     log: &DriveLog,
     sensors: &[SensorNoise],
     cfg: &NoiseConfig,
     copy: u64,
+    keep: Option<&[&str]>,
 ) -> DriveLog {
-    let mut out = log.clone();
+    let mut out = DriveLog {
+        meta: log.meta.clone(),
+        timestamp_ns: log.timestamp_ns.clone(),
+        signals: log
+            .signals
+            .iter()
+            .filter(|s| keep.is_none_or(|k| k.contains(&s.name.as_str())))
+            .cloned()
+            .collect(),
+    };
     for s in sensors {
         if let Some(col) = out.signals.iter_mut().find(|c| c.name == s.column) {
             perturb_column(&mut col.values, log, s, cfg, copy);
@@ -166,13 +178,15 @@ fn perturb_column(
 
 /// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
 /// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (in
-/// parallel, results in copy order, so the outcome does not depend on the thread count).
+/// parallel, results in copy order, so the outcome does not depend on the thread count), each
+/// copy holding the columns `keep` alone when given (those `residuals` reads).
 ///
 /// # Errors
 /// [`NoiseError`] from the settings, the sensor estimates or `residuals`.
 pub fn noise_floors_with<F>(
     log: &DriveLog,
     cfg: &NoiseConfig,
+    keep: Option<&[&str]>,
     residuals: F,
 ) -> Result<NoiseFloors, NoiseError>
 where
@@ -191,7 +205,7 @@ where
     let mut runs: Vec<Run> = (0..cfg.copies as u64)
         .into_par_iter()
         .map(|c| {
-            let plog = perturbed_log(log, &sensors, cfg, c);
+            let plog = perturbed_log(log, &sensors, cfg, c, keep);
             let rs = residuals(&plog)?;
             drop(plog);
             base.iter()
@@ -265,7 +279,9 @@ pub fn noise_floors(
     theta: &Theta,
     cfg: &NoiseConfig,
 ) -> Result<NoiseFloors, NoiseError> {
-    noise_floors_with(log, cfg, |l| models.compared(l, theta))
+    noise_floors_with(log, cfg, Some(&ModelSet::READ_COLUMNS), |l| {
+        models.compared(l, theta)
+    })
 }
 
 #[cfg(test)]
@@ -302,7 +318,7 @@ mod tests {
         let cfg = NoiseConfig::default();
         let mut moved = 0;
         for copy in 0..12 {
-            let plog = perturbed_log(&log, std::slice::from_ref(&s), &cfg, copy);
+            let plog = perturbed_log(&log, std::slice::from_ref(&s), &cfg, copy, None);
             let d = column_perturbation(&log, &s, &cfg, copy).expect("the column");
             for ((p, v), x) in plog.signals[0]
                 .values

@@ -11,8 +11,8 @@ use fleetdyn::diagnose::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location, NamedSeries,
 };
 use fleetdyn::diagnose::noise::{
-    estimate_sensor_noise, noise_floors, stream, ModelSet, NoiseConfig, NoiseFloor, NoiseFloors,
-    SampleKind, SensorNoise,
+    estimate_sensor_noise, noise_floors, perturbed_log, sensor_estimates, stream, ModelSet,
+    NoiseConfig, NoiseFloor, NoiseFloors, SampleKind, SensorNoise,
 };
 use fleetdyn::model::catalogue::Effect;
 use fleetdyn::model::extended_vehicle::ExtendedVehicle;
@@ -345,6 +345,64 @@ fn bad_and_empty_input_give_errors_or_empty_results() {
     let loc = locate(&cmp, &floors, &[], &LocateConfig::default()).unwrap();
     let back: Location = serde_json::from_str(&serde_json::to_string(&loc).unwrap()).unwrap();
     assert_eq!(back.signals[0].windows.len(), loc.signals[0].windows.len());
+}
+
+#[test]
+fn a_noise_copy_of_the_columns_the_models_read_compares_bit_for_bit_as_the_whole_copy() {
+    // a drive with both models (driveline and axle loads) and columns they do not read (GNSS):
+    // every compared signal of a copy restricted to ModelSet::READ_COLUMNS equals, bit for bit,
+    // that of the whole copy; so the noise floor does not depend on what else the log carries
+    let dir = tempfile::tempdir().unwrap();
+    let d = synth_drive(
+        &fixture(VEHICLE),
+        "city-se",
+        2.0,
+        5,
+        &dir.path().join("d"),
+        &DriveConfig::default(),
+        None,
+    )
+    .unwrap();
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.01);
+    let models = ModelSet {
+        actuation: true,
+        ..ModelSet::for_log(&d.log, &truth, &ratios, nominal)
+    };
+    assert!(models.longitudinal.is_some() && models.axle);
+    let cfg = NoiseConfig::default();
+    let sensors = sensor_estimates(&d.log, &cfg).unwrap();
+    let bits = |c: &[Compared]| -> Vec<(String, Vec<u64>, Vec<u64>, Vec<bool>)> {
+        c.iter()
+            .map(|x| {
+                (
+                    x.name.clone(),
+                    x.measured.iter().map(|v| v.to_bits()).collect(),
+                    x.simulated.iter().map(|v| v.to_bits()).collect(),
+                    x.valid.clone(),
+                )
+            })
+            .collect()
+    };
+    for copy in 0..2 {
+        let whole = perturbed_log(&d.log, &sensors, &cfg, copy, None);
+        let kept = perturbed_log(&d.log, &sensors, &cfg, copy, Some(&ModelSet::READ_COLUMNS));
+        assert!(
+            kept.signals.len() < whole.signals.len(),
+            "the drive has columns the models do not read: {:?}",
+            whole.signals.iter().map(|s| &s.name).collect::<Vec<_>>()
+        );
+        let a = models.compared(&whole, &nominal).unwrap();
+        let b = models.compared(&kept, &nominal).unwrap();
+        // the two speeds, the clutch-actuated engine speed and the three bellow pressures
+        assert_eq!(a.len(), 6);
+        assert!(
+            bits(&a) == bits(&b),
+            "copy {copy}: the restricted copy compares differently"
+        );
+    }
 }
 
 /// A 2 km city drive (seed 5) with `effect` hidden, its floors and location.
