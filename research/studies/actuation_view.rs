@@ -11,9 +11,9 @@
 //! cargo run --release --manifest-path research/Cargo.toml --bin actuation_view -- DIR case-0009 case-0016 …
 //! ```
 use fleetdyn::diagnose::compare::Compared;
-use fleetdyn::diagnose::rows;
 use fleetdyn::diagnose::extended::Theta;
 use fleetdyn::diagnose::noise::{noise_floors_with, NoiseConfig, NoiseError};
+use fleetdyn::diagnose::rows;
 use fleetdyn::diagnose::setup::Setup;
 use fleetdyn::table::DriveLog;
 use std::path::PathBuf;

@@ -374,17 +374,17 @@ fn a_noise_copy_of_the_columns_the_models_read_compares_bit_for_bit_as_the_whole
     assert!(models.longitudinal.is_some() && models.axle);
     let cfg = NoiseConfig::default();
     let sensors = sensor_estimates(&d.log, &cfg).unwrap();
-    let bits = |c: &[Compared]| -> Vec<(String, Vec<u64>, Vec<u64>, Vec<bool>)> {
-        c.iter()
-            .map(|x| {
-                (
-                    x.name.clone(),
-                    x.measured.iter().map(|v| v.to_bits()).collect(),
-                    x.simulated.iter().map(|v| v.to_bits()).collect(),
-                    x.valid.clone(),
-                )
+    // every signal's name, then its measured and simulated values' bits and its valid rows
+    let bits = |c: &[Compared]| -> (Vec<String>, Vec<u64>) {
+        let names = c.iter().map(|x| x.name.clone()).collect();
+        let values = c
+            .iter()
+            .flat_map(|x| {
+                let m = x.measured.iter().chain(&x.simulated).map(|v| v.to_bits());
+                m.chain(x.valid.iter().map(|&v| u64::from(v)))
             })
-            .collect()
+            .collect();
+        (names, values)
     };
     for copy in 0..2 {
         let whole = perturbed_log(&d.log, &sensors, &cfg, copy, None);
