@@ -120,6 +120,22 @@ impl DriveLog {
         self.timestamp_ns.is_empty()
     }
 
+    /// A copy with the columns `keep` alone (`None`: every column), in the log's order; the
+    /// time stamps and metadata copied whole. What a consumer that reads a few columns of a
+    /// long drive copies instead of the whole log.
+    pub fn with_columns(&self, keep: Option<&[&str]>) -> DriveLog {
+        DriveLog {
+            meta: self.meta.clone(),
+            timestamp_ns: self.timestamp_ns.clone(),
+            signals: self
+                .signals
+                .iter()
+                .filter(|s| keep.is_none_or(|k| k.contains(&s.name.as_str())))
+                .cloned()
+                .collect(),
+        }
+    }
+
     /// Values of a column by name.
     pub fn signal(&self, name: &str) -> Option<&[f64]> {
         self.signals

@@ -62,16 +62,7 @@ pub fn corrected_log(
     cured_slope: Option<&[f64]>,
     only: Option<&[&str]>,
 ) -> DriveLog {
-    let mut out = DriveLog {
-        meta: log.meta.clone(),
-        timestamp_ns: log.timestamp_ns.clone(),
-        signals: log
-            .signals
-            .iter()
-            .filter(|s| only.is_none_or(|o| o.contains(&s.name.as_str())))
-            .cloned()
-            .collect(),
-    };
+    let mut out = log.with_columns(only);
     let t: Vec<f64> = log.seconds_from_start();
     let delta = theta.get(Effect::GradeOffset);
     let offset = theta.get(Effect::EngineTorqueOffset);

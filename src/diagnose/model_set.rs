@@ -44,23 +44,16 @@ fn has(log: &DriveLog, c: &str) -> bool {
 
 impl<'a> ModelSet<'a> {
     /// Every column [`ModelSet::compared`] reads off a recording, whichever models run: the
-    /// models' inputs ([`super::rows::MODEL_INPUTS`]), the compared outputs and the axle
-    /// model's acceleration and bellow pressures. A noise copy holds these alone
+    /// models' inputs ([`super::rows::MODEL_INPUTS`]), the engine speed, the axle model's
+    /// acceleration and the bellow pressures. A noise copy holds these alone
     /// ([`super::noise::noise_floors`]).
-    pub const READ_COLUMNS: [&'static str; 12] = [
-        "engine_torque",
-        "gear",
-        "clutch_position",
-        "brake_force",
-        "retarder_torque",
-        "road_slope",
-        "vehicle_speed",
-        "engine_speed",
-        "longitudinal_acceleration",
-        "bellow_pressure_front",
-        "bellow_pressure_rear",
-        "bellow_pressure_tag",
-    ];
+    pub fn read_columns() -> Vec<&'static str> {
+        super::rows::MODEL_INPUTS
+            .into_iter()
+            .chain(["engine_speed", "longitudinal_acceleration"])
+            .chain(PRESSURES)
+            .collect()
+    }
 
     /// The models `log` can drive: longitudinal with vehicle and engine speed, engine torque
     /// and gear; axle with the three bellow pressures and a vehicle with axles.

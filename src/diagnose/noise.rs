@@ -100,16 +100,7 @@ pub fn perturbed_log(
     copy: u64,
     keep: Option<&[&str]>,
 ) -> DriveLog {
-    let mut out = DriveLog {
-        meta: log.meta.clone(),
-        timestamp_ns: log.timestamp_ns.clone(),
-        signals: log
-            .signals
-            .iter()
-            .filter(|s| keep.is_none_or(|k| k.contains(&s.name.as_str())))
-            .cloned()
-            .collect(),
-    };
+    let mut out = log.with_columns(keep);
     for s in sensors {
         if let Some(col) = out.signals.iter_mut().find(|c| c.name == s.column) {
             perturb_column(&mut col.values, log, s, cfg, copy);
@@ -279,9 +270,8 @@ pub fn noise_floors(
     theta: &Theta,
     cfg: &NoiseConfig,
 ) -> Result<NoiseFloors, NoiseError> {
-    noise_floors_with(log, cfg, Some(&ModelSet::READ_COLUMNS), |l| {
-        models.compared(l, theta)
-    })
+    let read = ModelSet::read_columns();
+    noise_floors_with(log, cfg, Some(&read), |l| models.compared(l, theta))
 }
 
 #[cfg(test)]

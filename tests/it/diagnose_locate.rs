@@ -350,7 +350,7 @@ fn bad_and_empty_input_give_errors_or_empty_results() {
 #[test]
 fn a_noise_copy_of_the_columns_the_models_read_compares_bit_for_bit_as_the_whole_copy() {
     // a drive with both models (driveline and axle loads) and columns they do not read (GNSS):
-    // every compared signal of a copy restricted to ModelSet::READ_COLUMNS equals, bit for bit,
+    // every compared signal of a copy restricted to ModelSet::read_columns equals, bit for bit,
     // that of the whole copy; so the noise floor does not depend on what else the log carries
     let dir = tempfile::tempdir().unwrap();
     let d = synth_drive(
@@ -388,7 +388,8 @@ fn a_noise_copy_of_the_columns_the_models_read_compares_bit_for_bit_as_the_whole
     };
     for copy in 0..2 {
         let whole = perturbed_log(&d.log, &sensors, &cfg, copy, None);
-        let kept = perturbed_log(&d.log, &sensors, &cfg, copy, Some(&ModelSet::READ_COLUMNS));
+        let read = ModelSet::read_columns();
+        let kept = perturbed_log(&d.log, &sensors, &cfg, copy, Some(&read));
         assert!(
             kept.signals.len() < whole.signals.len(),
             "the drive has columns the models do not read: {:?}",
