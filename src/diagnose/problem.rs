@@ -255,12 +255,13 @@ impl<'a> Problem<'a> {
             }
         };
         // an events channel of the longitudinal model from (row, measured value, weight)
-        // samples, when at least `min` fall in each part of the split
+        // samples, when at least `min` fall in each part of the split, with the samples' rows
+        // (sorted, unique: where its view's simulation writes)
         let events_channel = |name: &str,
                               unit: &'static str,
                               min: usize,
                               samples: &[(usize, f64, f64)]|
-         -> Option<Channel> {
+         -> Option<(Channel, Arc<[usize]>)> {
             let held = samples.iter().filter(|s| split.heldout[s.0]).count();
             if held < min || samples.len() - held < min {
                 return None;
@@ -276,8 +277,8 @@ impl<'a> Problem<'a> {
             let rows = sample_rows(samples.iter().map(|s| s.0), n);
             let meas = RowColumn::sparse(&meas, rows.clone(), 0.0);
             let mut ch = mk(name, unit, Domain::Longitudinal, meas, valid);
-            ch.events = Some(EventWeights(RowColumn::sparse(&w, rows, 0.0)));
-            Some(ch)
+            ch.events = Some(EventWeights(RowColumn::sparse(&w, rows.clone(), 0.0)));
+            Some((ch, rows))
         };
         let mut modes = Vec::new();
         let mut mode_rows: Arc<[usize]> = Arc::from(Vec::new());
@@ -329,10 +330,11 @@ impl<'a> Problem<'a> {
                 .map(|s| (s.row, s.ln_frequency, s.weight))
                 .collect();
             let min = modal_channel::MIN_ENGAGEMENTS_PER_PART;
-            if let Some(ch) = events_channel(modal_channel::NAME, modal_channel::UNIT, min, &events)
+            if let Some((ch, rows)) =
+                events_channel(modal_channel::NAME, modal_channel::UNIT, min, &events)
             {
                 let n = log.len();
-                mode_rows = sample_rows(samples.iter().map(|s| s.row), n);
+                mode_rows = rows;
                 let y = modal_channel::simulate(
                     &samples,
                     &nominal_truth.driveline,
@@ -370,14 +372,14 @@ impl<'a> Problem<'a> {
             let min = reversal_channel::MIN_REVERSALS_PER_PART;
             let speeds_nominal = &views[0].1;
             let ch = events_channel(reversal_channel::NAME, reversal_channel::UNIT, min, &events);
-            if let (Some(ch), 2) = (ch, speeds_nominal.len()) {
+            if let (Some((ch, rows)), 2) = (ch, speeds_nominal.len()) {
                 let y = reversal_channel::simulate(
                     &samples,
                     &t_s,
                     &speeds_nominal[1].values(),
                     &speeds_nominal[0].values(),
                 );
-                reversal_rows = sample_rows(samples.iter().map(|s| s.row), log.len());
+                reversal_rows = rows;
                 views.push((
                     View {
                         domain: Domain::Longitudinal,

@@ -169,6 +169,7 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         .filter(|f| f["effect"] == "rolling_resistance")
     {
         let v = f["value"].as_f64().unwrap();
+        // a fit clamped to the domain's end may differ from the product by its rounding
         assert!(
             v <= fleetdyn::model::catalogue::ROLLING_RESISTANCE_MAX * nominal_c_r1 * (1.0 + 1e-12),
             "{v}"
