@@ -31,19 +31,34 @@
 //! The segment means are not independent: a slope sensor that reads in steps of `q` (whole
 //! percent on a J1939 bus) leaves an unknown error of up to `m g q/2` (±2 kN for 40 t) on every
 //! stretch of constant reading, the same on all its segments, and a step of that size is what
-//! the scan looks for. The regression and the scan are therefore generalised least squares
-//! with the covariance of [`super::run_covariance`]: white noise plus one such error per run of
-//! segments sharing their slope reading. A step that coincides with one run is discounted by
-//! that run's error; one that splits a run or spans several is not. The scan whitens with the
-//! covariance's closed-form inverse square root and reads every candidate stretch's statistics
-//! from prefix sums ([`RunCovariance`]): linear time and memory in the number of segments,
-//! plus the candidates.
+//! the scan looks for. Two ways out, and the diagnosis takes the first:
+//!
+//! - **The slope reconstructed between the steps** ([`SlopeReading::grade`]): the force balance
+//!   reads the recorded slope's consistent reconstruction on the distance grid
+//!   ([`super::slope_grid::SlopeGrid::cured`] at the sensor's own resolution,
+//!   [`crate::signal::dequantise`]): the sensor's noise flips a reading into the neighbouring
+//!   step the more often the nearer the true grade lies to the steps' boundary, and the
+//!   reconstruction reads where in its step the grade lies from those flips. A run's error is
+//!   then no longer one shared constant; the regression and the scan are ordinary least
+//!   squares (white noise), and what the reconstruction leaves (a grade held so far inside one
+//!   step that the reading never flips) is in the calibrated threshold
+//!   [`StretchConfig::threshold_f`].
+//! - **The recorded slope** (`grade: None`): the regression and the scan are generalised
+//!   least squares with the covariance of [`super::run_covariance`]: white noise plus one such
+//!   error per run of segments sharing their slope reading. A step that coincides with one run
+//!   is discounted by that run's error; one that splits a run or spans several is not
+//!   (threshold [`StretchConfig::threshold_f_recorded_steps`]).
+//!
+//! The scan whitens with the covariance's closed-form inverse square root and reads every
+//! candidate stretch's statistics from prefix sums ([`RunCovariance`]): linear time and memory
+//! in the number of segments, plus the candidates.
 //!
 //! The threshold is calibrated, not derived: the largest F over the no-effect drives of the
 //! twelve calibration seeds of the truth plant (docs/diagnosis/method.md, rule 6), which no
 //! proof figure uses. The nominal p-value a flagged stretch carries (the step's F against
-//! `F(1, ν)`, Bonferroni over the runs scanned) orders stretches but does not decide: a true
-//! grade that changes within one reading still leaves a step the covariance does not hold.
+//! `F(1, ν)`, Bonferroni over the runs scanned) orders stretches but does not decide: a grade
+//! held inside one step, unflipped, for kilometres leaves the reconstruction an error it
+//! cannot see.
 
 use std::ops::Range;
 
@@ -76,12 +91,17 @@ pub struct StretchConfig {
     pub min_moving_share: f64,
     /// Fewest segments for a verdict (12: 3 km).
     pub min_total_segments: usize,
-    /// Largest F of the step on a healthy truck (calibrated: module documentation).
+    /// Largest F of the step on a healthy truck, with the slope reconstructed between a
+    /// stepped sensor's readings or read from a continuous sensor (calibrated: module
+    /// documentation).
     pub threshold_f: f64,
+    /// The same with a stepped sensor's recorded readings and the run covariance
+    /// ([`SlopeReading::grade`] `None`; calibrated likewise).
+    pub threshold_f_recorded_steps: f64,
 }
 
 impl Default for StretchConfig {
-    /// 250 m, 4 segments, 60 %, 90 % moving, 12 segments, F 65.
+    /// 250 m, 4 segments, 60 %, 90 % moving, 12 segments, F 37 (65 on recorded steps).
     fn default() -> Self {
         Self {
             segment_m: 250.0,
@@ -89,7 +109,8 @@ impl Default for StretchConfig {
             max_share: 0.6,
             min_moving_share: 0.9,
             min_total_segments: 12,
-            threshold_f: 65.0,
+            threshold_f: 37.0,
+            threshold_f_recorded_steps: 65.0,
         }
     }
 }
@@ -194,6 +215,7 @@ pub fn segments(
     distance_m: &[f64],
     p: &DrivelineParams,
     ratios: &[f64],
+    grade: Option<&[f64]>,
     cfg: &StretchConfig,
 ) -> Option<Vec<Segment>> {
     let (tq, w, v, gear, slope, brake) = (
@@ -206,7 +228,7 @@ pub fn segments(
     );
     let (tq, w, v, gear, slope, brake) = (&*tq, &*w, &*v, &*gear, &*slope, &*brake);
     let n = log.len();
-    if n < 3 || t_s.len() != n || distance_m.len() != n {
+    if n < 3 || t_s.len() != n || distance_m.len() != n || grade.is_some_and(|g| g.len() != n) {
         return None;
     }
     let retarder = filled_column(log, "retarder_torque");
@@ -233,7 +255,7 @@ pub fn segments(
             0.0
         };
         let m_v = wheels + (j_t + p.j_p_kg_m2) * i_f * i_f / (r_w * r_w);
-        let s = slope[i];
+        let s = grade.map_or(slope[i], |g| g[i]);
         let root = (1.0 + s * s).sqrt();
         let (sin, cos) = (s / root, 1.0 / root);
         let f_ret = retarder.map_or(0.0, |r| if r[i].is_finite() { r[i] } else { 0.0 }) * i_f / r_w;
@@ -405,22 +427,46 @@ pub fn scan(
     })
 }
 
-/// [`segments`] then [`scan`]; `slope_resolution` is the slope sensor's step, tan α (0 for a
-/// continuous sensor).
+/// The road slope as the scan reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlopeReading<'a> {
+    /// The slope sensor's step, tan α (0 for a continuous sensor).
+    pub resolution: f64,
+    /// The slope the force balance uses on each row, tan α: the recorded slope's
+    /// reconstruction between its steps ([`super::slope_grid::SlopeGrid::cured`] at
+    /// `resolution`); `None` uses the recorded slope. The runs of the covariance are always
+    /// the recorded readings'.
+    pub grade: Option<&'a [f64]>,
+}
+
+/// [`segments`] then [`scan`].
 pub fn resistance_stretch(
     log: &DriveLog,
     t_s: &[f64],
     distance_m: &[f64],
     p: &DrivelineParams,
     ratios: &[f64],
-    slope_resolution: f64,
+    slope: SlopeReading<'_>,
     cfg: &StretchConfig,
 ) -> Option<ResistanceStretch> {
-    let quantisation_n = p.mass_kg * p.gravity_m_per_s2 * slope_resolution.max(0.0);
+    let steps = slope.grade.is_none() && slope.resolution > 0.0;
+    let quantisation_n = if steps {
+        p.mass_kg * p.gravity_m_per_s2 * slope.resolution
+    } else {
+        0.0
+    };
+    let cfg = StretchConfig {
+        threshold_f: if steps {
+            cfg.threshold_f_recorded_steps
+        } else {
+            cfg.threshold_f
+        },
+        ..*cfg
+    };
     scan(
-        &segments(log, t_s, distance_m, p, ratios, cfg)?,
+        &segments(log, t_s, distance_m, p, ratios, slope.grade, &cfg)?,
         quantisation_n,
-        cfg,
+        &cfg,
     )
 }
 
@@ -462,6 +508,12 @@ impl ResistanceStretch {
 mod tests {
     use super::*;
     use crate::diagnose::tyre_slip::tests::truck;
+
+    /// A continuous slope sensor, read as recorded.
+    const RECORDED: SlopeReading<'static> = SlopeReading {
+        resolution: 0.0,
+        grade: None,
+    };
 
     /// 12 km at a steady 22 m/s in gear 12 over rolling grades, the engine torque exactly the
     /// nominal resistances plus `extra` newtons between 5 and 8 km and a white force noise of
@@ -524,18 +576,18 @@ mod tests {
         let (p, ratios) = truck();
         let cfg = StretchConfig::default();
         let (log, t, x) = drive(&p, &ratios, 0.0, false);
-        let clean = resistance_stretch(&log, &t, &x, &p, &ratios, 0.0, &cfg).unwrap();
+        let clean = resistance_stretch(&log, &t, &x, &p, &ratios, RECORDED, &cfg).unwrap();
         assert_eq!(clean.segments, 48);
         assert!(!clean.flagged, "{clean:?}");
         // a heavier truck than the file leaves m g sin α + … on every segment: the regression
         // takes it, no step
         let (log, t, x) = drive(&p, &ratios, 0.0, true);
-        let heavy = resistance_stretch(&log, &t, &x, &p, &ratios, 0.0, &cfg).unwrap();
+        let heavy = resistance_stretch(&log, &t, &x, &p, &ratios, RECORDED, &cfg).unwrap();
         assert!(!heavy.flagged, "{heavy:?}");
         // 800 N more between 5 and 8 km: found there, its size within four standard errors
         // (126 N / √12 segments)
         let (log, t, x) = drive(&p, &ratios, 800.0, false);
-        let wet = resistance_stretch(&log, &t, &x, &p, &ratios, 0.0, &cfg).unwrap();
+        let wet = resistance_stretch(&log, &t, &x, &p, &ratios, RECORDED, &cfg).unwrap();
         assert!(wet.flagged, "{wet:?}");
         assert!((wet.step_n - 800.0).abs() < 150.0, "{wet:?}");
         let m = wet.mismatch(&t, &x).unwrap();
@@ -544,6 +596,61 @@ mod tests {
             "{m:?}"
         );
         assert_eq!(m.signal, NAME);
+    }
+
+    #[test]
+    fn a_stretch_under_a_stepped_slope_reading_is_found_on_the_reconstructed_slope() {
+        let (p, ratios) = truck();
+        let cfg = StretchConfig::default();
+        let q = 0.01;
+        // the drive's ±2 % grades read in whole-percent steps after a sensor noise of σ =
+        // 0.2 % (the truth plant's bus; the force error of a reading is up to m g q/2, about
+        // 2 kN for this truck)
+        let stepped = |extra: f64| {
+            let (mut log, t, x) = drive(&p, &ratios, extra, false);
+            let mut rng = crate::rng::Xoshiro256StarStar::seed_from_u64(11);
+            for s in log.signal_mut("road_slope").unwrap() {
+                *s = ((*s + 0.002 * rng.standard_normal()) / q).round() * q;
+            }
+            (log, t, x)
+        };
+        let scan_both = |extra: f64| {
+            let (log, t, x) = stepped(extra);
+            let grade = crate::diagnose::slope_grid::SlopeGrid::new(&log)
+                .and_then(|g| g.cured(q))
+                .unwrap();
+            let rebuilt = SlopeReading {
+                resolution: q,
+                grade: Some(&grade),
+            };
+            let recorded = SlopeReading {
+                resolution: q,
+                grade: None,
+            };
+            (
+                resistance_stretch(&log, &t, &x, &p, &ratios, rebuilt, &cfg).unwrap(),
+                resistance_stretch(&log, &t, &x, &p, &ratios, recorded, &cfg).unwrap(),
+                t,
+                x,
+            )
+        };
+        let (clean, clean_steps, _, _) = scan_both(0.0);
+        assert!(
+            !clean.flagged && !clean_steps.flagged,
+            "{clean:?} {clean_steps:?}"
+        );
+        // 800 N more between 5 and 8 km: the recorded steps' run covariance discounts it
+        // (measured F 15 against 65), the reconstruction finds it (F 121 against 37) where it
+        // is, its size within the test above's bound
+        let (wet, wet_steps, t, x) = scan_both(800.0);
+        assert!(!wet_steps.flagged, "{wet_steps:?}");
+        assert!(wet.flagged && wet.f > 2.0 * cfg.threshold_f, "{wet:?}");
+        assert!((wet.step_n - 800.0).abs() < 150.0, "{wet:?}");
+        let m = wet.mismatch(&t, &x).unwrap();
+        assert!(
+            (m.start_m - 5000.0).abs() < 260.0 && (m.end_m - 8000.0).abs() < 260.0,
+            "{m:?}"
+        );
     }
 
     /// The covariance of [`super::super::run_covariance`] as a dense matrix.
@@ -639,7 +746,7 @@ mod tests {
                     *v = (*v / resolution).round() * resolution;
                 }
             }
-            let segs = segments(&log, &t, &x, &p, &ratios, &cfg).unwrap();
+            let segs = segments(&log, &t, &x, &p, &ratios, None, &cfg).unwrap();
             let qn = p.mass_kg * p.gravity_m_per_s2 * resolution;
             let fast = scan(&segs, qn, &cfg).unwrap();
             let (f, step, i, j) = dense_scan(&segs, qn, &cfg);
@@ -668,7 +775,7 @@ mod tests {
         let (log, t, x) = drive(&p, &ratios, 0.0, false);
         let mut no_brake = log.clone();
         no_brake.signals.retain(|s| s.name != "brake_force");
-        assert!(resistance_stretch(&no_brake, &t, &x, &p, &ratios, 0.0, &cfg).is_none());
+        assert!(resistance_stretch(&no_brake, &t, &x, &p, &ratios, RECORDED, &cfg).is_none());
         let k = 2000; // 880 m
         let short = DriveLog::from_columns(
             20_000_000,
@@ -677,6 +784,8 @@ mod tests {
                 .map(|s| (s.name.as_str(), s.unit.as_str(), s.values[..k].to_vec()))
                 .collect(),
         );
-        assert!(resistance_stretch(&short, &t[..k], &x[..k], &p, &ratios, 0.0, &cfg).is_none());
+        assert!(
+            resistance_stretch(&short, &t[..k], &x[..k], &p, &ratios, RECORDED, &cfg).is_none()
+        );
     }
 }

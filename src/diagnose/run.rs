@@ -36,9 +36,12 @@ use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig,
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::parameter_table::{EstimateMethod, ParameterRow};
 use super::problem::{ExplainError, Problem};
-use super::resistance_stretch::{resistance_stretch, ResistanceStretch, StretchConfig};
+use super::resistance_stretch::{
+    resistance_stretch, ResistanceStretch, SlopeReading, StretchConfig,
+};
 use super::row_column::RowColumn;
 use super::setup::Setup;
+use super::slope_grid::SlopeGrid;
 use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsistency};
 use super::tyre_slip::{self, tyre_slip_variance};
 use crate::diagnose::compare::Comparison;
@@ -354,6 +357,10 @@ pub fn diagnose(
     let cond = &cmp.conditions;
     let driveline = &setup.nominal_truth.driveline;
     let (consistency, stretch) = if setup.longitudinal {
+        // the force balance reads the slope reconstructed between the sensor's steps
+        let grade = (setup.slope_resolution > 0.0)
+            .then(|| SlopeGrid::new(log).and_then(|g| g.cured(setup.slope_resolution)))
+            .flatten();
         // the longitudinal model's own fit; estimated here only when the explain step left
         // that model out
         let slip = problem
@@ -374,7 +381,10 @@ pub fn diagnose(
                 &cond.distance_m,
                 driveline,
                 &setup.ratios,
-                setup.slope_resolution,
+                SlopeReading {
+                    resolution: setup.slope_resolution,
+                    grade: grade.as_deref(),
+                },
                 &cfg.stretch,
             ),
         )

@@ -17,7 +17,9 @@ use super::effect_parameters::Theta;
 use crate::model::catalogue::Effect;
 use crate::schema::Interpolation;
 use crate::signal::dequantise::{dequantise, DequantiseConfig};
-use crate::signal::distance::{fill_gaps, resample_to_distance, DistanceMap, ResampleConfig};
+use crate::signal::distance::{
+    fill_gaps, resample_columns_to_distance, DistanceMap, ResampleConfig,
+};
 use crate::signal::sensor_noise::{grid_step_s, SampleKind};
 use crate::signal::sensor_noise_estimate::estimate_sensor_noise;
 use crate::table::DriveLog;
@@ -49,7 +51,9 @@ impl SlopeGrid {
     /// to resample).
     pub fn new(log: &DriveLog) -> Option<SlopeGrid> {
         let recorded = log.signal("road_slope")?;
-        let d = resample_to_distance(log, &ResampleConfig::default()).ok()?;
+        let d =
+            resample_columns_to_distance(log, Some(&["road_slope"]), &ResampleConfig::default())
+                .ok()?;
         let raw = fill_gaps(d.signal("road_slope")?, Interpolation::Hold)?;
         let noise_sigma = grid_step_s(log)
             .ok()

@@ -448,6 +448,19 @@ pub fn resample_to_distance(
     log: &DriveLog,
     cfg: &ResampleConfig,
 ) -> Result<DistanceLog, ResampleError> {
+    resample_columns_to_distance(log, None, cfg)
+}
+
+/// [`resample_to_distance`] for the columns named in `keep` alone (all with `None`): the
+/// same grid, map and values, without the others' memory.
+///
+/// # Errors
+/// See [`DistanceMap::from_log`].
+pub fn resample_columns_to_distance(
+    log: &DriveLog,
+    keep: Option<&[&str]>,
+    cfg: &ResampleConfig,
+) -> Result<DistanceLog, ResampleError> {
     let map = DistanceMap::from_log(log, cfg)?;
     let n_grid = (map.total_m() / cfg.step_m).floor() as usize + 1;
     let mut pos = Vec::with_capacity(n_grid);
@@ -463,6 +476,7 @@ pub fn resample_to_distance(
     let signals = log
         .signals
         .iter()
+        .filter(|s| keep.is_none_or(|k| k.contains(&s.name.as_str())))
         .map(|s| {
             let interp = schema
                 .column(&s.name)
