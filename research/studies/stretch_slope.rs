@@ -1,6 +1,6 @@
 //! The resistance-stretch scan on the recorded slope steps and on their reconstruction: per
-//! case of each proof folder given (catalogue cases skipped), the hidden label and the scan's
-//! F of the best step with the recorded readings (generalised least squares with the run
+//! case of each proof folder given, what was hidden (the catalogue or out-of-catalogue effect's
+//! id, or `none`) and the scan's F of the best step with the recorded readings (generalised least squares with the run
 //! covariance, `SlopeReading::grade` `None`) and with the slope reconstructed between the steps
 //! (`SlopeGrid::cured` at the drive's resolution, the diagnosis's reading), tab-separated.
 //! The largest of each column over the calibration seeds' no-effect drives is that reading's
@@ -28,16 +28,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for dir in dirs {
         let dir = PathBuf::from(dir);
         for case in proof_dir::cases(&dir, vec![])? {
-            let answer = proof_dir::answer(&dir, &case);
-            if answer.effect.is_some() {
-                continue;
-            }
-            // the out-of-catalogue effect's id, else `none`
-            let hidden = std::fs::read_to_string(dir.join("answers").join(format!("{case}.json")))
-                .ok()
-                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-                .and_then(|v| v["concealed"]["id"].as_str().map(str::to_string))
-                .unwrap_or(answer.label);
+            // the concealed effect's id (catalogue or not), else its kind (`none`)
+            let concealed =
+                std::fs::read_to_string(dir.join("answers").join(format!("{case}.json")))
+                    .ok()
+                    .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+                    .map(|v| v["concealed"].clone())
+                    .unwrap_or_default();
+            let hidden = concealed["id"]
+                .as_str()
+                .or(concealed["kind"].as_str())
+                .unwrap_or("?")
+                .to_string();
             let (vf, log) = proof_dir::load(&dir, &case)?;
             let setup = Setup::new(&log, &vf)?;
             let c = Conditions::from_log(&log);
