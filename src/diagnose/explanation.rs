@@ -213,16 +213,20 @@ impl Verdict {
 /// `significant_mismatch`: any accepted finding → `explained` (the acceptance rule is a
 /// significance test of its own, on held-out data, and may see a small spread-out effect a
 /// per-window test does not); otherwise `unexplained` when the mismatch is significant and no
-/// estimate within the file's tolerances explains it (passing rules 1 to 3), else
-/// `no_significant_mismatch`: nothing is wrong beyond the vehicle file's tolerances.
+/// estimate within the file's tolerances explains it (passing rules 1 to 3), or when
+/// `channel_mismatch` (a stretch located by one of the tests on the recorded channels alone,
+/// which parameters constant over the drive cannot produce whatever their values, so no
+/// estimate explains it); else `no_significant_mismatch`: nothing is wrong beyond the vehicle
+/// file's tolerances.
 pub fn verdict(
     findings: &[Finding],
     consistent: &[ConsistentEstimate],
     significant_mismatch: bool,
+    channel_mismatch: bool,
 ) -> Verdict {
     if !findings.is_empty() {
         Verdict::Explained
-    } else if significant_mismatch && consistent.is_empty() {
+    } else if channel_mismatch || (significant_mismatch && consistent.is_empty()) {
         Verdict::Unexplained
     } else {
         Verdict::NoSignificantMismatch
@@ -235,8 +239,11 @@ mod tests {
 
     #[test]
     fn verdict_combines_findings_and_significance() {
-        assert_eq!(verdict(&[], &[], false), Verdict::NoSignificantMismatch);
-        assert_eq!(verdict(&[], &[], true), Verdict::Unexplained);
+        assert_eq!(
+            verdict(&[], &[], false, false),
+            Verdict::NoSignificantMismatch
+        );
+        assert_eq!(verdict(&[], &[], true, false), Verdict::Unexplained);
         let within = ConsistentEstimate {
             effect: "aero_drag",
             estimate: ParameterEstimate {
@@ -254,8 +261,13 @@ mod tests {
             file_tolerance: Tolerance::Relative(0.05),
         };
         assert_eq!(
-            verdict(&[], std::slice::from_ref(&within), true),
+            verdict(&[], std::slice::from_ref(&within), true, false),
             Verdict::NoSignificantMismatch
+        );
+        // a stretch from a channel test is not what an estimate within the tolerances explains
+        assert_eq!(
+            verdict(&[], std::slice::from_ref(&within), true, true),
+            Verdict::Unexplained
         );
         assert_eq!(
             serde_json::to_string(&Verdict::NoSignificantMismatch).unwrap(),

@@ -92,8 +92,9 @@ pub struct StretchConfig {
     /// Fewest segments for a verdict (12: 3 km).
     pub min_total_segments: usize,
     /// Largest F of the step on a healthy truck, with the slope reconstructed between a
-    /// stepped sensor's readings or read from a continuous sensor (calibrated: module
-    /// documentation).
+    /// stepped sensor's readings (calibrated on a whole-percent sensor: module
+    /// documentation). A continuous sensor's slope, which carries no step error, is held to
+    /// the same threshold.
     pub threshold_f: f64,
     /// The same with a stepped sensor's recorded readings and the run covariance
     /// ([`SlopeReading::grade`] `None`; calibrated likewise).
@@ -434,8 +435,8 @@ pub struct SlopeReading<'a> {
     pub resolution: f64,
     /// The slope the force balance uses on each row, tan α: the recorded slope's
     /// reconstruction between its steps ([`super::slope_grid::SlopeGrid::cured`] at
-    /// `resolution`); `None` uses the recorded slope. The runs of the covariance are always
-    /// the recorded readings'.
+    /// `resolution`), scanned with white noise; `None` uses the recorded slope, scanned with
+    /// the run covariance when `resolution` is positive (module documentation).
     pub grade: Option<&'a [f64]>,
 }
 

@@ -399,6 +399,7 @@ pub fn diagnose(
             .as_ref()
             .and_then(|s| s.mismatch(&cond.t_s, &cond.distance_m)),
     ];
+    let channel_mismatch = located.iter().any(Option::is_some);
     for m in located.into_iter().flatten() {
         location.mismatch.push(m);
         location.any_significant = true;
@@ -415,6 +416,7 @@ pub fn diagnose(
         &explanation.findings,
         &explanation.consistent,
         location.any_significant,
+        channel_mismatch,
     );
     // residuals after: the extended models at the final parameters, per model in use
     let mut after: BTreeMap<String, Vec<f64>> = BTreeMap::new();

@@ -271,7 +271,7 @@ fn check(road: Road, e: Effect, value: f64, ambiguous: &[&str]) {
     let words = finding_sentence(f);
     assert!(words.contains(e.parameter()) && words.contains("held-out"));
     assert_eq!(
-        verdict(&x.findings, &x.consistent, true),
+        verdict(&x.findings, &x.consistent, true, false),
         Verdict::Explained
     );
     // the proof's noise-free scoring (`fits_against`) given the recording itself as the
@@ -379,7 +379,7 @@ fn clean_drives_give_no_finding() {
                 .collect::<Vec<_>>()
         );
         assert_eq!(
-            verdict(&r.x.findings, &r.x.consistent, false),
+            verdict(&r.x.findings, &r.x.consistent, false, false),
             Verdict::NoSignificantMismatch
         );
         // a significant mismatch on a clean drive is unexplained unless an estimate within the
@@ -389,7 +389,10 @@ fn clean_drives_give_no_finding() {
         } else {
             Verdict::NoSignificantMismatch
         };
-        assert_eq!(verdict(&r.x.findings, &r.x.consistent, true), expected);
+        assert_eq!(
+            verdict(&r.x.findings, &r.x.consistent, true, false),
+            expected
+        );
         // every parameter the drive informs has a linearised estimate; those the outputs follow
         // linearly are within the module's 20 % of the truth (the vehicle file's value on a
         // clean drive). Their 95 % intervals do not always hold it: the single-effect estimate
