@@ -17,7 +17,7 @@ pub struct Answer {
     pub effect: Option<(Effect, f64)>,
 }
 
-/// The answer of `case` in the proof folder `dir`.
+/// The answer of `case` in the proof folder `dir` (either truth's answer file).
 pub fn answer(dir: &Path, case: &str) -> Answer {
     let none = |label: &str| Answer {
         label: label.into(),
@@ -27,6 +27,27 @@ pub fn answer(dir: &Path, case: &str) -> Answer {
         return none("?");
     };
     let v: serde_json::Value = serde_json::from_str(&s).unwrap_or_default();
+    // the independent truth's answer: `concealed` with its kind, the effect's id and truth
+    let c = &v["concealed"];
+    if c.is_object() {
+        return match c["kind"].as_str() {
+            Some("catalogue") => {
+                let id = c["id"].as_str().unwrap_or("?");
+                let truth = c["truth"].as_f64().unwrap_or(f64::NAN);
+                let nominal = c["nominal"].as_f64().unwrap_or(f64::NAN);
+                Answer {
+                    label: if nominal != 0.0 && nominal.is_finite() {
+                        format!("{id} {:+.0}%", 100.0 * (truth / nominal - 1.0))
+                    } else {
+                        format!("{id} {truth:.4}")
+                    },
+                    effect: Effect::from_id(id).ok().map(|e| (e, truth)),
+                }
+            }
+            Some("out_of_catalogue") => none("out_of_catalogue"),
+            _ => none("none"),
+        };
+    }
     let e = &v["effect"];
     if e.is_null() {
         return none(if v["out_of_catalogue"].is_null() {
