@@ -1,10 +1,10 @@
-//! The resistance-stretch scan on the recorded slope steps and on their reconstruction: per
-//! case of each proof folder given, what was hidden (the catalogue or out-of-catalogue effect's
-//! id, or `none`) and the scan's F of the best step with the recorded readings (generalised least squares with the run
-//! covariance, `SlopeReading::grade` `None`) and with the slope reconstructed between the steps
-//! (`SlopeGrid::cured` at the drive's resolution, the diagnosis's reading), tab-separated.
-//! The largest of each column over the calibration seeds' no-effect drives is that reading's
-//! threshold (docs/diagnosis/method.md, rule 6).
+//! The resistance-stretch scan on the recorded slope steps and on their reconstruction: per case of
+//! each proof folder given, what was hidden (the catalogue or out-of-catalogue effect's id, or
+//! `none`) and the scan's F of the best step with the recorded readings (generalised least squares
+//! with the run covariance, `SlopeReading::grade` `None`) and with the slope reconstructed between
+//! the steps (`SlopeGrid::cured` at the drive's resolution, the diagnosis's reading),
+//! tab-separated. The largest of each column over the calibration seeds' no-effect drives is that
+//! reading's threshold (docs/diagnosis/method.md, rule 6).
 //!
 //! ```text
 //! cargo run --release --manifest-path research/Cargo.toml --bin stretch_slope -- DIR...

@@ -16,7 +16,10 @@
 //!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule. Then
 //!    the shuffle modes after clutch engagements ([`super::modal`]): when their drive-level test
 //!    flags (its own test at α = 0.01 with a 3 % margin), one more engine-speed mismatch
-//!    stretch, and the mismatch counts as significant.
+//!    stretch, and the mismatch counts as significant. Then the two tests on the recorded
+//!    channels alone ([`speed_consistency`]; [`resistance_stretch`], on the slope
+//!    reconstructed between the sensor's steps): a flagged one adds a located stretch, which
+//!    no estimate within the tolerances explains.
 //! 5. Explain ([`explain`]) with the noise floors as the signal weights; the verdict
 //!    ([`verdict`]) from the findings and step 4's significance.
 //! 6. Show (`report::diagnosis_files::write_outputs`, a layer above this module):
