@@ -68,7 +68,8 @@ impl Key {
 
 /// Search cursors of the scenario's inputs for one simulation: the steps move forward in
 /// time, so each lookup scans on from the last ([`super::inputs::Piecewise::piece_index_from`],
-/// the same pieces as a binary search).
+/// the same pieces as a binary search; a span that starts part-way into a long input finds its
+/// first piece by the binary search).
 #[derive(Default)]
 struct Cursors {
     engine: std::cell::Cell<usize>,

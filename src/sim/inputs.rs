@@ -3,6 +3,10 @@
 
 use std::sync::Arc;
 
+/// Pieces [`Piecewise::piece_index_from`] scans on from its cursor before it searches the
+/// rest: a step of a simulation moves on by one piece or none.
+pub const CURSOR_SCAN: usize = 8;
+
 /// A piecewise-linear signal: contiguous pieces `(t0, t1, v0, v1)` covering `[0, T]`.
 ///
 /// On `[t0, t1)` the value is `v0 + (v1 − v0)·((t − t0)/(t1 − t0))` (the last piece also at its
@@ -234,17 +238,26 @@ impl Piecewise {
     }
 
     /// [`Piecewise::piece_index`] for times that mostly move forward: `cursor` holds the last
-    /// answer and the search scans on from it (amortised constant time over a simulation
-    /// that steps through the input), falling back to the binary search when `t` lies before
-    /// the cursor's piece. The same index as `piece_index(t)` for every `t`: knots increase,
-    /// so the last knot at or before `t` found from the cursor is the global one.
+    /// answer and the search scans on from it for up to [`CURSOR_SCAN`] pieces (amortised
+    /// constant time over a simulation that steps through the input), then binary-searches
+    /// the pieces after it (a simulation that starts part-way into a long input, with a fresh
+    /// cursor, costs a logarithm, not a scan of every piece before its start); it falls back
+    /// to the binary search over all pieces when `t` lies before the cursor's piece. The same
+    /// index as `piece_index(t)` for every `t`: knots increase, so the last knot at or before
+    /// `t` found from the cursor is the global one.
     #[inline]
     pub fn piece_index_from(&self, cursor: &std::cell::Cell<usize>, t: f64) -> usize {
         let n = self.piece_count();
         let mut k = cursor.get().min(n - 1);
         if self.knots[k] <= t {
+            let mut scanned = 0;
             while k + 1 < n && self.knots[k + 1] <= t {
                 k += 1;
+                scanned += 1;
+                if scanned == CURSOR_SCAN {
+                    k += self.knots[k + 1..n].partition_point(|&t0| t0 <= t);
+                    break;
+                }
             }
         } else {
             k = self.piece_index(t);
@@ -480,6 +493,23 @@ mod tests {
             assert_eq!(k, p.piece_index(x), "t = {x}");
             let c = std::cell::Cell::new(cursor.get());
             assert_eq!(p.eval_from(&c, x).to_bits(), p.eval(x).to_bits(), "t = {x}");
+        }
+    }
+
+    #[test]
+    fn a_fresh_cursor_finds_a_piece_far_into_a_long_input_as_the_binary_search_does() {
+        // ten hours at 50 Hz: a simulation window that starts part-way in starts its cursor at
+        // the first piece; every jump, short or long, lands on the binary search's piece
+        let n = 1_800_001;
+        let t: Arc<[f64]> = (0..n).map(|k| k as f64 * 0.02).collect();
+        let v: Vec<f64> = (0..n).map(|k| (k % 17) as f64).collect();
+        let p = Piecewise::through_samples(&t, &v, Between::Held).unwrap();
+        for start in [0.0, 0.013, 0.17, 35_999.99, 36_000.0, 17_333.337, 40_000.0] {
+            let cursor = std::cell::Cell::new(0);
+            for dt in [0.0, 0.005, 0.02, 0.1, 7.0] {
+                let x = start + dt;
+                assert_eq!(p.piece_index_from(&cursor, x), p.piece_index(x), "t = {x}");
+            }
         }
     }
 }
