@@ -208,8 +208,10 @@ fn derivative(x: &[f64], t: &[f64]) -> Vec<f64> {
 /// [`StretchConfig::segment_m`] bins, the channels' gaps filled as the schema says
 /// ([`filled_column`]: a CAN dropout costs its own rows' precision, not the
 /// segment); a bin counts when at least [`StretchConfig::min_moving_share`] of its rows move
-/// above 1 m/s. `None` without the engine torque, engine speed, vehicle speed, gear, slope or
-/// brake-force column.
+/// above 1 m/s. The force balance reads `grade` (tan α per row, [`SlopeReading::grade`]) where
+/// given, else the recorded slope; each segment's `slope_reading` is the recorded one either
+/// way. `None` without the engine torque, engine speed, vehicle speed, gear, slope or
+/// brake-force column, or with a `grade` whose length is not the log's.
 pub fn segments(
     log: &DriveLog,
     t_s: &[f64],
@@ -641,7 +643,8 @@ mod tests {
             "{clean:?} {clean_steps:?}"
         );
         // 800 N more between 5 and 8 km: the recorded steps' run covariance discounts it
-        // (measured F 15 against 65), the reconstruction finds it (F 121 against 37) where it
+        // (measured F 15 against 65), the reconstruction finds it (F 121 against 37; asked for
+        // at least twice the threshold, so that the test fails on a marginal flag) where it
         // is, its size within the test above's bound
         let (wet, wet_steps, t, x) = scan_both(800.0);
         assert!(!wet_steps.flagged, "{wet_steps:?}");
