@@ -12,6 +12,7 @@
 
 pub mod diagnose;
 pub mod fleet;
+pub mod heap;
 pub mod ingest;
 pub mod io;
 pub mod model;

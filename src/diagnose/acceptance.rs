@@ -225,6 +225,9 @@ pub struct CandidateFit {
     pub passes_whiteness: bool,
     /// Rule 3 (likelihood-ratio form) holds.
     pub passes_interval: bool,
+    /// The simulation at the fitted value, kept while the round decides and only for a
+    /// candidate that passes (the interval and the ambiguity set read passing candidates'
+    /// simulations alone; a simulation holds every model's outputs on every row).
     #[serde(skip)]
     pub(super) eval: Option<Eval>,
     #[serde(skip)]

@@ -79,7 +79,6 @@ pub use super::signal_fits::{fits_against, BeforeAfter, SignalFit, SignalMetrics
 /// [`ExplainError`] when a model fails at the round's parameters (a candidate's failure only
 /// removes that candidate) or the configuration is out of its domain.
 pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation, ExplainError> {
-    use rayon::prelude::*;
     if cfg.max_findings > 16 {
         return Err(ExplainError::BadConfig {
             parameter: "max_findings",
@@ -127,8 +126,10 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 .total_cmp(&scr.entries[a].overall_reduction)
         });
         cands.truncate(MAX_FULL_FITS);
+        // one candidate at a time, its simulations parallel inside (over windows, grid points
+        // and the interval's two sides): a long drive holds one candidate's working set
         let fits: Vec<CandidateFit> = cands
-            .par_iter()
+            .iter()
             .map(|&k| candidate_fit(&ev, &base, &scr.entries[k], theta))
             .collect();
         // passing, most explained first (ties: screen rank)
@@ -194,7 +195,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             }
             rounds.push(Round {
                 screen: scr,
-                fits,
+                fits: without_simulations(fits),
                 accepted: None,
                 consistent: Some(e.id()),
             });
@@ -204,7 +205,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         let Some((i, ci)) = accepted else {
             rounds.push(Round {
                 screen: scr,
-                fits,
+                fits: without_simulations(fits),
                 accepted: None,
                 consistent: None,
             });
@@ -259,7 +260,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         });
         rounds.push(Round {
             screen: scr,
-            fits,
+            fits: without_simulations(fits),
             accepted: Some(e.id()),
             consistent: None,
         });
@@ -275,6 +276,16 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         linearised,
         theta,
     })
+}
+
+/// `fits` as a round keeps them: their figures without their simulations (a simulation holds
+/// every model's outputs on every row; a decided round never reads them again, and on a long
+/// drive the rounds' simulations would outweigh the recording).
+fn without_simulations(mut fits: Vec<CandidateFit>) -> Vec<CandidateFit> {
+    for f in &mut fits {
+        f.eval = None;
+    }
+    fits
 }
 
 /// Full fit of one screened candidate and its acceptance tests.
@@ -321,6 +332,10 @@ fn candidate_fit(
         })
         .collect();
     let rule = AcceptanceRule::FIXED;
+    let passes_heldout = gain >= rule.min_heldout_gain;
+    let passes_whiteness = !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power;
+    let passes_interval = dev + dev_heldout.unwrap_or(0.0) > threshold;
+    let passes = passes_heldout && passes_whiteness && passes_interval;
     CandidateFit {
         effect: e.id(),
         domain: e.domain(),
@@ -338,10 +353,10 @@ fn candidate_fit(
         deviance_at_start: dev,
         deviance_heldout_at_start: dev_heldout,
         evaluations: fr.evaluations,
-        passes_heldout: gain >= rule.min_heldout_gain,
-        passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
-        passes_interval: dev + dev_heldout.unwrap_or(0.0) > threshold,
-        eval: Some(best),
+        passes_heldout,
+        passes_whiteness,
+        passes_interval,
+        eval: passes.then_some(best),
         curvature: fr.curvature,
         active: active.to_vec(),
     }

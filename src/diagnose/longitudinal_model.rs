@@ -34,7 +34,12 @@ use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::{scenario_from_log, RecordedScenario};
 use crate::table::DriveLog;
+use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
+
+/// Windows simulated in parallel at a time ([`LongitudinalModel::simulate_windows`]): a batch's
+/// samples are held until they go onto the rows (32 windows of 20 s at 1 ms: about 15 MB).
+const WINDOW_BATCH: usize = 32;
 
 /// Settings of the windowed longitudinal simulation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -407,14 +412,12 @@ impl<'a> LongitudinalModel<'a> {
         } else {
             self.cfg.dt_s
         };
-        let mut fast = FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad);
-        let mut fine = (self.cfg.fine_at_reversals && dt > FINE_STEP_S)
-            .then(|| FastDriveline::new(p, self.ratios, FINE_STEP_S).with_lash(tm.lash_rad));
-        let fine_spans: &[(f64, f64)] = if fine.is_some() { &self.fine } else { &[] };
+        let fine_dt = (self.cfg.fine_at_reversals && dt > FINE_STEP_S).then_some(FINE_STEP_S);
+        let fine_spans: &[(f64, f64)] = if fine_dt.is_some() { &self.fine } else { &[] };
         let starts = &self.starts;
         let n_win = starts.len();
-        // the integration samples go straight onto the rows (the 1 ms samples of a long drive
-        // are never held)
+        // the integration samples go onto the rows a batch of windows at a time (the samples
+        // of a long drive are never all held)
         let mut rows = LinearResampler::<2>::new(&self.t);
         // the driven tyres' slip of a sample, from the model's drive-shaft torque
         // M_d = k_d·(twist beyond the lash) + c_d·(ω_d − ω_w), F_x = M_d / r_w
@@ -424,7 +427,14 @@ impl<'a> LongitudinalModel<'a> {
             let m_d = p.k_d_nm_per_rad * twist + p.c_d_nm_s_per_rad * (y[5] - y[7]);
             (self.slip.slip_per_newton * m_d / p.wheel_radius_m).clamp(-0.2, 0.2)
         };
-        for w in 0..n_win {
+        // window `w`'s samples (time; vehicle speed, engine speed), simulated by `fast` and
+        // `fine` (integrators of the window's steps: each window starts from the measured
+        // state, so a window's samples do not depend on which integrator ran the one before)
+        let window = |w: usize,
+                      fast: &mut FastDriveline<'_>,
+                      fine: &mut Option<FastDriveline<'_>>|
+         -> Result<Vec<(f64, [f64; 2])>, ExtendedError> {
+            let mut out = Vec::new();
             let ta = starts[w];
             let tb = starts
                 .get(w + 1)
@@ -432,7 +442,7 @@ impl<'a> LongitudinalModel<'a> {
                 .unwrap_or(sc.t_end_s)
                 .min(sc.t_end_s);
             if tb - ta < dt {
-                continue;
+                return Ok(out);
             }
             let v0 = interp_linear(&self.t, &self.v_meas, ta).max(0.0);
             let gear = sc.gear.eval(ta + 1e-9).round() as usize;
@@ -467,23 +477,21 @@ impl<'a> LongitudinalModel<'a> {
             }
             if needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true)) {
                 // the sample the window's first piece would start with
-                rows.push(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
-                continue;
+                out.push((ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]));
+                return Ok(out);
             }
             // the window piece by piece, each from the state and mode the last ended in
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
             let (mut y, mut mode) = (y0, mode);
             for (j, &(a, b, is_fine)) in pieces.iter().enumerate() {
-                let sim = match (is_fine, fine.as_mut()) {
-                    (true, Some(f)) => f,
-                    _ => &mut fast,
+                let run = match (is_fine, fine.as_mut()) {
+                    (true, Some(f)) => f.simulate_span(sc, a, b, y, mode),
+                    _ => fast.simulate_span(sc, a, b, y, mode),
                 };
-                let tr =
-                    sim.simulate_span(sc, a, b, y, mode)
-                        .map_err(|source| ExtendedError::Sim {
-                            file: file.clone(),
-                            source,
-                        })?;
+                let tr = run.map_err(|source| ExtendedError::Sim {
+                    file: file.clone(),
+                    source,
+                })?;
                 let (Some(&y_end), Some(&m_end)) = (tr.y.last(), tr.mode.last()) else {
                     continue;
                 };
@@ -494,16 +502,48 @@ impl<'a> LongitudinalModel<'a> {
                 } else {
                     tr.t.len() - 1
                 };
-                for k in 0..keep {
-                    // the engine turns faster than the vehicle's speed carries it by the slip
-                    rows.push(
+                // the engine turns faster than the vehicle's speed carries it by the slip
+                out.extend((0..keep).map(|k| {
+                    (
                         tr.t[k],
                         [
                             p.wheel_radius_m * tr.y[k][7],
                             tr.y[k][0] * (1.0 + slip_of(&tr.y[k])),
                         ],
-                    );
-                }
+                    )
+                }));
+            }
+            Ok(out)
+        };
+        // windows in parallel a batch at a time, their samples pushed in window order (the
+        // same rows whatever the thread count; a batch's samples are all a long drive holds)
+        let batch = WINDOW_BATCH.max(rayon::current_num_threads());
+        // inside a parallel job (the fits' simulations) the windows run on this thread: a
+        // thread waiting for its windows would take up another job, another simulation whose
+        // inputs and outputs it then holds too
+        let min_len = if rayon::current_thread_index().is_some() {
+            batch
+        } else {
+            1
+        };
+        for first in (0..n_win).step_by(batch) {
+            let samples: Vec<Vec<(f64, [f64; 2])>> = (first..(first + batch).min(n_win))
+                .into_par_iter()
+                .with_min_len(min_len)
+                .map_init(
+                    || {
+                        (
+                            FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad),
+                            fine_dt.map(|f| {
+                                FastDriveline::new(p, self.ratios, f).with_lash(tm.lash_rad)
+                            }),
+                        )
+                    },
+                    |(fast, fine), w| window(w, fast, fine),
+                )
+                .collect::<Result<_, _>>()?;
+            for (t, y) in samples.into_iter().flatten() {
+                rows.push(t, y);
             }
         }
         let [vehicle_speed, engine_speed] = rows.finish();

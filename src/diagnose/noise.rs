@@ -45,7 +45,6 @@
 use super::compare::Compared;
 use super::extended::Theta;
 use crate::table::DriveLog;
-use rayon::prelude::*;
 
 pub use super::model_set::ModelSet;
 pub use super::noise_config::{NoiseConfig, PerturbedColumn};
@@ -168,8 +167,8 @@ fn perturb_column(
 }
 
 /// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
-/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (in
-/// parallel, results in copy order, so the outcome does not depend on the thread count), each
+/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (one at
+/// a time, in copy order: the outcome does not depend on the thread count), each
 /// copy holding the columns `keep` alone when given (those `residuals` reads).
 ///
 /// # Errors
@@ -191,10 +190,12 @@ where
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
     // are dropped as soon as it is read, and the measurement's own change is drawn again for
-    // the split below, so a long drive holds one column per signal and copy)
+    // the split below, so a long drive holds one column per signal and copy). The copies run
+    // one after the other, each model's simulation parallel inside (a copy's perturbed log and
+    // model working set are a long drive's largest transient: one in flight, not one per
+    // thread).
     type Run = Vec<Option<Vec<f32>>>;
     let mut runs: Vec<Run> = (0..cfg.copies as u64)
-        .into_par_iter()
         .map(|c| {
             let plog = perturbed_log(log, &sensors, cfg, c, keep);
             let rs = residuals(&plog)?;

@@ -42,13 +42,13 @@ use super::problem::{ExplainError, Problem};
 use super::resistance_stretch::{
     resistance_stretch, ResistanceStretch, SlopeReading, StretchConfig,
 };
-use super::row_column::RowColumn;
 use super::setup::Setup;
 use super::slope_grid::SlopeGrid;
 use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsistency};
 use super::tyre_slip::{self, tyre_slip_variance};
-use crate::diagnose::compare::Comparison;
+use crate::diagnose::compare::{Comparison, Conditions};
 use crate::diagnose::rows::ACTUATION_CHANNEL;
+use crate::heap::release_free_memory;
 use crate::model::catalogue::Effect;
 use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
 use crate::model::tolerance::Tolerances;
@@ -91,7 +91,6 @@ pub fn tolerance_variance(
     problem: &Problem<'_>,
     tolerances: &Tolerances,
 ) -> Result<BTreeMap<String, Vec<f64>>, ExtendedError> {
-    use rayon::prelude::*;
     let nominal = *problem.nominal();
     let mut out: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for domain in problem.domains() {
@@ -116,33 +115,25 @@ pub fn tolerance_variance(
                 }
             })
             .collect();
-        // the edges' simulations in parallel a thread's worth at a time, added in edge order
-        // (the same sums whatever the thread count; a long drive never holds them all)
+        // the edges' simulations one at a time (each parallel inside, over its windows),
+        // added in edge order: a long drive holds one edge's simulation at a time
         let mut vars: Vec<Vec<f64>> = base.iter().map(|b| vec![0.0; b.len()]).collect();
-        for chunk in edges.chunks(rayon::current_num_threads().max(1)) {
-            let moved: Vec<Vec<RowColumn>> = chunk
-                .par_iter()
-                .map(|&(e, v)| {
-                    let mut theta = nominal;
-                    theta.set(e, v);
-                    problem.simulate(domain, &theta)
-                })
-                .collect::<Result<_, _>>()?;
-            for m in &moved {
-                for (k, var) in vars.iter_mut().enumerate() {
-                    let add =
-                        |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
-                    match (m[k].sparse_parts(), base[k].sparse_parts()) {
-                        // an events view: no change off its rows (equal fills) adds nothing
-                        (Some((ra, va, fa)), Some((rb, vb, fb))) if ra == rb && fa == fb => {
-                            for ((&i, a), b) in ra.iter().zip(va).zip(vb) {
-                                add(&mut var[i], a - b);
-                            }
+        for &(e, v) in &edges {
+            let mut theta = nominal;
+            theta.set(e, v);
+            let m = problem.simulate(domain, &theta)?;
+            for (k, var) in vars.iter_mut().enumerate() {
+                let add = |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                match (m[k].sparse_parts(), base[k].sparse_parts()) {
+                    // an events view: no change off its rows (equal fills) adds nothing
+                    (Some((ra, va, fa)), Some((rb, vb, fb))) if ra == rb && fa == fb => {
+                        for ((&i, a), b) in ra.iter().zip(va).zip(vb) {
+                            add(&mut var[i], a - b);
                         }
-                        _ => {
-                            for (i, v) in var.iter_mut().enumerate() {
-                                add(v, m[k][i] - base[k][i]);
-                            }
+                    }
+                    _ => {
+                        for (i, v) in var.iter_mut().enumerate() {
+                            add(v, m[k][i] - base[k][i]);
                         }
                     }
                 }
@@ -265,6 +256,8 @@ pub fn diagnose(
     let mut floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
     // the sensors' sample records serve the noise floor's draws alone
     floors.release_sensor_samples();
+    // between phases, the free memory of the last one goes back (crate::heap)
+    release_free_memory();
     // the clutch-actuated engine speed is not located: its floor only weights the explain
     // step's clutch-actuation view
     let actuation_variance = floors
@@ -272,12 +265,6 @@ pub fn diagnose(
         .iter()
         .position(|f| f.signal == ACTUATION_CHANNEL)
         .map(|k| floors.floors.remove(k).null_variance);
-    let mut signals = models.compared(log, &setup.nominal)?;
-    signals.retain(|c| c.name != ACTUATION_CHANNEL);
-    let cmp = Comparison {
-        signals,
-        conditions: setup.conditions.clone(),
-    };
     let lcfg = LocateConfig {
         shuffle_band_hz: shuffle_band_hz(&setup.nominal_truth.driveline, &setup.ratios),
         gear_ratios: setup.ratios.clone(),
@@ -306,9 +293,19 @@ pub fn diagnose(
         }
     }
     drop(allowed);
+    release_free_memory();
+    // the recording against the nominal models, made where locate first reads it (on a long
+    // drive, not held through the tolerance edges' simulations)
+    let mut signals = models.compared(log, &setup.nominal)?;
+    signals.retain(|c| c.name != ACTUATION_CHANNEL);
+    let cmp = Comparison {
+        signals,
+        conditions: Conditions::from_log(log),
+    };
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
     // the null copies serve the location's window test alone
     floors.release_samples();
+    release_free_memory();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
     // flagged drive is a located engine-speed mismatch
@@ -407,6 +404,7 @@ pub fn diagnose(
         location.mismatch.push(m);
         location.any_significant = true;
     }
+    release_free_memory();
     let explanation = explain(
         &problem,
         &ExplainConfig {

@@ -172,7 +172,6 @@ pub fn screen(
     effects: &[Effect],
     probes: &mut std::collections::BTreeMap<Effect, Arc<Probe>>,
 ) -> Screen {
-    use rayon::prelude::*;
     let nominal = *ev.problem.nominal();
     for p in probes.values_mut() {
         if p.fresh {
@@ -187,8 +186,9 @@ pub fn screen(
         .filter(|e| !probes.contains_key(e))
         .collect();
     let r = ev.resid(base);
+    // one effect at a time, each simulation parallel inside over its windows
     let fresh: Vec<(Effect, Option<Probe>)> = missing
-        .par_iter()
+        .iter()
         .map(|&e| {
             let spec = fit_spec(e, nominal.get(e), ev.problem.slope_step());
             let cur = ev.theta.get(e);

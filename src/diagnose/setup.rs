@@ -1,6 +1,5 @@
 //! Setting up the diagnosis of one recording: which models the recording can drive (the signals
-//! present decide), the nominal parameters, the rows that count, and the operating condition of
-//! every row.
+//! present decide), the nominal parameters and the rows that count.
 //!
 //! - Longitudinal/driveline: needs a vehicle `[driveline]` and the columns `vehicle_speed`,
 //!   `engine_speed`, `engine_torque`, `gear`. Rows count while the measured speed is at least
@@ -8,13 +7,11 @@
 //!   clutch transition is near ([`super::rows::longitudinal_rows`]).
 //! - Axle loads: needs a vehicle `[axles]` and the three bellow pressures. Rows with a real
 //!   pressure sample count, away from shifts ([`super::rows::axle_rows`]).
-//! - Operating conditions: [`Conditions::from_log`].
 //! - The slope sensor's resolution is estimated from the recording
 //!   ([`crate::signal::quantization`]; an unquantised slope counts as the nominal);
 //!   `slope_quantization`'s nominal value is the vehicle file's `[sensors]
 //!   road_slope_resolution` ([`crate::model::vehicle::Sensors`]).
 
-use super::compare::Conditions;
 use super::extended::{AxleModel, ExtendedError, LongitudinalConfig, LongitudinalModel, Theta};
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::model::vehicle::VehicleFile;
@@ -45,8 +42,6 @@ pub struct Setup {
     pub axle: bool,
     /// Why not, when it does not.
     pub axle_reason: Option<String>,
-    /// Operating conditions.
-    pub conditions: Conditions,
 }
 
 fn column(log: &DriveLog, name: &str, interp: Interpolation) -> Option<Vec<f64>> {
@@ -139,7 +134,6 @@ impl Setup {
             .unwrap_or(nominal_slope_resolution);
         let nominal_truth = ExtendedVehicle::nominal(d, vehicle.axles.as_ref());
         let nominal = Theta::nominal(&nominal_truth, nominal_slope_resolution);
-        let conditions = Conditions::from_log(log);
         Ok(Setup {
             nominal_truth,
             ratios: vehicle.gearbox.ratios.clone(),
@@ -149,7 +143,6 @@ impl Setup {
             longitudinal_reason,
             axle: axle_reason.is_none(),
             axle_reason,
-            conditions,
         })
     }
 
