@@ -432,9 +432,9 @@ impl<'a> LongitudinalModel<'a> {
         // state, so a window's samples do not depend on which integrator ran the one before)
         let window = |w: usize,
                       fast: &mut FastDriveline<'_>,
-                      fine: &mut Option<FastDriveline<'_>>|
-         -> Result<Vec<(f64, [f64; 2])>, ExtendedError> {
-            let mut out = Vec::new();
+                      fine: &mut Option<FastDriveline<'_>>,
+                      out: &mut dyn FnMut(f64, [f64; 2])|
+         -> Result<(), ExtendedError> {
             let ta = starts[w];
             let tb = starts
                 .get(w + 1)
@@ -442,7 +442,7 @@ impl<'a> LongitudinalModel<'a> {
                 .unwrap_or(sc.t_end_s)
                 .min(sc.t_end_s);
             if tb - ta < dt {
-                return Ok(out);
+                return Ok(());
             }
             let v0 = interp_linear(&self.t, &self.v_meas, ta).max(0.0);
             let gear = sc.gear.eval(ta + 1e-9).round() as usize;
@@ -477,8 +477,8 @@ impl<'a> LongitudinalModel<'a> {
             }
             if needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true)) {
                 // the sample the window's first piece would start with
-                out.push((ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]));
-                return Ok(out);
+                out(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
+                return Ok(());
             }
             // the window piece by piece, each from the state and mode the last ended in
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
@@ -503,47 +503,61 @@ impl<'a> LongitudinalModel<'a> {
                     tr.t.len() - 1
                 };
                 // the engine turns faster than the vehicle's speed carries it by the slip
-                out.extend((0..keep).map(|k| {
-                    (
+                for k in 0..keep {
+                    out(
                         tr.t[k],
                         [
                             p.wheel_radius_m * tr.y[k][7],
                             tr.y[k][0] * (1.0 + slip_of(&tr.y[k])),
                         ],
-                    )
-                }));
+                    );
+                }
             }
-            Ok(out)
+            Ok(())
         };
-        // windows in parallel a batch at a time, their samples pushed in window order (the
-        // same rows whatever the thread count; a batch's samples are all a long drive holds)
-        let batch = WINDOW_BATCH.max(rayon::current_num_threads());
-        // inside a parallel job (the fits' simulations) the windows run on this thread: a
-        // thread waiting for its windows would take up another job, another simulation whose
-        // inputs and outputs it then holds too
-        let min_len = if rayon::current_thread_index().is_some() {
-            batch
-        } else {
+        // one integrator per thread (its matrix cache carries over between windows); inside a
+        // parallel job (a fit's grid point, a drive of the proof or the pipeline) the windows
+        // run on the job's thread, their samples straight onto the rows: a thread waiting for
+        // its windows would take up another job, another simulation whose inputs and outputs
+        // it then holds too
+        let threads = if rayon::current_thread_index().is_some() {
             1
+        } else {
+            rayon::current_num_threads().max(1)
         };
-        for first in (0..n_win).step_by(batch) {
-            let samples: Vec<Vec<(f64, [f64; 2])>> = (first..(first + batch).min(n_win))
-                .into_par_iter()
-                .with_min_len(min_len)
-                .map_init(
-                    || {
-                        (
-                            FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad),
-                            fine_dt.map(|f| {
-                                FastDriveline::new(p, self.ratios, f).with_lash(tm.lash_rad)
-                            }),
-                        )
-                    },
-                    |(fast, fine), w| window(w, fast, fine),
+        let mut sims: Vec<_> = (0..threads)
+            .map(|_| {
+                (
+                    FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad),
+                    fine_dt.map(|f| FastDriveline::new(p, self.ratios, f).with_lash(tm.lash_rad)),
                 )
-                .collect::<Result<_, _>>()?;
-            for (t, y) in samples.into_iter().flatten() {
-                rows.push(t, y);
+            })
+            .collect();
+        if let [(fast, fine)] = sims.as_mut_slice() {
+            for w in 0..n_win {
+                window(w, fast, fine, &mut |t, y| rows.push(t, y))?;
+            }
+        } else {
+            // windows in parallel a batch at a time, each thread a contiguous run of them, the
+            // samples pushed in window order (the same rows whatever the thread count; a
+            // batch's samples are all a long drive holds)
+            let batch = WINDOW_BATCH.max(threads);
+            let all: Vec<usize> = (0..n_win).collect();
+            for ws in all.chunks(batch) {
+                let samples: Vec<Vec<(f64, [f64; 2])>> = sims
+                    .par_iter_mut()
+                    .zip(ws.par_chunks(ws.len().div_ceil(threads)))
+                    .map(|((fast, fine), run)| {
+                        let mut got = Vec::new();
+                        for &w in run {
+                            window(w, fast, fine, &mut |t, y| got.push((t, y)))?;
+                        }
+                        Ok(got)
+                    })
+                    .collect::<Result<_, ExtendedError>>()?;
+                for (t, y) in samples.into_iter().flatten() {
+                    rows.push(t, y);
+                }
             }
         }
         let [vehicle_speed, engine_speed] = rows.finish();

@@ -146,6 +146,13 @@ pub fn tolerance_variance(
     Ok(out)
 }
 
+/// Rows from which a diagnosis hands the allocator's free memory back to the operating system
+/// between its steps ([`crate::heap::release_free_memory`]): 2 hours at 50 Hz. On a 10-hour
+/// drive that takes about 0.1 GB off the resident peak; on a proof drive of 20 minutes the
+/// freed columns are small and faulting the returned pages in again costs more (1.5 % of the
+/// diagnosis's time, one thread, seed 1's first 17 proof drives).
+pub const RELEASE_MEMORY_MIN_ROWS: usize = 360_000;
+
 /// Gears whose shuffle mode sets the modal test's tolerance margin ([`tolerance_shift`]): the
 /// low gears, where clutch engagements ring.
 pub const MODAL_TOLERANCE_GEARS: usize = 4;
@@ -248,6 +255,12 @@ pub fn diagnose(
     vehicle: &VehicleFile,
     cfg: &DiagnoseConfig,
 ) -> Result<Diagnosed, DiagnoseError> {
+    // between steps, a long drive's freed columns go back to the operating system
+    let release = || {
+        if log.len() >= RELEASE_MEMORY_MIN_ROWS {
+            release_free_memory();
+        }
+    };
     let setup = Setup::new(log, vehicle)?;
     let models = ModelSet {
         actuation: true,
@@ -256,8 +269,7 @@ pub fn diagnose(
     let mut floors = noise_floors(log, &models, &setup.nominal, &cfg.noise)?;
     // the sensors' sample records serve the noise floor's draws alone
     floors.release_sensor_samples();
-    // between phases, the free memory of the last one goes back (crate::heap)
-    release_free_memory();
+    release();
     // the clutch-actuated engine speed is not located: its floor only weights the explain
     // step's clutch-actuation view
     let actuation_variance = floors
@@ -293,7 +305,7 @@ pub fn diagnose(
         }
     }
     drop(allowed);
-    release_free_memory();
+    release();
     // the recording against the nominal models, made where locate first reads it (on a long
     // drive, not held through the tolerance edges' simulations)
     let mut signals = models.compared(log, &setup.nominal)?;
@@ -305,7 +317,7 @@ pub fn diagnose(
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
     // the null copies serve the location's window test alone
     floors.release_samples();
-    release_free_memory();
+    release();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
     // (docs/models/driveline.md: the simulated ringing is restarted inside the analysis windows); a
     // flagged drive is a located engine-speed mismatch
@@ -404,7 +416,7 @@ pub fn diagnose(
         location.mismatch.push(m);
         location.any_significant = true;
     }
-    release_free_memory();
+    release();
     let explanation = explain(
         &problem,
         &ExplainConfig {
