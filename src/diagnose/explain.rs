@@ -56,6 +56,7 @@ use super::fit::{
     Evaluator, ScreenEntry, MAX_FULL_FITS,
 };
 use super::linearised::linearised_estimates;
+use super::long_drive::{is_long, map_in_order};
 use super::problem::{ExplainError, Part, Problem};
 use super::row_column::RowColumn;
 use super::signal_fits::signal_fits;
@@ -126,12 +127,10 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 .total_cmp(&scr.entries[a].overall_reduction)
         });
         cands.truncate(MAX_FULL_FITS);
-        // one candidate at a time, its simulations parallel inside (over windows, grid points
-        // and the interval's two sides): a long drive holds one candidate's working set
-        let fits: Vec<CandidateFit> = cands
-            .iter()
-            .map(|&k| candidate_fit(&ev, &base, &scr.entries[k], theta))
-            .collect();
+        // the candidates in parallel, one at a time on a long drive (super::long_drive)
+        let fits: Vec<CandidateFit> = map_in_order(is_long(problem.times().len()), &cands, |&k| {
+            candidate_fit(&ev, &base, &scr.entries[k], theta)
+        });
         // passing, most explained first (ties: screen rank)
         let mut passing: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].passes()).collect();
         passing.sort_by(|&a, &b| fits[b].explained.total_cmp(&fits[a].explained));

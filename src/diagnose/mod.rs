@@ -25,6 +25,7 @@ pub mod locate_config;
 pub mod locate_frequency;
 pub mod locate_statements;
 pub mod location;
+pub mod long_drive;
 pub mod longitudinal_model;
 pub mod modal;
 pub mod modal_channel;

@@ -44,6 +44,7 @@
 
 use super::compare::Compared;
 use super::extended::Theta;
+use super::long_drive::{is_long, map_in_order};
 use crate::table::DriveLog;
 
 pub use super::model_set::ModelSet;
@@ -167,8 +168,9 @@ fn perturb_column(
 }
 
 /// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
-/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (one at
-/// a time, in copy order: the outcome does not depend on the thread count), each
+/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (results
+/// in copy order, one copy at a time on a long drive: [`super::long_drive`]; the outcome does
+/// not depend on the thread count), each
 /// copy holding the columns `keep` alone when given (those `residuals` reads).
 ///
 /// # Errors
@@ -190,36 +192,36 @@ where
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
     // are dropped as soon as it is read, and the measurement's own change is drawn again for
-    // the split below, so a long drive holds one column per signal and copy). The copies run
-    // one after the other, each model's simulation parallel inside (a copy's perturbed log and
-    // model working set are a long drive's largest transient: one in flight, not one per
-    // thread).
+    // the split below, so a long drive holds one column per signal and copy). On a long drive
+    // the copies run one after the other, each simulation parallel inside (a copy's perturbed
+    // log and simulation are its largest transient: one in flight, not one per thread).
     type Run = Vec<Option<Vec<f32>>>;
-    let mut runs: Vec<Run> = (0..cfg.copies as u64)
-        .map(|c| {
-            let plog = perturbed_log(log, &sensors, cfg, c, keep);
-            let rs = residuals(&plog)?;
-            drop(plog);
-            base.iter()
-                .zip(&r0s)
-                .map(|(b, r0)| {
-                    let Some(cmp) = rs.iter().find(|x| x.name == b.name) else {
-                        return Ok(None);
-                    };
-                    let rc = cmp.residual();
-                    let n = r0.len();
-                    if rc.len() != n {
-                        return Err(NoiseError::Length {
-                            what: format!("residual of {} in a perturbed copy", b.name),
-                            expected: n,
-                            got: rc.len(),
-                        });
-                    }
-                    Ok(Some((0..n).map(|i| (rc[i] - r0[i]) as f32).collect()))
-                })
-                .collect()
-        })
-        .collect::<Result<_, _>>()?;
+    let copies: Vec<u64> = (0..cfg.copies as u64).collect();
+    let mut runs: Vec<Run> = map_in_order(is_long(log.len()), &copies, |&c| {
+        let plog = perturbed_log(log, &sensors, cfg, c, keep);
+        let rs = residuals(&plog)?;
+        drop(plog);
+        base.iter()
+            .zip(&r0s)
+            .map(|(b, r0)| {
+                let Some(cmp) = rs.iter().find(|x| x.name == b.name) else {
+                    return Ok(None);
+                };
+                let rc = cmp.residual();
+                let n = r0.len();
+                if rc.len() != n {
+                    return Err(NoiseError::Length {
+                        what: format!("residual of {} in a perturbed copy", b.name),
+                        expected: n,
+                        got: rc.len(),
+                    });
+                }
+                Ok(Some((0..n).map(|i| (rc[i] - r0[i]) as f32).collect()))
+            })
+            .collect()
+    })
+    .into_iter()
+    .collect::<Result<_, _>>()?;
     let mut floors = Vec::new();
     for (k, b) in base.iter().enumerate() {
         let n = r0s[k].len();

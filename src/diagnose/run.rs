@@ -35,6 +35,7 @@ use super::fit::fit_spec;
 use super::locate::{
     inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
+use super::long_drive::{is_long, map_in_order};
 use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::parameter_table::{EstimateMethod, ParameterRow};
@@ -115,25 +116,38 @@ pub fn tolerance_variance(
                 }
             })
             .collect();
-        // the edges' simulations one at a time (each parallel inside, over its windows),
-        // added in edge order: a long drive holds one edge's simulation at a time
+        // the edges' simulations a thread's worth at a time (one at a time on a long drive,
+        // each parallel inside: super::long_drive), added in edge order: the same sums
+        // whatever the thread count, and never every edge's simulation held at once
         let mut vars: Vec<Vec<f64>> = base.iter().map(|b| vec![0.0; b.len()]).collect();
-        for &(e, v) in &edges {
-            let mut theta = nominal;
-            theta.set(e, v);
-            let m = problem.simulate(domain, &theta)?;
-            for (k, var) in vars.iter_mut().enumerate() {
-                let add = |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
-                match (m[k].sparse_parts(), base[k].sparse_parts()) {
-                    // an events view: no change off its rows (equal fills) adds nothing
-                    (Some((ra, va, fa)), Some((rb, vb, fb))) if ra == rb && fa == fb => {
-                        for ((&i, a), b) in ra.iter().zip(va).zip(vb) {
-                            add(&mut var[i], a - b);
+        let long = is_long(problem.times().len());
+        let at_once = if long {
+            1
+        } else {
+            rayon::current_num_threads().max(1)
+        };
+        for chunk in edges.chunks(at_once) {
+            let moved = map_in_order(long, chunk, |&(e, v)| {
+                let mut theta = nominal;
+                theta.set(e, v);
+                problem.simulate(domain, &theta)
+            });
+            for m in moved {
+                let m = m?;
+                for (k, var) in vars.iter_mut().enumerate() {
+                    let add =
+                        |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
+                    match (m[k].sparse_parts(), base[k].sparse_parts()) {
+                        // an events view: no change off its rows (equal fills) adds nothing
+                        (Some((ra, va, fa)), Some((rb, vb, fb))) if ra == rb && fa == fb => {
+                            for ((&i, a), b) in ra.iter().zip(va).zip(vb) {
+                                add(&mut var[i], a - b);
+                            }
                         }
-                    }
-                    _ => {
-                        for (i, v) in var.iter_mut().enumerate() {
-                            add(v, m[k][i] - base[k][i]);
+                        _ => {
+                            for (i, v) in var.iter_mut().enumerate() {
+                                add(v, m[k][i] - base[k][i]);
+                            }
                         }
                     }
                 }
@@ -145,13 +159,6 @@ pub fn tolerance_variance(
     }
     Ok(out)
 }
-
-/// Rows from which a diagnosis hands the allocator's free memory back to the operating system
-/// between its steps ([`crate::heap::release_free_memory`]): 2 hours at 50 Hz. On a 10-hour
-/// drive that takes about 0.1 GB off the resident peak; on a proof drive of 20 minutes the
-/// freed columns are small and faulting the returned pages in again costs more (1.5 % of the
-/// diagnosis's time, one thread, seed 1's first 17 proof drives).
-pub const RELEASE_MEMORY_MIN_ROWS: usize = 360_000;
 
 /// Gears whose shuffle mode sets the modal test's tolerance margin ([`tolerance_shift`]): the
 /// low gears, where clutch engagements ring.
@@ -256,8 +263,9 @@ pub fn diagnose(
     cfg: &DiagnoseConfig,
 ) -> Result<Diagnosed, DiagnoseError> {
     // between steps, a long drive's freed columns go back to the operating system
+    // (super::long_drive)
     let release = || {
-        if log.len() >= RELEASE_MEMORY_MIN_ROWS {
+        if is_long(log.len()) {
             release_free_memory();
         }
     };

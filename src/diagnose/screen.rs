@@ -39,6 +39,7 @@
 
 use super::evaluator::{Active, Eval, Evaluator};
 use super::fit_spec::fit_spec;
+use super::long_drive::{is_long, map_in_order};
 use super::problem::Part;
 use super::row_column::RowColumn;
 use crate::model::catalogue::{Domain, Effect};
@@ -186,10 +187,9 @@ pub fn screen(
         .filter(|e| !probes.contains_key(e))
         .collect();
     let r = ev.resid(base);
-    // one effect at a time, each simulation parallel inside over its windows
-    let fresh: Vec<(Effect, Option<Probe>)> = missing
-        .iter()
-        .map(|&e| {
+    // the effects' probes in parallel, one effect at a time on a long drive (super::long_drive)
+    let fresh: Vec<(Effect, Option<Probe>)> =
+        map_in_order(is_long(ev.problem.times().len()), &missing, |&e| {
             let spec = fit_spec(e, nominal.get(e), ev.problem.slope_step());
             let cur = ev.theta.get(e);
             let in_domain = |p: &f64| *p >= spec.lo && *p <= spec.hi;
@@ -250,8 +250,7 @@ pub fn screen(
                     ..p
                 }),
             )
-        })
-        .collect();
+        });
     for (e, p) in fresh {
         if let Some(p) = p {
             probes.insert(e, Arc::new(p));
