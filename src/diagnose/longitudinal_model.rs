@@ -401,6 +401,32 @@ impl<'a> LongitudinalModel<'a> {
         theta: &Theta,
         needed: Option<&[bool]>,
     ) -> Result<LongitudinalOutputs, ExtendedError> {
+        // inside a parallel job (a fit's grid point, a drive of the proof or the pipeline) the
+        // windows run on the job's thread: a thread waiting for its windows would take up
+        // another job, another simulation whose inputs and outputs it then holds too
+        let threads = if rayon::current_thread_index().is_some() {
+            1
+        } else {
+            rayon::current_num_threads().max(1)
+        };
+        self.simulate_windows_on(theta, needed, threads)
+    }
+
+    /// [`LongitudinalModel::simulate_windows`] with the windows spread over `threads`
+    /// integrators (1: one after the other on this thread, the samples straight onto the rows;
+    /// more: a batch of [`WINDOW_BATCH`] windows at a time, each integrator a contiguous run of
+    /// them in parallel, the samples pushed in window order). The outputs are the same, bit for
+    /// bit, whatever `threads`: every window starts from the measured state.
+    ///
+    /// # Errors
+    /// As [`LongitudinalModel::simulate`].
+    pub fn simulate_windows_on(
+        &self,
+        theta: &Theta,
+        needed: Option<&[bool]>,
+        threads: usize,
+    ) -> Result<LongitudinalOutputs, ExtendedError> {
+        let threads = threads.max(1);
         let tm = self.plant(theta)?;
         let p: &DrivelineParams = &tm.driveline;
         let file = self.log.meta.source_file.clone();
@@ -515,16 +541,7 @@ impl<'a> LongitudinalModel<'a> {
             }
             Ok(())
         };
-        // one integrator per thread (its matrix cache carries over between windows); inside a
-        // parallel job (a fit's grid point, a drive of the proof or the pipeline) the windows
-        // run on the job's thread, their samples straight onto the rows: a thread waiting for
-        // its windows would take up another job, another simulation whose inputs and outputs
-        // it then holds too
-        let threads = if rayon::current_thread_index().is_some() {
-            1
-        } else {
-            rayon::current_num_threads().max(1)
-        };
+        // one integrator per thread (its matrix cache carries over between windows)
         let mut sims: Vec<_> = (0..threads)
             .map(|_| {
                 (

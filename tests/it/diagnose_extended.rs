@@ -492,3 +492,45 @@ fn the_reversals_are_integrated_at_the_fine_step() {
     assert!(worst(&fine) * rpm < 0.1, "{}", worst(&fine) * rpm);
     assert!(worst(&coarse) * rpm > 1.0, "{}", worst(&coarse) * rpm);
 }
+
+/// The windowed simulation gives the same rows, bit for bit, whatever the number of integrators
+/// its windows are spread over (`LongitudinalModel::simulate_windows_on`): on a proof drive
+/// without an effect (`fleetdyn prove --seed 1`, case 38, with fine spans about its torque
+/// reversals), every window and every other window, one integrator against two and five (five:
+/// batches whose runs are uneven).
+#[test]
+fn the_windows_give_the_same_rows_on_any_number_of_integrators() {
+    let (vf, log) = proof_drive(1, 38);
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.001);
+    let m = LongitudinalModel::new(
+        &log,
+        &truth,
+        &ratios,
+        nominal,
+        LongitudinalConfig::default(),
+    )
+    .unwrap();
+    let n_win = m.window_starts().len();
+    assert!(n_win > 40, "{n_win} windows: more than one batch of 32");
+    let every_other: Vec<bool> = (0..n_win).map(|w| w % 2 == 0).collect();
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+    for needed in [None, Some(every_other.as_slice())] {
+        let one = m.simulate_windows_on(&nominal, needed, 1).unwrap();
+        assert!(one.engine_speed.iter().any(|v| v.is_finite()));
+        for threads in [2, 5] {
+            let many = m.simulate_windows_on(&nominal, needed, threads).unwrap();
+            assert_eq!(
+                bits(&one.vehicle_speed),
+                bits(&many.vehicle_speed),
+                "{threads}"
+            );
+            assert_eq!(
+                bits(&one.engine_speed),
+                bits(&many.engine_speed),
+                "{threads}"
+            );
+        }
+    }
+}
