@@ -12,7 +12,8 @@
 //!    switch: any of every row's), ranked, at most [`super::fit::MAX_FULL_FITS`] (6).
 //! 3. **Fit** each candidate's parameter on the train part by Levenberg–Marquardt on the
 //!    re-simulated extended model (mode-aware: the hybrid simulation switches clutch modes and
-//!    gears itself), within its physical domain, in parallel across candidates; 95 % interval
+//!    gears itself), within its physical domain, in parallel across candidates (one at a time
+//!    on a long drive: [`super::long_drive`]); 95 % interval
 //!    by profile likelihood with an effective number of independent samples
 //!    ([`super::fit`]).
 //! 4. **Accept** by [`AcceptanceRule::FIXED`] ([`super::acceptance`]), **isolate** (ambiguity

@@ -168,10 +168,10 @@ fn perturb_column(
 }
 
 /// Noise floors of the signals `residuals` compares on `log` (see the module documentation,
-/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (results
-/// in copy order, one copy at a time on a long drive: [`super::long_drive`]; the outcome does
-/// not depend on the thread count), each
-/// copy holding the columns `keep` alone when given (those `residuals` reads).
+/// part 2): `residuals` is run on the recording and on `cfg.copies` perturbed copies (in
+/// parallel, one at a time on a long drive: [`super::long_drive`]; results in copy order, so
+/// the outcome does not depend on the thread count), each copy holding the columns `keep`
+/// alone when given (those `residuals` reads).
 ///
 /// # Errors
 /// [`NoiseError`] from the settings, the sensor estimates or `residuals`.

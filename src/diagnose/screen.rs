@@ -164,7 +164,8 @@ fn may_change(ev: &Evaluator<'_, '_>, e: Effect) -> Active {
 }
 
 /// Screens `effects` (applicable, not yet accepted) around `base` (the round's simulation).
-/// Probes missing from `probes` are simulated (in parallel) and added; the others are reused
+/// Probes missing from `probes` are simulated (in parallel; one at a time on a long drive,
+/// [`super::long_drive`]) and added; the others are reused
 /// ([`Probe`]). An effect whose probes fail on both sides of the current value is left out (it
 /// cannot be fitted).
 pub fn screen(
