@@ -3,9 +3,9 @@
 //!
 //! glibc's malloc keeps memory that a program frees for its next requests, and a freed
 //! full-length column (14 MB per channel on a 10-hour drive) often lands between chunks still
-//! in use, where it stays resident although nothing uses it: after the diagnosis's noise floor,
-//! location and explanation, a 10-hour drive's resident memory stood 0.2–0.4 GB above the
-//! memory in use. [`release_free_memory`] asks glibc to return every free page it holds
+//! in use, where it stays resident although nothing uses it (a 10-hour drive's diagnosis, trimmed
+//! after each step, peaked at 1 097 MB resident against 1 313 MB untrimmed in one run each:
+//! docs/validation/benchmarks.md). [`release_free_memory`] asks glibc to return every free page it holds
 //! (`malloc_trim(0)`, which also releases whole free pages inside its heaps); it changes no
 //! value a computation sees. It costs a walk of the allocator's free lists — milliseconds —
 //! so it is called between phases, not in loops. Other platforms' allocators keep their own

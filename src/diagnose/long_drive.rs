@@ -11,8 +11,9 @@
 //! has no windows, so a drive of ordinary length keeps the items' parallelism).
 //!
 //! Between its steps a long drive's diagnosis also hands the allocator's free pages back to the
-//! operating system ([`crate::heap::release_free_memory`]): on a 10-hour drive that takes about
-//! 0.1 GB off the resident peak; on a 20-minute drive the freed columns are small and faulting
+//! operating system ([`crate::heap::release_free_memory`]): on a 10-hour drive that took about
+//! 0.2 GB off the resident peak in one measured pair of runs; on a 20-minute drive the freed
+//! columns are small and faulting
 //! the returned pages in again costs more (1.5 % of the diagnosis's time on one thread, seed 1's
 //! first 17 proof drives). Measured in docs/validation/benchmarks.md.
 
