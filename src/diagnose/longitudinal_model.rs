@@ -392,7 +392,9 @@ impl<'a> LongitudinalModel<'a> {
     /// only its first sample — the state it starts from, which needs no integration — is kept
     /// for the rows of the window before that interpolate towards it. Every window starts from
     /// the measured state, so the outputs on the rows of the windows simulated are those of
-    /// the whole simulation, bit for bit.
+    /// the whole simulation, bit for bit. Outside a parallel job the windows are spread over
+    /// the thread pool ([`LongitudinalModel::simulate_windows_on`]); inside one they run on the
+    /// job's thread.
     ///
     /// # Errors
     /// As [`LongitudinalModel::simulate`] (a window left out fails nothing).
@@ -442,8 +444,8 @@ impl<'a> LongitudinalModel<'a> {
         let fine_spans: &[(f64, f64)] = if fine_dt.is_some() { &self.fine } else { &[] };
         let starts = &self.starts;
         let n_win = starts.len();
-        // the integration samples go onto the rows a batch of windows at a time (the samples
-        // of a long drive are never all held)
+        // the integration samples go onto the rows as they come (one integrator) or a batch of
+        // windows at a time (several): a long drive's samples are never all held
         let mut rows = LinearResampler::<2>::new(&self.t);
         // the driven tyres' slip of a sample, from the model's drive-shaft torque
         // M_d = k_d·(twist beyond the lash) + c_d·(ω_d − ω_w), F_x = M_d / r_w
