@@ -9,6 +9,9 @@
 //! Files are written into a hidden staging folder inside the output folder and renamed into
 //! place only when all of them are written, `diagnosis.json` last: a reader never sees a
 //! partial diagnosis, and a failed one leaves the folder as it was (no partial outputs).
+//! A process killed while writing leaves its staging folder behind; the next write into the
+//! same folder removes every staging folder it finds there (the writer owns its output folder:
+//! the pipeline gives each drive's folder to one shard, the `diagnose` command to its one run).
 
 use super::axle_plot::PlotError;
 use super::contract::assemble;
@@ -106,10 +109,8 @@ pub fn write_outputs(
         move |source| WriteError::Io { path, source }
     };
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let stage = dir.join(format!(".diagnose-partial-{}", std::process::id()));
-    if stage.exists() {
-        std::fs::remove_dir_all(&stage).map_err(io(&stage))?;
-    }
+    remove_stale_stages(dir).map_err(io(dir))?;
+    let stage = dir.join(format!("{STAGE_PREFIX}{}", std::process::id()));
     std::fs::create_dir_all(&stage).map_err(io(&stage))?;
     let result = write_staged(&stage, d, log, fingerprint);
     let names = match result {
@@ -142,6 +143,21 @@ pub fn write_outputs(
             .collect(),
         detail: p("detail.json"),
     })
+}
+
+/// Name of a staging folder, before the writing process's id.
+const STAGE_PREFIX: &str = ".diagnose-partial-";
+
+/// Removes the staging folders of earlier writes into `dir` that did not finish (their process
+/// was killed), whatever process made them.
+fn remove_stale_stages(dir: &Path) -> std::io::Result<()> {
+    for e in std::fs::read_dir(dir)? {
+        let e = e?;
+        if e.file_name().to_string_lossy().starts_with(STAGE_PREFIX) && e.file_type()?.is_dir() {
+            std::fs::remove_dir_all(e.path())?;
+        }
+    }
+    Ok(())
 }
 
 /// File name of a signal's residual plot.

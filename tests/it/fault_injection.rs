@@ -1,7 +1,8 @@
 //! Faults around a batch run: `kill -9` in the middle of a drive's commit and again later, then a
 //! re-run that gives a clean run's bytes with no temporary file visible at any time; a read-only
 //! output folder refused before any drive is read; a full disk failing the drives that hit it,
-//! naming the file, leaving nothing half-written.
+//! naming the file, leaving nothing half-written; staging folders of killed diagnosis writers
+//! removed by the next run.
 //!
 //! The full disk is simulated without root: the child runs under `RLIMIT_FSIZE` (`ulimit -f`)
 //! with `SIGXFSZ` ignored, so a write past the limit returns `EFBIG` ("File too large") where a
@@ -261,4 +262,64 @@ fn a_full_disk_fails_the_drives_it_hits_naming_the_file_and_leaves_nothing_half_
     assert!(files
         .iter()
         .any(|f| f.ends_with("good-small.parquet") && f.starts_with(out.join("drive_summary"))));
+}
+
+/// Every folder under `root` (recursively) whose name starts with `prefix`.
+fn folders_named(root: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
+    let mut found = Vec::new();
+    let mut todo = vec![root.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            if e.file_type().unwrap().is_dir() {
+                if e.file_name().to_string_lossy().starts_with(prefix) {
+                    found.push(e.path());
+                }
+                todo.push(e.path());
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn staging_folders_of_killed_diagnosis_writers_are_gone_after_the_next_run() {
+    // A process killed while writing a drive's diagnosis leaves its staging folder (named with
+    // its process id) in the drive's report folder; the task that takes the drive over has
+    // another id. Here every diagnosed drive's folder holds such a leftover, one with a finished
+    // file and a temporary, one empty, before the run.
+    let dir = tempfile::tempdir().unwrap();
+    let (clean, resumed) = (dir.path().join("clean"), dir.path().join("resumed"));
+    let run = |out: &Path| {
+        run_expecting(
+            bin()
+                .args(["run", "pipelines/nightly.toml", "--out"])
+                .arg(out),
+            0,
+        )
+    };
+    run(&clean);
+    let drives: Vec<String> = (1..=4)
+        .map(|n| {
+            format!("_reports/diagnose/model_version=2026.1/vehicle_id=TRK-000{n}/truck-000{n}")
+        })
+        .collect();
+    for d in &drives {
+        let left = resumed.join(d).join(".diagnose-partial-4194301");
+        std::fs::create_dir_all(&left).unwrap();
+        std::fs::copy(
+            clean.join(d).join("mismatch.parquet"),
+            left.join("mismatch.parquet"),
+        )
+        .unwrap();
+        std::fs::write(left.join(".findings.parquet.tmp-4194301-7"), b"half").unwrap();
+        std::fs::create_dir_all(resumed.join(d).join(".diagnose-partial-4194302")).unwrap();
+    }
+    run(&resumed);
+    assert_eq!(
+        folders_named(&resumed, ".diagnose-partial-"),
+        Vec::<std::path::PathBuf>::new()
+    );
+    let files = deterministic_files(&clean);
+    assert_eq!(files, deterministic_files(&resumed), "no file more or less");
+    assert_same_bytes(&clean, &resumed, &files);
 }
