@@ -9,6 +9,29 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+/// Removes the temporary files that interrupted writers (a killed process) left in `dir`: the
+/// hidden `.<name>.tmp-<pid>-<n>` names of [`AtomicFile::create`], whatever process made them.
+/// Only for a folder the caller owns, where no other process writes at the same time.
+///
+/// # Errors
+/// An I/O error reading the folder (a missing folder is not one) or removing a file.
+pub fn remove_stale_temps(dir: &Path) -> io::Result<()> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(e),
+    };
+    for e in entries {
+        let e = e?;
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with('.') && name.contains(".tmp-") && e.file_type()?.is_file() {
+            std::fs::remove_file(e.path())?;
+        }
+    }
+    Ok(())
+}
+
 /// A file being written under a temporary name next to its final path.
 #[derive(Debug)]
 pub struct AtomicFile {
@@ -136,5 +159,27 @@ mod tests {
             assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
         }
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn stale_temps_of_any_process_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        for n in [".a.parquet.tmp-4194301-0", ".summary.md.tmp-7-12"] {
+            std::fs::write(d.join(n), b"half").unwrap();
+        }
+        for n in ["a.parquet", ".hidden", "b.tmp-3-1"] {
+            std::fs::write(d.join(n), b"whole").unwrap();
+        }
+        std::fs::create_dir(d.join(".c.tmp-1-1")).unwrap();
+        remove_stale_temps(d).unwrap();
+        let mut left: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, [".c.tmp-1-1", ".hidden", "a.parquet", "b.tmp-3-1"]);
+        // a folder that does not exist holds nothing stale
+        remove_stale_temps(&d.join("missing")).unwrap();
     }
 }

@@ -6,7 +6,7 @@ mod fingerprint;
 pub mod json_f64;
 mod parquet_out;
 
-pub use atomic::AtomicFile;
+pub use atomic::{remove_stale_temps, AtomicFile};
 pub use escape::escape;
 pub use fingerprint::canonical;
 pub use parquet_out::{

@@ -434,12 +434,8 @@ fn ecdf_svg(title: &str, series: &[(&str, Vec<f64>)]) -> Result<String, String> 
 /// [`RunError`] when a file cannot be written.
 pub fn write_run_report(dir: &Path, plan: &Plan, report: &RunReport) -> Result<(), RunError> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
-    for f in std::fs::read_dir(dir).map_err(io_err(dir))?.flatten() {
-        // leftovers of an interrupted report write (this report folder belongs to this run)
-        if f.file_name().to_string_lossy().contains(".tmp-") {
-            let _ = std::fs::remove_file(f.path());
-        }
-    }
+    // leftovers of an interrupted report write (this report folder belongs to this run)
+    crate::io::remove_stale_temps(dir).map_err(io_err(dir))?;
     let mut written: Vec<&str> = Vec::new();
     write_table(
         &dir.join("drive_validation.parquet"),

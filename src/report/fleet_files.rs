@@ -9,7 +9,7 @@ use super::fleet_html::{fleet_html, PageInfo};
 use crate::fleet::suggest::suggestion;
 use crate::fleet::tables::{change_columns, parameter_columns, trip_columns, vehicle_columns};
 use crate::fleet::{FleetError, VehicleEvidence};
-use crate::io::{escape, write_table, AtomicFile, TableMeta};
+use crate::io::{escape, remove_stale_temps, write_table, AtomicFile, TableMeta};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -43,6 +43,8 @@ pub fn write_fleet_outputs(
         move |source| FleetError::Io { path, source }
     };
     std::fs::create_dir_all(dir).map_err(io(dir))?;
+    // leftovers of an interrupted write of this folder (it belongs to the one step writing it)
+    remove_stale_temps(dir).map_err(io(dir))?;
     let table_meta = |table: &str| TableMeta {
         table: table.into(),
         drive_id: String::new(),

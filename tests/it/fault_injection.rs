@@ -1,8 +1,8 @@
 //! Faults around a batch run: `kill -9` in the middle of a drive's commit and again later, then a
 //! re-run that gives a clean run's bytes with no temporary file visible at any time; a read-only
 //! output folder refused before any drive is read; a full disk failing the drives that hit it,
-//! naming the file, leaving nothing half-written; staging folders of killed diagnosis writers
-//! removed by the next run.
+//! naming the file, leaving nothing half-written; the staging folders and temporaries of killed
+//! report writers removed by the next run.
 //!
 //! The full disk is simulated without root: the child runs under `RLIMIT_FSIZE` (`ulimit -f`)
 //! with `SIGXFSZ` ignored, so a write past the limit returns `EFBIG` ("File too large") where a
@@ -282,11 +282,11 @@ fn folders_named(root: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
 }
 
 #[test]
-fn staging_folders_of_killed_diagnosis_writers_are_gone_after_the_next_run() {
+fn leftovers_of_killed_report_writers_are_gone_after_the_next_run() {
     // A process killed while writing a drive's diagnosis leaves its staging folder (named with
     // its process id) in the drive's report folder; the task that takes the drive over has
     // another id. Here every diagnosed drive's folder holds such a leftover, one with a finished
-    // file and a temporary, one empty, before the run.
+    // file and a temporary, one empty, before the run; and the report folders a temporary file.
     let dir = tempfile::tempdir().unwrap();
     let (clean, resumed) = (dir.path().join("clean"), dir.path().join("resumed"));
     let run = |out: &Path| {
@@ -314,6 +314,11 @@ fn staging_folders_of_killed_diagnosis_writers_are_gone_after_the_next_run() {
         std::fs::write(left.join(".findings.parquet.tmp-4194301-7"), b"half").unwrap();
         std::fs::create_dir_all(resumed.join(d).join(".diagnose-partial-4194302")).unwrap();
     }
+    // and the run report's and the fleet step's folders a killed writer's temporaries
+    let rep = resumed.join("_reports/nightly/model_version=2026.1");
+    std::fs::create_dir_all(rep.join("fleet")).unwrap();
+    std::fs::write(rep.join(".summary.md.tmp-4194301-3"), b"half").unwrap();
+    std::fs::write(rep.join("fleet/.fleet.html.tmp-4194301-9"), b"half").unwrap();
     run(&resumed);
     assert_eq!(
         folders_named(&resumed, ".diagnose-partial-"),
