@@ -194,7 +194,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 excluded.push(Effect::from_id(a).expect("catalogue id"));
             }
             rounds.push(Round {
-                screen: scr,
+                screen: scr.without_probes(),
                 fits: without_simulations(fits),
                 accepted: None,
                 consistent: Some(e.id()),
@@ -204,7 +204,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         let accepted = accepted.map(|(i, ci, _)| (i, ci));
         let Some((i, ci)) = accepted else {
             rounds.push(Round {
-                screen: scr,
+                screen: scr.without_probes(),
                 fits: without_simulations(fits),
                 accepted: None,
                 consistent: None,
@@ -259,7 +259,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             evidence,
         });
         rounds.push(Round {
-            screen: scr,
+            screen: scr.without_probes(),
             fits: without_simulations(fits),
             accepted: Some(e.id()),
             consistent: None,

@@ -187,8 +187,13 @@ where
     cfg.validate()?;
     let dt = grid_step_s(log)?;
     let sensors = sensor_estimates(log, cfg)?;
-    let base = residuals(log)?;
+    let mut base = residuals(log)?;
     let r0s: Vec<Vec<f64>> = base.iter().map(Compared::residual).collect();
+    // past the residuals, only the signals' names, units and rows that count are read
+    for b in &mut base {
+        b.measured = Vec::new();
+        b.simulated = Vec::new();
+    }
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
     // are dropped as soon as it is read, and the measurement's own change is drawn again for
@@ -207,16 +212,28 @@ where
                 let Some(cmp) = rs.iter().find(|x| x.name == b.name) else {
                     return Ok(None);
                 };
-                let rc = cmp.residual();
                 let n = r0.len();
-                if rc.len() != n {
+                let got = cmp.valid.len();
+                if got != n || cmp.measured.len() != n || cmp.simulated.len() != n {
                     return Err(NoiseError::Length {
                         what: format!("residual of {} in a perturbed copy", b.name),
                         expected: n,
-                        got: rc.len(),
+                        got: got.min(cmp.measured.len()).min(cmp.simulated.len()),
                     });
                 }
-                Ok(Some((0..n).map(|i| (rc[i] - r0[i]) as f32).collect()))
+                // the copy's residual (Compared::residual) less the recording's, row by row
+                Ok(Some(
+                    (0..n)
+                        .map(|i| {
+                            let rc = if cmp.valid[i] {
+                                cmp.measured[i] - cmp.simulated[i]
+                            } else {
+                                f64::NAN
+                            };
+                            (rc - r0[i]) as f32
+                        })
+                        .collect(),
+                ))
             })
             .collect()
     })

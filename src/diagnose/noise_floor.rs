@@ -484,17 +484,18 @@ impl NoiseFloors {
         self.floors.iter().find(|f| f.signal == signal)
     }
 
-    /// Drops what only the floors' making and the window test read: every floor's null copies
-    /// (a long drive's largest part of the floors: one f32 row per copy and row), which only
-    /// [`NoiseFloor::window_dof`] reads, after which a window's degrees of freedom come from
-    /// the autocorrelation alone; and the sensor estimates' native-sample records, which only
-    /// a copy's draw reads ([`SensorNoise::without_samples`]). The diagnosis releases the
-    /// sensors' records as soon as the floors are made
-    /// ([`NoiseFloors::release_sensor_samples`]) and the null copies once the mismatch is
-    /// located.
+    /// Drops what only the floors' making and the location's tests read: every floor's null
+    /// copies (a long drive's largest part of the floors: one f32 row per copy and row), which
+    /// only [`NoiseFloor::window_dof`] reads, after which a window's degrees of freedom come
+    /// from the autocorrelation alone, and its per-row null variance (empty afterwards: the
+    /// floors serve figures only, no window test); and the sensor estimates' native-sample
+    /// records, which only a copy's draw reads ([`SensorNoise::without_samples`]). The
+    /// diagnosis releases the sensors' records as soon as the floors are made
+    /// ([`NoiseFloors::release_sensor_samples`]) and the rest once the mismatch is located.
     pub fn release_samples(&mut self) {
         for f in &mut self.floors {
             f.null_copies = Vec::new();
+            f.null_variance = Vec::new();
         }
         self.release_sensor_samples();
     }

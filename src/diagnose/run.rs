@@ -210,8 +210,8 @@ pub struct Diagnosed {
     pub drive_id: String,
     /// The verdict of step 5 ([`verdict`]).
     pub verdict: Verdict,
-    /// Step 3, without the null copies and the sensors' sample records
-    /// ([`NoiseFloors::release_samples`]: steps 3 and 4 read them).
+    /// Step 3, without the null copies, the per-row null variances and the sensors' sample
+    /// records ([`NoiseFloors::release_samples`]: steps 3 and 4 read them).
     pub floors: NoiseFloors,
     /// Step 4.
     pub location: Location,
@@ -318,12 +318,12 @@ pub fn diagnose(
     // drive, not held through the tolerance edges' simulations)
     let mut signals = models.compared(log, &setup.nominal)?;
     signals.retain(|c| c.name != ACTUATION_CHANNEL);
-    let cmp = Comparison {
+    let mut cmp = Comparison {
         signals,
         conditions: Conditions::from_log(log),
     };
     let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
-    // the null copies serve the location's window test alone
+    // the null copies and the per-row null variances serve the location's tests alone
     floors.release_samples();
     release();
     // the shuffle modes after clutch engagements against the nominal driveline's linearised ones
@@ -424,6 +424,17 @@ pub fn diagnose(
         location.mismatch.push(m);
         location.any_significant = true;
     }
+    // past the location, the comparison is read for the residuals before and the rows' times
+    // alone: made now, the rest dropped before the explain step's simulations
+    let before: Vec<(String, Vec<f64>)> = std::mem::take(&mut cmp.signals)
+        .into_iter()
+        .map(|c| {
+            let r = c.residual();
+            (c.name, r)
+        })
+        .collect();
+    let t_s = std::mem::take(&mut cmp.conditions.t_s);
+    drop(cmp);
     release();
     let explanation = explain(
         &problem,
@@ -457,18 +468,14 @@ pub fn diagnose(
             after.insert(ch.name.clone(), r);
         }
     }
-    let residuals = cmp
-        .signals
-        .iter()
-        .map(|c| {
-            let before = c.residual();
-            Residual {
-                signal: c.name.clone(),
-                after: after
-                    .remove(&c.name)
-                    .unwrap_or_else(|| vec![f64::NAN; before.len()]),
-                before,
-            }
+    let residuals = before
+        .into_iter()
+        .map(|(signal, before)| Residual {
+            after: after
+                .remove(&signal)
+                .unwrap_or_else(|| vec![f64::NAN; before.len()]),
+            signal,
+            before,
         })
         .collect();
     let parameters = parameter_rows(&explanation, &setup.nominal, &vehicle.tolerance);
@@ -479,7 +486,7 @@ pub fn diagnose(
         floors,
         location,
         explanation,
-        t_s: cmp.conditions.t_s.clone(),
+        t_s,
         residuals,
         models: ModelsUsed {
             longitudinal: setup.longitudinal,

@@ -115,7 +115,8 @@ pub struct ScreenEntry {
     pub joint_change: f64,
     /// Above the candidate threshold.
     pub candidate: bool,
-    /// The finite-difference probe.
+    /// The finite-difference probe (none in a decided round's screen,
+    /// [`Screen::without_probes`]).
     #[serde(skip)]
     pub probe: Option<Arc<Probe>>,
     /// The single-effect least-squares sums on the screened rows.
@@ -138,7 +139,7 @@ pub struct ScreenSums {
 }
 
 impl ScreenEntry {
-    /// Which models the effect changes.
+    /// Which models the effect changes (empty without a probe).
     pub fn active(&self) -> &[bool] {
         self.probe.as_ref().map_or(&[], |p| &p.active)
     }
@@ -152,6 +153,19 @@ pub struct Screen {
     /// Fraction of all models' weighted train SSE the joint fit of every screened sensitivity
     /// removes (unconstrained: what the catalogue explains linearly at most).
     pub joint_reduction: f64,
+}
+
+impl Screen {
+    /// The screen as a decided round keeps it: its figures without the entries' probes (each
+    /// holds every changed model's outputs on every row; the explain step keeps its own map of
+    /// the probes for the rounds that reuse them, and nothing reads a decided round's), after
+    /// which [`ScreenEntry::active`] is empty.
+    pub fn without_probes(mut self) -> Screen {
+        for e in &mut self.entries {
+            e.probe = None;
+        }
+        self
+    }
 }
 
 /// Models `e` may change: its own, and for a longitudinal effect also the axle model (which
