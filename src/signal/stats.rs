@@ -99,8 +99,10 @@ pub fn t_cdf(x: f64, dof: f64) -> f64 {
     StudentsT::new(0.0, 1.0, dof).map_or(f64::NAN, |t| t.cdf(x))
 }
 
-/// FFT length of one block of [`xcorr_sums`] (at least four times the lag span): a block
-/// of `a` is `XCORR_FFT_LEN − 2·max_lag` samples long.
+/// FFT length of one block of [`xcorr_sums`]: a block of `a` is `m − 2·max_lag` samples long
+/// for a transform length `m` of this, or of the power of two from `4·max_lag + 2` when the
+/// lags reach further (a block at least as long as the lag span), or of the power of two from
+/// the series' length plus `2·max_lag` when that is shorter.
 pub const XCORR_FFT_LEN: usize = 1 << 15;
 
 /// Σ_t a(t)·b(t+k) for k = −max_lag..=max_lag (index k + max_lag; `b` read as zero outside
