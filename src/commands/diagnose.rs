@@ -2,7 +2,7 @@
 
 use super::failure::{input, io, model, Failure};
 use super::progress::Progress;
-use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError};
+use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError, UNREAD_COLUMNS};
 use fleetdyn::ingest::IngestOptions;
 use fleetdyn::model::vehicle::VehicleFile;
 use fleetdyn::pipeline::ingest_stage::{self, IngestConfig};
@@ -38,7 +38,11 @@ fn category(e: DiagnoseError) -> Failure {
 
 /// Runs it.
 pub fn run(job: Job) -> Result<(), Failure> {
-    let ing = ingest_stage::run(&job.drive, &job.opts).map_err(input)?;
+    let mut ing = ingest_stage::run(&job.drive, &job.opts).map_err(input)?;
+    // the diagnosis reads no position: the GNSS columns go before it starts
+    ing.log
+        .signals
+        .retain(|c| !UNREAD_COLUMNS.contains(&c.name.as_str()));
     let t0 = std::time::Instant::now();
     let spinner = Progress::spinner(&format!(
         "diagnosing {} ({:.0} s of drive)",

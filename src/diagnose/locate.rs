@@ -45,7 +45,8 @@ use crate::signal::stats::runs;
 use std::collections::BTreeMap;
 
 pub use super::locate_config::{
-    inputs_from_log, shuffle_band_hz, LocateConfig, LocateError, NamedSeries, WindowAxis,
+    inputs_from_log, recorded_inputs, shuffle_band_hz, InputSeries, LocateConfig, LocateError,
+    NamedSeries, RecordedInput, WindowAxis,
 };
 pub use super::location::{
     BandCoherence, BandPower, ConditionCell, InputCoherence, InputLag, Location, Mismatch,
@@ -74,6 +75,21 @@ pub fn locate(
     inputs: &[NamedSeries],
     cfg: &LocateConfig,
 ) -> Result<Location, LocateError> {
+    locate_inputs(cmp, floors, inputs, cfg)
+}
+
+/// [`locate`] with inputs of any [`InputSeries`] kind, each made when its tests read it (a
+/// log's [`recorded_inputs`]: one filled copy at a time). The same location as [`locate`] on
+/// the same series.
+///
+/// # Errors
+/// As [`locate`].
+pub fn locate_inputs<S: InputSeries>(
+    cmp: &Comparison,
+    floors: &NoiseFloors,
+    inputs: &[S],
+    cfg: &LocateConfig,
+) -> Result<Location, LocateError> {
     cfg.validate()?;
     let n = cmp.conditions.t_s.len();
     let cond = Cond::new(&cmp.conditions, n)?;
@@ -93,11 +109,11 @@ pub fn locate(
         }
     }
     for x in inputs {
-        if x.values.len() != n {
+        if x.len() != n {
             return Err(LocateError::Length {
-                what: format!("input {}", x.name),
+                what: format!("input {}", x.name()),
                 expected: n,
-                got: x.values.len(),
+                got: x.len(),
             });
         }
     }
@@ -169,14 +185,17 @@ pub fn locate(
             k = e + 1;
         }
         loc.bands = band_powers(&residual, &usable, floor, cfg, cond.dt);
-        loc.coherence = inputs
-            .iter()
-            .filter_map(|x| coherence(x, &residual, &usable, floor, cfg, cond.dt))
-            .collect();
-        loc.lags = inputs
-            .iter()
-            .filter_map(|x| lag(x, &residual, &usable, cfg, cond.dt))
-            .collect();
+        // each input made, read by both tests and dropped before the next
+        let (mut coh, mut lags) = (Vec::new(), Vec::new());
+        for x in inputs {
+            let Some(x) = x.series() else {
+                continue;
+            };
+            coh.extend(coherence(&x, &residual, &usable, floor, cfg, cond.dt));
+            lags.extend(lag(&x, &residual, &usable, cfg, cond.dt));
+        }
+        loc.coherence = coh;
+        loc.lags = lags;
         loc.conditions = cells(&residual, &usable, floor, &cond, cfg);
         if loc.significant {
             loc.statements = statements(&s.name, &residual, &usable, floor, &cond, cfg);

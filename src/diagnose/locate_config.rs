@@ -15,6 +15,7 @@ use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
 use crate::table::DriveLog;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use thiserror::Error;
 
 /// Why locating cannot run.
@@ -216,27 +217,94 @@ pub struct NamedSeries {
     pub values: Vec<f64>,
 }
 
-/// The recorded inputs of a log as named series (gaps filled as the schema's kind says):
-/// engine torque, road slope, vehicle speed, brake force, retarder torque, clutch position,
-/// those present.
-pub fn inputs_from_log(log: &DriveLog) -> Vec<NamedSeries> {
-    let cols = [
-        ("engine_torque", Interpolation::Linear),
-        ("road_slope", Interpolation::Hold),
-        ("vehicle_speed", Interpolation::Linear),
-        ("brake_force", Interpolation::Linear),
-        ("retarder_torque", Interpolation::Linear),
-        ("clutch_position", Interpolation::Linear),
-    ];
-    cols.iter()
-        .filter_map(|(c, k)| {
-            let s = log.signals.iter().find(|s| s.name == *c)?;
-            Some(NamedSeries {
-                name: s.name.clone(),
-                unit: s.unit.clone(),
-                values: fill_gaps(&s.values, *k)?,
+/// The recorded inputs the location reads: engine torque, road slope, vehicle speed, brake
+/// force, retarder torque, clutch position, each with the interpolation that fills its gaps
+/// (the schema's kind).
+const RECORDED_INPUTS: [(&str, Interpolation); 6] = [
+    ("engine_torque", Interpolation::Linear),
+    ("road_slope", Interpolation::Hold),
+    ("vehicle_speed", Interpolation::Linear),
+    ("brake_force", Interpolation::Linear),
+    ("retarder_torque", Interpolation::Linear),
+    ("clutch_position", Interpolation::Linear),
+];
+
+/// An input series of the location's coherence and lag tests
+/// ([`super::locate::locate`]), made when the tests read it: one at a time, so a long drive
+/// never holds every input's copy at once.
+pub trait InputSeries {
+    /// Canonical column.
+    fn name(&self) -> &str;
+    /// Rows.
+    fn len(&self) -> usize;
+    /// Whether it has no rows.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The series (`None`: it holds no value, and is left out of the tests).
+    fn series(&self) -> Option<Cow<'_, NamedSeries>>;
+}
+
+impl InputSeries for NamedSeries {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn len(&self) -> usize {
+        self.values.len()
+    }
+    fn series(&self) -> Option<Cow<'_, NamedSeries>> {
+        Some(Cow::Borrowed(self))
+    }
+}
+
+/// A recorded input column of a log, its gaps filled when read ([`InputSeries::series`]).
+#[derive(Debug, Clone, Copy)]
+pub struct RecordedInput<'a> {
+    name: &'a str,
+    unit: &'a str,
+    raw: &'a [f64],
+    fill: Interpolation,
+}
+
+impl InputSeries for RecordedInput<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn len(&self) -> usize {
+        self.raw.len()
+    }
+    fn series(&self) -> Option<Cow<'_, NamedSeries>> {
+        Some(Cow::Owned(NamedSeries {
+            name: self.name.to_string(),
+            unit: self.unit.to_string(),
+            values: fill_gaps(self.raw, self.fill)?,
+        }))
+    }
+}
+
+/// The recorded inputs of `log` the location reads, those present, in a fixed order, read
+/// lazily ([`RecordedInput`]).
+pub fn recorded_inputs(log: &DriveLog) -> Vec<RecordedInput<'_>> {
+    RECORDED_INPUTS
+        .iter()
+        .filter_map(|&(c, fill)| {
+            let s = log.signals.iter().find(|s| s.name == c)?;
+            Some(RecordedInput {
+                name: &s.name,
+                unit: &s.unit,
+                raw: &s.values,
+                fill,
             })
         })
+        .collect()
+}
+
+/// The recorded inputs of a log as named series, filled at once: those of
+/// [`recorded_inputs`] that hold a value.
+pub fn inputs_from_log(log: &DriveLog) -> Vec<NamedSeries> {
+    recorded_inputs(log)
+        .iter()
+        .filter_map(|x| x.series().map(Cow::into_owned))
         .collect()
 }
 

@@ -50,7 +50,9 @@ use crate::table::DriveLog;
 pub use super::model_set::ModelSet;
 pub use super::noise_config::{NoiseConfig, PerturbedColumn};
 pub use super::noise_error::NoiseError;
-pub use super::noise_floor::{segment_mean_square, NoiseFloor, NoiseFloors, NullPsd};
+pub use super::noise_floor::{
+    segment_mean_square, segment_mean_square_stream, NoiseFloor, NoiseFloors, NullPsd,
+};
 pub use crate::signal::sensor_noise::{
     grid_step_s, stream, SampleKind, SensorNoise, SensorNoiseError,
 };
@@ -197,7 +199,8 @@ where
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
     // are dropped as soon as it is read, and the measurement's own change is drawn again for
-    // the split below, so a long drive holds one column per signal and copy). On a long drive
+    // the split below, so a long drive holds one column per signal and copy, on the rows that
+    // count). On a long drive
     // the copies run one after the other, each simulation parallel inside (a copy's perturbed
     // log and simulation are its largest transient: one in flight, not one per thread).
     type Run = Vec<Option<Vec<f32>>>;
@@ -221,9 +224,12 @@ where
                         got: got.min(cmp.measured.len()).min(cmp.simulated.len()),
                     });
                 }
-                // the copy's residual (Compared::residual) less the recording's, row by row
+                // the copy's residual (Compared::residual) less the recording's, on the rows
+                // where the recording's counts (elsewhere the recording's residual is NaN, and
+                // so is the change): the clutch-actuation channel counts on a few rows only
                 Ok(Some(
                     (0..n)
+                        .filter(|&i| b.valid[i])
                         .map(|i| {
                             let rc = if cmp.valid[i] {
                                 cmp.measured[i] - cmp.simulated[i]
@@ -242,10 +248,28 @@ where
     let mut floors = Vec::new();
     for (k, b) in base.iter().enumerate() {
         let n = r0s[k].len();
+        // each copy's change spread onto every row (NaN where the recording's row does not
+        // count), one signal's copies at a time
         let (index, copies): (Vec<u64>, Vec<Vec<f32>>) = runs
             .iter_mut()
             .enumerate()
-            .filter_map(|(c, r)| r[k].take().map(|e| (c as u64, e)))
+            .filter_map(|(c, r)| {
+                r[k].take().map(|e| {
+                    let mut on = e.into_iter();
+                    let full: Vec<f32> = b
+                        .valid
+                        .iter()
+                        .map(|&v| {
+                            if v {
+                                on.next().unwrap_or(f32::NAN)
+                            } else {
+                                f32::NAN
+                            }
+                        })
+                        .collect();
+                    (c as u64, full)
+                })
+            })
             .unzip();
         let mut f = NoiseFloor::from_null_copies(&b.name, &b.unit, dt, copies, &b.valid, cfg)?;
         // measurement / input split (RMS over the rows that count, where the floor keeps the

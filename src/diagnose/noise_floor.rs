@@ -15,8 +15,9 @@
 use super::noise_config::NoiseConfig;
 use super::noise_error::NoiseError;
 use crate::signal::sensor_noise::{stream, SensorNoise};
-use crate::signal::{csd_pieces, WelchConfig};
+use crate::signal::{csd_piece_stream, WelchConfig};
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 /// The null PSD of a floor (mean over the copies).
@@ -39,6 +40,14 @@ pub struct NullPsd {
 /// squared segment mean of each piece: the power slower than one segment, which the Welch PSD
 /// leaves out (0 without a full segment).
 pub fn segment_mean_square(pieces: &[&[f64]], nperseg: usize) -> f64 {
+    segment_mean_square_stream(pieces.iter().map(|&x| Cow::Borrowed(x)), nperseg)
+}
+
+/// [`segment_mean_square`] of pieces made as they are read (one held at a time), bit for bit.
+pub fn segment_mean_square_stream<'a>(
+    pieces: impl Iterator<Item = Cow<'a, [f64]>>,
+    nperseg: usize,
+) -> f64 {
     let step = (nperseg - nperseg / 2).max(1);
     let (mut s, mut k) = (0.0, 0usize);
     for x in pieces {
@@ -265,30 +274,40 @@ impl NoiseFloor {
         }
         let correlation_time_s =
             dt_s * (1.0 + 2.0 * autocorrelation[1..].iter().map(|r| r * r).sum::<f64>());
-        // null PSD over every copy's usable stretches
+        // null PSD over every copy's usable stretches, each read in double precision as the
+        // spectrum reaches it (all copies' stretches at once would be 8 bytes per copy and
+        // usable row: 0.17 GB on a 10-hour drive)
         let nperseg = ((cfg.psd_segment_s / dt_s).round() as usize).max(8);
-        // each copy's usable stretches in double precision, as the spectrum takes them
-        let mut stretches: Vec<Vec<f64>> = Vec::new();
-        for c in &copies {
-            let mut i = 0;
-            while i < n {
-                if !usable[i] {
-                    i += 1;
-                    continue;
-                }
-                let a = i;
-                while i < n && usable[i] {
-                    i += 1;
-                }
-                stretches.push(c[a..i].iter().map(|x| f64::from(*x)).collect());
+        let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
+        let mut i = 0;
+        while i < n {
+            if !usable[i] {
+                i += 1;
+                continue;
             }
+            let a = i;
+            while i < n && usable[i] {
+                i += 1;
+            }
+            runs.push(a..i);
         }
-        let pieces: Vec<(&[f64], &[f64])> = stretches
-            .iter()
-            .map(|p| (p.as_slice(), p.as_slice()))
-            .collect();
-        let null_psd = csd_pieces(
-            &pieces,
+        let stretches = || {
+            copies.iter().flat_map(|c| {
+                runs.iter().map(move |r| {
+                    c[r.clone()]
+                        .iter()
+                        .map(|x| f64::from(*x))
+                        .collect::<Vec<f64>>()
+                })
+            })
+        };
+        let null_psd = csd_piece_stream(
+            || {
+                stretches().map(|p| {
+                    let q = p.clone();
+                    (Cow::Owned(p), Cow::Owned(q))
+                })
+            },
             &WelchConfig {
                 fs_hz: 1.0 / dt_s,
                 nperseg: Some(nperseg),
@@ -302,10 +321,8 @@ impl NoiseFloor {
             psd: c.pxx,
             dof: c.dof,
             nperseg,
-            dc_power: segment_mean_square(&pieces.iter().map(|p| p.0).collect::<Vec<_>>(), nperseg),
+            dc_power: segment_mean_square_stream(stretches().map(Cow::Owned), nperseg),
         });
-        drop(pieces);
-        drop(stretches);
         for c in copies.iter_mut() {
             for (x, u) in c.iter_mut().zip(&usable) {
                 if !u {

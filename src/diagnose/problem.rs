@@ -559,6 +559,17 @@ impl<'a> Problem<'a> {
         &self.nominal_outputs
     }
 
+    /// The nominal outputs of `domain`'s views, flattened as [`Problem::simulate`] returns
+    /// them: the nominal simulation itself, shared, not made again.
+    pub fn nominal_of(&self, domain: Domain) -> Vec<RowColumn> {
+        self.views
+            .iter()
+            .zip(&self.nominal_outputs)
+            .filter(|(v, _)| v.domain == domain)
+            .flat_map(|(_, y)| y.iter().cloned())
+            .collect()
+    }
+
     /// The views ([`super::view`]), longitudinal first.
     pub fn views(&self) -> &[View] {
         &self.views

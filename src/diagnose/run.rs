@@ -33,7 +33,7 @@ use super::explain::{explain, verdict, ExplainConfig, Explanation, Verdict};
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig, Theta};
 use super::fit::fit_spec;
 use super::locate::{
-    inputs_from_log, locate, shuffle_band_hz, LocateConfig, LocateError, Location,
+    locate_inputs, recorded_inputs, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
 use super::long_drive::{is_long, map_in_order};
 use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig, Reference};
@@ -84,19 +84,22 @@ pub enum DiagnoseError {
 /// `Σ Δy²/3` — the variance of a parameter spread uniformly over `θ₀ ± w`, to first order,
 /// the parameters independent. A residual this size is what a truck whose values all lie in
 /// their bands shows against the nominal model; locate tests the residual against the sensor
-/// noise floor plus this (docs/diagnosis/method.md, "Model-form residual").
+/// noise floor plus this (docs/diagnosis/method.md, "Model-form residual"). Made for the
+/// channels named in `signals` alone (those the location tests; the events and clutch-actuation
+/// channels are not located).
 ///
 /// # Errors
 /// [`ExtendedError`] when a model fails at the nominal parameters or at a band's edge.
 pub fn tolerance_variance(
     problem: &Problem<'_>,
     tolerances: &Tolerances,
+    signals: &[&str],
 ) -> Result<BTreeMap<String, Vec<f64>>, ExtendedError> {
     let nominal = *problem.nominal();
     let mut out: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for domain in problem.domains() {
         let idx = problem.channel_indices(domain);
-        let base = problem.simulate(domain, &nominal)?;
+        let base = problem.nominal_of(domain);
         let edges: Vec<(Effect, f64)> = Effect::ALL
             .into_iter()
             .filter(|e| e.domain() == domain)
@@ -119,7 +122,18 @@ pub fn tolerance_variance(
         // the edges' simulations a thread's worth at a time (one at a time on a long drive,
         // each parallel inside: super::long_drive), added in edge order: the same sums
         // whatever the thread count, and never every edge's simulation held at once
-        let mut vars: Vec<Vec<f64>> = base.iter().map(|b| vec![0.0; b.len()]).collect();
+        let wanted: Vec<bool> = idx
+            .iter()
+            .map(|&c| signals.contains(&problem.channels()[c].name.as_str()))
+            .collect();
+        if !wanted.contains(&true) {
+            continue;
+        }
+        let mut vars: Vec<Vec<f64>> = base
+            .iter()
+            .zip(&wanted)
+            .map(|(b, &w)| if w { vec![0.0; b.len()] } else { Vec::new() })
+            .collect();
         let long = is_long(problem.times().len());
         let at_once = if long {
             1
@@ -135,6 +149,9 @@ pub fn tolerance_variance(
             for m in moved {
                 let m = m?;
                 for (k, var) in vars.iter_mut().enumerate() {
+                    if !wanted[k] {
+                        continue;
+                    }
                     let add =
                         |v: &mut f64, d: f64| *v += if d.is_finite() { d * d / 3.0 } else { 0.0 };
                     match (m[k].sparse_parts(), base[k].sparse_parts()) {
@@ -153,8 +170,10 @@ pub fn tolerance_variance(
                 }
             }
         }
-        for (&c, var) in idx.iter().zip(vars) {
-            out.insert(problem.channels()[c].name.clone(), var);
+        for ((&c, var), w) in idx.iter().zip(vars).zip(wanted) {
+            if w {
+                out.insert(problem.channels()[c].name.clone(), var);
+            }
         }
     }
     Ok(out)
@@ -253,6 +272,12 @@ pub struct ModelsUsed {
     pub slope_resolution: f64,
 }
 
+/// Columns of the canonical log that neither the diagnosis nor its outputs read: the GNSS
+/// position. A caller that owns a long drive's log may drop them before diagnosing it (the
+/// `diagnose` command does: 43 MB on a 10-hour drive at 50 Hz); the diagnosis is the same,
+/// bit for bit.
+pub const UNREAD_COLUMNS: [&str; 3] = ["latitude", "longitude", "altitude"];
+
 /// Diagnoses `log` against the nominal `vehicle` (module documentation).
 ///
 /// # Errors
@@ -294,7 +319,9 @@ pub fn diagnose(
     let problem = setup.problem(log, actuation_variance.as_deref())?;
     // residual the vehicle file's tolerances allow is not a mismatch: its variance joins the
     // floor's per-row null variance
-    let mut allowed = tolerance_variance(&problem, &vehicle.tolerance)?;
+    let located: Vec<&str> = floors.floors.iter().map(|f| f.signal.as_str()).collect();
+    let mut allowed = tolerance_variance(&problem, &vehicle.tolerance, &located)?;
+    drop(located);
     if let Some(slip) = tyre_slip_variance(log, &setup.nominal_truth.driveline, &setup.ratios) {
         let v = allowed
             .entry("engine_speed".to_string())
@@ -322,7 +349,7 @@ pub fn diagnose(
         signals,
         conditions: Conditions::from_log(log),
     };
-    let mut location = locate(&cmp, &floors, &inputs_from_log(log), &lcfg)?;
+    let mut location = locate_inputs(&cmp, &floors, &recorded_inputs(log), &lcfg)?;
     // the null copies and the per-row null variances serve the location's tests alone
     floors.release_samples();
     release();

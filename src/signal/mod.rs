@@ -46,6 +46,6 @@ pub use sos::{
 };
 pub use spectrum::{cumulative_power, knee_frequency, share_below};
 pub use welch::{
-    chi2_ppf, csd, csd_pieces, equivalent_dof, hann_periodic, welch, WelchConfig, WelchCsd,
-    WelchPsd,
+    chi2_ppf, csd, csd_piece_stream, csd_pieces, equivalent_dof, hann_periodic, welch, WelchConfig,
+    WelchCsd, WelchPsd,
 };

@@ -84,9 +84,10 @@ pub struct SensorNoise {
     /// Native sample positions, rows (fractional).
     #[serde(skip)]
     pub(super) positions: Vec<f64>,
-    /// Run index (persistent error) of every native sample.
+    /// Run index (persistent error) of every native sample (32 bits: a long drive's record is
+    /// one index per native sample).
     #[serde(skip)]
-    pub(super) run: Vec<usize>,
+    pub(super) run: Vec<u32>,
     /// Recorded level of every run.
     #[serde(skip)]
     pub(super) run_level: Vec<f64>,
@@ -156,8 +157,10 @@ impl SensorNoise {
         });
         let rate = 1.0 / (period_rows as f64 * dt_s);
         let hw = ((0.5 * rate).round() as usize).max(1);
-        let run: Vec<usize> = (0..positions.len()).map(|j| j / (2 * hw + 1)).collect();
-        let run_level = vec![f64::NAN; run.last().map_or(0, |r| r + 1)];
+        let run: Vec<u32> = (0..positions.len())
+            .map(|j| (j / (2 * hw + 1)) as u32)
+            .collect();
+        let run_level = vec![f64::NAN; run.last().map_or(0, |&r| r as usize + 1)];
         Ok(SensorNoise {
             column: column.into(),
             unit: unit.into(),
@@ -225,7 +228,7 @@ impl SensorNoise {
                 vec![None; n_rows],
             );
         }
-        let n_runs = self.run.last().map_or(0, |r| r + 1);
+        let n_runs = self.run.last().map_or(0, |&r| r as usize + 1);
         let white: Vec<f64> = (0..self.positions.len())
             .map(|_| self.sigma_white * rng.standard_normal())
             .collect();
@@ -258,7 +261,7 @@ impl SensorNoise {
         let d: Vec<f64> = white
             .iter()
             .zip(&self.run)
-            .map(|(w, r)| w + pers[*r])
+            .map(|(w, &r)| w + pers[r as usize])
             .collect();
         // at rest: in a run at a bound and itself within the noise of it (3σ_w + q), so that the
         // first samples of an actuation, whose running median is still the rest level, stay
@@ -267,7 +270,7 @@ impl SensorNoise {
             .run
             .iter()
             .zip(&self.native_values)
-            .map(|(r, v)| bound[*r].filter(|b| (v - b).abs() <= near))
+            .map(|(&r, v)| bound[r as usize].filter(|b| (v - b).abs() <= near))
             .collect();
         let p = &self.positions;
         let mut out = vec![0.0; n_rows];

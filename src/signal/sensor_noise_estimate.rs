@@ -495,7 +495,8 @@ pub fn estimate_sensor_noise_in(
             None => run_level.push(l),
         }
         last = Some((k.piece, l));
-        run.push(id);
+        // a run per native sample at most: a drive has far fewer than 2³² samples
+        run.push(id as u32);
     }
     Ok(SensorNoise {
         column: column.into(),

@@ -10,6 +10,7 @@
 use num_complex::Complex64;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use statrs::function::gamma::{gamma_lr, gamma_ur, ln_gamma};
+use std::borrow::Cow;
 
 use super::error::{check_finite, SignalError};
 
@@ -240,26 +241,56 @@ pub fn csd(x: &[f64], y: &[f64], cfg: &WelchConfig) -> Result<WelchCsd, SignalEr
 /// [`SignalError::InvalidSegment`] (no piece as long as a segment, unequal piece lengths,
 /// `nperseg = 0`, `noverlap ≥ nperseg`), [`SignalError::InvalidSampleRate`].
 pub fn csd_pieces(pieces: &[(&[f64], &[f64])], cfg: &WelchConfig) -> Result<WelchCsd, SignalError> {
+    csd_piece_stream(
+        || {
+            pieces
+                .iter()
+                .map(|&(x, y)| (Cow::Borrowed(x), Cow::Borrowed(y)))
+        },
+        cfg,
+    )
+}
+
+/// [`csd_pieces`] with the pieces made as they are read: `pieces()` yields the same pieces in
+/// the same order each time it is called (twice: once to check them, once to transform them),
+/// so pieces converted on the fly (a single-precision series read in double precision, say)
+/// are held one at a time, never all together. The result is [`csd_pieces`]'s on the same
+/// pieces, bit for bit (the segments are summed in the same order).
+///
+/// Errors: as [`csd_pieces`].
+pub fn csd_piece_stream<'a, I, F>(pieces: F, cfg: &WelchConfig) -> Result<WelchCsd, SignalError>
+where
+    F: Fn() -> I,
+    I: Iterator<Item = (Cow<'a, [f64]>, Cow<'a, [f64]>)>,
+{
     if !(cfg.fs_hz.is_finite() && cfg.fs_hz > 0.0) {
         return Err(SignalError::InvalidSampleRate { fs_hz: cfg.fs_hz });
     }
     let nperseg = cfg.nperseg.unwrap_or(256);
     let noverlap = cfg.noverlap.unwrap_or(nperseg / 2);
-    let longest = pieces.iter().map(|p| p.0.len()).max().unwrap_or(0);
     let bad = |len| SignalError::InvalidSegment {
         nperseg,
         noverlap,
         len,
     };
+    // one pass for the checks: the longest piece, and the first piece's fault
+    let mut longest = 0;
+    let mut fault = None;
+    for (x, y) in pieces() {
+        longest = longest.max(x.len());
+        if fault.is_none() {
+            fault = if x.len() != y.len() {
+                Some(bad(y.len()))
+            } else {
+                check_finite(&x).and_then(|()| check_finite(&y)).err()
+            };
+        }
+    }
     if nperseg == 0 || noverlap >= nperseg || longest < nperseg {
         return Err(bad(longest));
     }
-    for (x, y) in pieces {
-        if x.len() != y.len() {
-            return Err(bad(y.len()));
-        }
-        check_finite(x)?;
-        check_finite(y)?;
+    if let Some(e) = fault {
+        return Err(e);
     }
     let step = nperseg - noverlap;
     let win = hann_periodic(nperseg);
@@ -283,7 +314,7 @@ pub fn csd_pieces(pieces: &[(&[f64], &[f64])], cfg: &WelchConfig) -> Result<Welc
         fft.process_with_scratch(&mut buf, out, &mut scratch)
             .expect("buffer sizes come from the plan");
     };
-    for (x, y) in pieces {
+    for (x, y) in pieces() {
         if x.len() < nperseg {
             continue;
         }
@@ -403,6 +434,62 @@ pub fn chi2_ppf(p: f64, dof: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Pieces made on the fly (single-precision series read in double precision) give the
+    /// spectrum of the same pieces given at once, bit for bit, and the same errors.
+    #[test]
+    fn a_stream_of_pieces_is_the_pieces_at_once() {
+        let series: Vec<Vec<f32>> = (0..3)
+            .map(|c| {
+                (0..700 + 97 * c)
+                    .map(|i| ((i as f32) * 0.37 + c as f32).sin() + 0.01 * (i % 7) as f32)
+                    .collect()
+            })
+            .collect();
+        let wide: Vec<Vec<f64>> = series
+            .iter()
+            .map(|s| s.iter().map(|x| f64::from(*x)).collect())
+            .collect();
+        let cfg = WelchConfig {
+            fs_hz: 50.0,
+            nperseg: Some(128),
+            noverlap: None,
+            confidence: 0.95,
+        };
+        let at_once: Vec<(&[f64], &[f64])> =
+            wide.iter().map(|w| (w.as_slice(), w.as_slice())).collect();
+        let a = csd_pieces(&at_once, &cfg).unwrap();
+        let b = csd_piece_stream(
+            || {
+                series.iter().map(|s| {
+                    let w: Vec<f64> = s.iter().map(|x| f64::from(*x)).collect();
+                    (Cow::Owned(w.clone()), Cow::Owned(w))
+                })
+            },
+            &cfg,
+        )
+        .unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+        assert_eq!(bits(&a.pxx), bits(&b.pxx));
+        assert_eq!(bits(&a.pyy), bits(&b.pyy));
+        assert_eq!(a.n_segments, b.n_segments);
+        assert_eq!(a.dof.to_bits(), b.dof.to_bits());
+        // a non-finite sample is the same error either way
+        let mut bad = wide.clone();
+        bad[1][5] = f64::NAN;
+        let at_once: Vec<(&[f64], &[f64])> =
+            bad.iter().map(|w| (w.as_slice(), w.as_slice())).collect();
+        let e1 = csd_pieces(&at_once, &cfg).unwrap_err();
+        let e2 = csd_piece_stream(
+            || {
+                bad.iter()
+                    .map(|w| (Cow::Borrowed(&w[..]), Cow::Borrowed(&w[..])))
+            },
+            &cfg,
+        )
+        .unwrap_err();
+        assert_eq!(format!("{e1:?}"), format!("{e2:?}"));
+    }
 
     #[test]
     fn dof_limits() {

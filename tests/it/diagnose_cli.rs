@@ -321,3 +321,38 @@ fn prove_records_its_driving_and_rejects_an_unknown_one() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("drawn, fixed"));
     assert!(!other.exists());
 }
+
+/// The columns the diagnosis does not read (`UNREAD_COLUMNS`, which the command drops before
+/// diagnosing) change nothing in it: a drive diagnosed with and without its GNSS columns gives
+/// the same diagnosis.json, bit for bit.
+#[test]
+fn the_gnss_columns_change_nothing_in_a_diagnosis() {
+    use fleetdyn::diagnose::run::{diagnose, DiagnoseConfig, UNREAD_COLUMNS};
+    use fleetdyn::model::vehicle::VehicleFile;
+    let dir = tempfile::tempdir().unwrap();
+    let d = synth_drive(
+        &fixture(VEHICLE),
+        "city-se",
+        1.5,
+        5,
+        &dir.path().join("drive"),
+        &DriveConfig::default(),
+        None,
+    )
+    .unwrap();
+    let vf = VehicleFile::load(&d.vehicle).unwrap();
+    let mut without = d.log.clone();
+    without
+        .signals
+        .retain(|c| !UNREAD_COLUMNS.contains(&c.name.as_str()));
+    assert_eq!(
+        d.log.signals.len(),
+        without.signals.len() + UNREAD_COLUMNS.len(),
+        "the synthetic drive records every GNSS column"
+    );
+    let json = |log: &fleetdyn::table::DriveLog| {
+        let r = diagnose(log, &vf, &DiagnoseConfig::default()).unwrap();
+        serde_json::to_string(&fleetdyn::report::contract::assemble(&r)).unwrap()
+    };
+    assert_eq!(json(&d.log), json(&without));
+}

@@ -664,6 +664,19 @@ fn the_clutch_actuation_view_is_weighted_per_row_and_serves_its_own_effects() {
     let which: Vec<bool> = (0..p.views().len()).map(|m| m == k).collect();
     let sim = p.simulate_views(&which, &nominal).unwrap();
     assert_eq!(sim[k].as_ref().unwrap()[0], p.nominal_outputs()[k][0]);
+    // a domain's nominal outputs (read by the tolerance band instead of simulating the nominal
+    // again) are its simulation at the nominal parameters, bit for bit
+    for domain in p.domains() {
+        let sim = p.simulate(domain, &nominal).unwrap();
+        let nom = p.nominal_of(domain);
+        assert_eq!(sim.len(), nom.len(), "{domain:?}");
+        for (a, b) in sim.iter().zip(&nom) {
+            let bits = |c: &fleetdyn::diagnose::row_column::RowColumn| -> Vec<u64> {
+                c.values().iter().map(|x| x.to_bits()).collect()
+            };
+            assert_eq!(bits(a), bits(b), "{domain:?}");
+        }
+    }
 }
 
 /// A fit's train-only evaluation (`Evaluator::eval_train`) simulates the longitudinal model on
