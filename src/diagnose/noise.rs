@@ -199,10 +199,10 @@ where
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison
     // are dropped as soon as it is read, and the measurement's own change is drawn again for
-    // the split below, so a long drive holds one column per signal and copy, on the rows that
-    // count). On a long drive
-    // the copies run one after the other, each simulation parallel inside (a copy's perturbed
-    // log and simulation are its largest transient: one in flight, not one per thread).
+    // the split below, so a long drive holds one value per signal, copy and row that counts).
+    // On a long drive the copies run one after the other, each simulation parallel inside (a
+    // copy's perturbed log and simulation are its largest transient: one in flight, not one
+    // per thread).
     type Run = Vec<Option<Vec<f32>>>;
     let copies: Vec<u64> = (0..cfg.copies as u64).collect();
     let mut runs: Vec<Run> = map_in_order(is_long(log.len()), &copies, |&c| {
