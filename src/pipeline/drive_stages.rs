@@ -267,6 +267,14 @@ pub(super) fn compute(
     vehicle: Option<&LoadedVehicle>,
 ) -> Result<(Computed, Vec<StageNote>), Fail> {
     let mut notes = vec![ran(PipelineStage::Ingest)];
+    // The diagnosis reads the log alone: it runs first, while no other stage's output is held (a
+    // long drive's distance tables and simulations would otherwise sit beside its own peak), and
+    // takes its place after validate in the notes and, should it fail, in the failures (a stage
+    // before it that fails is the one reported).
+    let diagnosed = vehicle.map(|v| {
+        let mut n = Vec::new();
+        (run_diagnose(plan, &log, v, &mut n), n)
+    });
     let dist = if plan.has(PipelineStage::Resample) {
         let d = resample_to_distance(&log, &plan.spec.resample)
             .map_err(|e| fail(PipelineStage::Resample, e))?;
@@ -331,8 +339,12 @@ pub(super) fn compute(
     if plan.has(PipelineStage::Validate) {
         notes.push(ran(PipelineStage::Validate));
     }
-    let diagnosis = match vehicle {
-        Some(v) => run_diagnose(plan, &log, v, &mut notes)?,
+    let diagnosis = match diagnosed {
+        Some((d, n)) => {
+            let d = d?;
+            notes.extend(n);
+            d
+        }
         None => None,
     };
     let gravity = vehicle
