@@ -15,6 +15,7 @@ use fleetdyn::diagnose::compare::Conditions;
 use fleetdyn::diagnose::extended::SlopeGrid;
 use fleetdyn::diagnose::resistance_stretch::{segments, Segment, StretchConfig};
 use fleetdyn::diagnose::setup::Setup;
+use fleetdyn::signal::stats::median;
 use nalgebra::{DMatrix, DVector};
 use std::path::PathBuf;
 #[path = "common/proof_dir.rs"]
@@ -129,20 +130,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
-    // the middle value, or the mean of the two middle ones
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        match v.len() {
-            0 => f64::NAN,
-            n if n % 2 == 1 => v[n / 2],
-            n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-        }
-    };
     println!(
         "# {} cases: median |A / A_truck - 1| without the speed term {:.2}, with it {:.2}",
         err_wind.len(),
-        median(err_nowind),
-        median(err_wind)
+        median(&mut err_nowind),
+        median(&mut err_wind)
     );
     Ok(())
 }

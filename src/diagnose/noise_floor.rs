@@ -15,6 +15,7 @@
 use super::noise_config::NoiseConfig;
 use super::noise_error::NoiseError;
 use crate::signal::sensor_noise::{stream, SensorNoise};
+use crate::signal::stats::runs;
 use crate::signal::{csd_piece_stream, WelchConfig};
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -278,27 +279,12 @@ impl NoiseFloor {
         // spectrum reaches it (all copies' stretches at once would be 8 bytes per copy and
         // usable row: 0.17 GB on a 10-hour drive)
         let nperseg = ((cfg.psd_segment_s / dt_s).round() as usize).max(8);
-        let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
-        let mut i = 0;
-        while i < n {
-            if !usable[i] {
-                i += 1;
-                continue;
-            }
-            let a = i;
-            while i < n && usable[i] {
-                i += 1;
-            }
-            runs.push(a..i);
-        }
+        let stretches_of = runs(&usable);
         let stretches = || {
             copies.iter().flat_map(|c| {
-                runs.iter().map(move |r| {
-                    c[r.clone()]
-                        .iter()
-                        .map(|x| f64::from(*x))
-                        .collect::<Vec<f64>>()
-                })
+                stretches_of
+                    .iter()
+                    .map(move |&(a, b)| c[a..b].iter().map(|x| f64::from(*x)).collect::<Vec<f64>>())
             })
         };
         let null_psd = csd_piece_stream(

@@ -321,7 +321,6 @@ pub fn diagnose(
     // floor's per-row null variance
     let located: Vec<&str> = floors.floors.iter().map(|f| f.signal.as_str()).collect();
     let mut allowed = tolerance_variance(&problem, &vehicle.tolerance, &located)?;
-    drop(located);
     if let Some(slip) = tyre_slip_variance(log, &setup.nominal_truth.driveline, &setup.ratios) {
         let v = allowed
             .entry("engine_speed".to_string())
