@@ -176,3 +176,39 @@ impl DriveLog {
             .sort_by_key(|s| schema.position(&s.name).unwrap_or(usize::MAX));
     }
 }
+
+/// A log read with some of its columns replaced: what a consumer that corrects a few columns
+/// of a long drive reads, instead of a copy of every column with the few corrected (each
+/// column of a 10-hour drive at 50 Hz is 14.4 MB).
+#[derive(Debug, Clone, Copy)]
+pub struct LogView<'a> {
+    /// The log: its time stamps, metadata and every column not replaced.
+    pub log: &'a DriveLog,
+    /// Columns read instead of the log's of the same name, each as long as the log.
+    pub replaced: &'a [Signal],
+}
+
+impl<'a> LogView<'a> {
+    /// The log as it is.
+    pub fn of(log: &'a DriveLog) -> Self {
+        Self { log, replaced: &[] }
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.log.len()
+    }
+
+    /// True when the log has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.log.is_empty()
+    }
+
+    /// Values of a column by name: the replacement, else the log's.
+    pub fn signal(&self, name: &str) -> Option<&'a [f64]> {
+        match self.replaced.iter().find(|s| s.name == name) {
+            Some(s) => Some(s.values.as_slice()),
+            None => self.log.signal(name),
+        }
+    }
+}

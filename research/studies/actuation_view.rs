@@ -46,8 +46,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Ok(vec![Compared {
                 name: "engine_speed".into(),
                 unit: "rad/s".into(),
-                measured: l.signal("engine_speed").unwrap_or(&[]).to_vec(),
-                simulated: sim(l, &setup.nominal)?,
+                measured: l.signal("engine_speed").unwrap_or(&[]).to_vec().into(),
+                simulated: sim(l, &setup.nominal)?.into(),
                 valid: act.clone(),
             }])
         })?;

@@ -24,7 +24,7 @@
 
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
-use super::model_inputs::{corrected_log, filled, INPUT_EFFECTS};
+use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
 use super::simulation_windows::{fine_spans, stepped_pieces, window_starts, FINE_STEP_S};
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::driveline::DrivelineParams;
@@ -32,8 +32,8 @@ use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::{interp_linear, LinearResampler};
 use crate::sim::fast::FastDriveline;
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
-use crate::sim::recorded::{scenario_from_log, RecordedScenario};
-use crate::table::DriveLog;
+use crate::sim::recorded::{scenario_from_view, RecordedScenario};
+use crate::table::{DriveLog, LogView};
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
 
@@ -99,7 +99,7 @@ pub struct LongitudinalOutputs {
 }
 
 /// The columns a simulation reads off the (corrected) recording as its inputs
-/// ([`scenario_from_log`] and the tyres' slip, [`super::tyre_slip::slip_of_rows`]).
+/// ([`scenario_from_view`] and the tyres' slip, [`super::tyre_slip::slip_of_rows`]).
 pub const INPUT_COLUMNS: [&str; 6] = [
     "road_slope",
     "engine_torque",
@@ -227,16 +227,21 @@ impl<'a> LongitudinalModel<'a> {
         p: &DrivelineParams,
     ) -> Result<ReadInputs, ExtendedError> {
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
-        let log = corrected_log(self.log, theta, cured.as_deref(), Some(&INPUT_COLUMNS));
-        let rec = scenario_from_log(
-            &log,
+        // the corrected columns alone, read over the recording
+        let replaced = corrected_columns(self.log, theta, cured.as_deref(), Some(&INPUT_COLUMNS));
+        let log = LogView {
+            log: self.log,
+            replaced: &replaced,
+        };
+        let rec = scenario_from_view(
+            log,
             self.ratios.len(),
             None,
             Some(p.final_drive_ratio / p.wheel_radius_m),
         )?;
         // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
         // a window's engine side starts from the recorded engine speed without it
-        let kappa = super::tyre_slip::slip_of_rows(&log, p, self.ratios, self.slip.slip_per_newton);
+        let kappa = super::tyre_slip::slip_of_rows(log, p, self.ratios, self.slip.slip_per_newton);
         Ok(ReadInputs {
             rec,
             kappa,

@@ -25,7 +25,7 @@ use super::extended_error::ExtendedError;
 use crate::model::catalogue::Effect;
 use crate::signal::interp_linear_at;
 use crate::sim::axle_recorded::AxleRecordConfig;
-use crate::table::DriveLog;
+use crate::table::{DriveLog, Signal};
 
 /// The sensor effects: they correct the recorded inputs ([`corrected_log`], and the cured slope
 /// of `slope_quantization`) instead of changing a model's plant.
@@ -63,50 +63,84 @@ pub fn corrected_log(
     only: Option<&[&str]>,
 ) -> DriveLog {
     let mut out = log.with_columns(only);
+    for c in corrected_columns(log, theta, cured_slope, only) {
+        if let Some(s) = out.signals.iter_mut().find(|s| s.name == c.name) {
+            *s = c;
+        }
+    }
+    out
+}
+
+/// The columns [`corrected_log`] changes, corrected, alone: the slope and the service-brake
+/// force whenever the log has them, the engine torque when `theta` delays or offsets it (among
+/// `only`, when given). Read over the log ([`crate::table::LogView`]) they are
+/// [`corrected_log`] without a copy of the columns it leaves as they are.
+pub fn corrected_columns(
+    log: &DriveLog,
+    theta: &Theta,
+    cured_slope: Option<&[f64]>,
+    only: Option<&[&str]>,
+) -> Vec<Signal> {
     let t: Vec<f64> = log.seconds_from_start();
     let delta = theta.get(Effect::GradeOffset);
     let offset = theta.get(Effect::EngineTorqueOffset);
     let tau = theta.get(Effect::SignalDelay);
     let speed = log.signal("vehicle_speed");
     let standstill_mps = AxleRecordConfig::default().standstill_speed_mps;
-    for s in out.signals.iter_mut() {
-        match s.name.as_str() {
+    let mut out = Vec::new();
+    for s in &log.signals {
+        if only.is_some_and(|k| !k.contains(&s.name.as_str())) {
+            continue;
+        }
+        let values = match s.name.as_str() {
             "road_slope" => {
                 // the hold's lag, read off the recorded samples (a cure is smooth)
                 let period = held_period_s(&t, &s.values);
-                if let Some(f) = cured_slope {
-                    s.values = f.to_vec();
-                }
+                let mut v = match cured_slope {
+                    Some(f) => f.to_vec(),
+                    None => s.values.clone(),
+                };
                 if let Some(p) = period {
-                    s.values = shifted(&t, &s.values, 0.5 * p);
+                    v = shifted(&t, &v, 0.5 * p);
                 }
                 if delta != 0.0 {
-                    for v in s.values.iter_mut() {
-                        *v = (v.atan() - delta).tan();
+                    for x in v.iter_mut() {
+                        *x = (x.atan() - delta).tan();
                     }
                 }
+                v
             }
-            "engine_torque" => {
-                if tau != 0.0 {
-                    s.values = shifted(&t, &s.values, tau);
-                }
+            "engine_torque" if tau != 0.0 || offset != 0.0 => {
+                let mut v = if tau != 0.0 {
+                    shifted(&t, &s.values, tau)
+                } else {
+                    s.values.clone()
+                };
                 if offset != 0.0 {
-                    for v in s.values.iter_mut() {
-                        *v -= offset;
+                    for x in v.iter_mut() {
+                        *x -= offset;
                     }
                 }
+                v
             }
             "brake_force" => {
                 let busy = windowed_max(&t, &s.values, super::rows::BRAKE_EPISODE_HALFWIDTH_S);
-                for (k, (v, m)) in s.values.iter_mut().zip(busy).enumerate() {
+                let mut v = s.values.clone();
+                for (k, (x, m)) in v.iter_mut().zip(busy).enumerate() {
                     let stands = speed.is_some_and(|u| u[k].abs() < standstill_mps);
                     if m < super::rows::BRAKE_RELEASED_BELOW_N && !stands {
-                        *v = 0.0;
+                        *x = 0.0;
                     }
                 }
+                v
             }
-            _ => {}
-        }
+            _ => continue,
+        };
+        out.push(Signal {
+            name: s.name.clone(),
+            unit: s.unit.clone(),
+            values,
+        });
     }
     out
 }
@@ -250,6 +284,72 @@ mod tests {
         // average; read 50 ms ahead the lag is gone (to rounding)
         assert!((mean_err(&held) + 1e-4).abs() < 5e-6, "{}", mean_err(&held));
         assert!(mean_err(read).abs() < 5e-6, "{}", mean_err(read));
+    }
+
+    #[test]
+    fn the_corrected_columns_read_over_the_log_are_the_corrected_log() {
+        // 60 s at 50 Hz: a 10 Hz held slope, a torque with steps, a brake that brakes once and
+        // drags a released force elsewhere, a gear column the correction leaves as it is
+        let n = 3000;
+        let t = |k: usize| k as f64 * 0.02;
+        let slope: Vec<f64> = (0..n)
+            .map(|k| 0.01 * ((t(k) * 10.0).floor() / 10.0).sin())
+            .collect();
+        let torque: Vec<f64> = (0..n)
+            .map(|k| if k % 700 < 350 { 900.0 } else { -80.0 })
+            .collect();
+        let brake: Vec<f64> = (0..n)
+            .map(|k| {
+                if (1000..1200).contains(&k) {
+                    8000.0
+                } else {
+                    300.0
+                }
+            })
+            .collect();
+        let log = DriveLog::from_columns(
+            20_000_000,
+            vec![
+                ("vehicle_speed", "m/s", vec![20.0; n]),
+                ("road_slope", "1", slope),
+                ("engine_torque", "N.m", torque),
+                ("brake_force", "N", brake),
+                ("gear", "1", vec![12.0; n]),
+            ],
+        );
+        let mut sensors = Theta([0.0; 16]);
+        sensors.set(Effect::GradeOffset, 0.003);
+        sensors.set(Effect::SignalDelay, 0.13);
+        sensors.set(Effect::EngineTorqueOffset, 40.0);
+        let cure: Vec<f64> = (0..n).map(|k| 0.01 * t(k).sin()).collect();
+        let only = ["road_slope", "engine_torque", "gear", "brake_force"];
+        for (theta, cured) in [
+            (Theta([0.0; 16]), None),
+            (sensors, None),
+            (sensors, Some(cure.as_slice())),
+        ] {
+            let copy = corrected_log(&log, &theta, cured, Some(&only));
+            let replaced = corrected_columns(&log, &theta, cured, Some(&only));
+            let view = crate::table::LogView {
+                log: &log,
+                replaced: &replaced,
+            };
+            for c in only {
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(
+                    bits(view.signal(c).unwrap()),
+                    bits(copy.signal(c).unwrap()),
+                    "{c}"
+                );
+            }
+            // the gear is never copied, nor the torque without a delay or offset
+            let names: Vec<&str> = replaced.iter().map(|s| s.name.as_str()).collect();
+            assert!(!names.contains(&"gear"));
+            assert_eq!(
+                names.contains(&"engine_torque"),
+                theta.get(Effect::SignalDelay) != 0.0
+            );
+        }
     }
 
     #[test]

@@ -193,8 +193,8 @@ where
     let r0s: Vec<Vec<f64>> = base.iter().map(Compared::residual).collect();
     // past the residuals, only the signals' names, units and rows that count are read
     for b in &mut base {
-        b.measured = Vec::new();
-        b.simulated = Vec::new();
+        b.measured = Default::default();
+        b.simulated = Default::default();
     }
     // per copy and compared signal: the residual's change alone, in single precision as the
     // floor keeps it ([`NoiseFloor::from_null_copies`]; a copy's log and its full comparison

@@ -68,6 +68,15 @@ impl RowColumn {
         self.len == 0
     }
 
+    /// A dense column's storage, to share with other holders of the same values (`None` for a
+    /// sparse column).
+    pub fn dense_storage(&self) -> Option<&Arc<Vec<f64>>> {
+        match self.rows {
+            None => Some(&self.values),
+            Some(_) => None,
+        }
+    }
+
     /// The stored rows of a sparse column (`None` for a dense one).
     pub fn stored_rows(&self) -> Option<&Arc<[usize]>> {
         self.rows.as_ref()

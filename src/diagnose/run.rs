@@ -43,11 +43,12 @@ use super::problem::{ExplainError, Problem};
 use super::resistance_stretch::{
     resistance_stretch, ResistanceStretch, SlopeReading, StretchConfig,
 };
+use super::row_column::RowColumn;
 use super::setup::Setup;
 use super::slope_grid::SlopeGrid;
 use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsistency};
 use super::tyre_slip::{self, tyre_slip_variance};
-use crate::diagnose::compare::{Comparison, Conditions};
+use crate::diagnose::compare::{share_storage, Comparison, Conditions};
 use crate::diagnose::rows::ACTUATION_CHANNEL;
 use crate::heap::release_free_memory;
 use crate::model::catalogue::Effect;
@@ -344,6 +345,13 @@ pub fn diagnose(
     // drive, not held through the tolerance edges' simulations)
     let mut signals = models.compared(log, &setup.nominal)?;
     signals.retain(|c| c.name != ACTUATION_CHANNEL);
+    // the problem holds the same speeds and nominal simulation: one storage for both
+    let pool: Vec<_> = (problem.channels().iter().map(|c| &c.measured))
+        .chain(problem.nominal_outputs().iter().flatten())
+        .filter_map(RowColumn::dense_storage)
+        .collect();
+    share_storage(&mut signals, &pool);
+    release();
     let mut cmp = Comparison {
         signals,
         conditions: Conditions::from_log(log),

@@ -30,7 +30,7 @@
 //! modelled; the located floor keeps it (a bound, conservative once the slip is modelled).
 
 use crate::model::driveline::DrivelineParams;
-use crate::table::DriveLog;
+use crate::table::{DriveLog, LogView};
 
 /// Smallest normalised longitudinal slip stiffness `C_κ / F_z` of a driven heavy-truck axle
 /// on a dry road, 1 (per unit slip): truck tyres measure about 8–15 (Pacejka, "Tire and
@@ -183,7 +183,7 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
 /// the torque or gear is not finite or the clutch is not closed (position above 0.02; the
 /// engine then does not follow the wheels).
 pub fn slip_of_rows(
-    log: &DriveLog,
+    log: LogView<'_>,
     p: &DrivelineParams,
     ratios: &[f64],
     slip_per_newton: f64,
@@ -306,12 +306,12 @@ pub(crate) mod tests {
         );
         // the rows' slip follows the torque and is 0 without one
         let log = drive(&p, &ratios, 0.0, 0.0);
-        let k = slip_of_rows(&log, &p, &ratios, 1.0 / c);
+        let k = slip_of_rows(LogView::of(&log), &p, &ratios, 1.0 / c);
         let tq = log.signal("engine_torque").unwrap();
         let g = log.signal("gear").unwrap();
         let expect = tq[5] * ratios[g[5] as usize - 1] * p.final_drive_ratio / p.wheel_radius_m / c;
         assert!((k[5] - expect).abs() < 1e-15);
-        assert!(slip_of_rows(&log, &p, &ratios, 0.0)
+        assert!(slip_of_rows(LogView::of(&log), &p, &ratios, 0.0)
             .iter()
             .all(|x| *x == 0.0));
     }

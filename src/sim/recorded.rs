@@ -25,7 +25,7 @@ use super::hybrid::{EngineInput, Scenario};
 use super::inputs::{Between, Piecewise};
 use crate::schema::Interpolation;
 use crate::signal::distance::{fill_gaps, fill_gaps_borrowed};
-use crate::table::DriveLog;
+use crate::table::{DriveLog, LogView};
 use std::borrow::Cow;
 use std::sync::Arc;
 
@@ -98,6 +98,14 @@ pub(crate) fn slope_input<'a>(
     log: &'a DriveLog,
     slope_column: Option<&str>,
 ) -> (Option<String>, Cow<'a, [f64]>) {
+    slope_input_of(LogView::of(log), slope_column)
+}
+
+/// [`slope_input`] of a log view.
+fn slope_input_of<'a>(
+    log: LogView<'a>,
+    slope_column: Option<&str>,
+) -> (Option<String>, Cow<'a, [f64]>) {
     let column = |name: &str| {
         log.signal(name)
             .and_then(|v| fill_gaps_borrowed(v, Interpolation::Hold))
@@ -140,8 +148,26 @@ pub fn scenario_from_log(
     slope_column: Option<&str>,
     retarder_n_per_nm: Option<f64>,
 ) -> Result<RecordedScenario, RecordedError> {
-    let file = log.meta.source_file.clone();
-    let t = relative_times(log)?;
+    scenario_from_view(
+        LogView::of(log),
+        forward_gears,
+        slope_column,
+        retarder_n_per_nm,
+    )
+}
+
+/// [`scenario_from_log`] of a log view: the log with some columns replaced.
+///
+/// # Errors
+/// As [`scenario_from_log`].
+pub fn scenario_from_view(
+    log: LogView<'_>,
+    forward_gears: usize,
+    slope_column: Option<&str>,
+    retarder_n_per_nm: Option<f64>,
+) -> Result<RecordedScenario, RecordedError> {
+    let file = log.log.meta.source_file.clone();
+    let t = relative_times(log.log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
     // read only: borrowed from the log when complete
@@ -167,7 +193,7 @@ pub fn scenario_from_log(
             *b += k * r;
         }
     }
-    let (slope_name, slope) = slope_input(log, slope_column);
+    let (slope_name, slope) = slope_input_of(log, slope_column);
     // neutral: clutch open in the last engaged gear (the first engaged one before any)
     let first_engaged = gear_raw.iter().copied().find(|g| *g >= 1.0).unwrap_or(1.0);
     let mut last = first_engaged;

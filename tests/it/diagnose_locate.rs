@@ -79,8 +79,8 @@ fn one_signal(name: &str, residual: Vec<f64>, cond: Conditions) -> Comparison {
         signals: vec![Compared {
             name: name.into(),
             unit: "1".into(),
-            measured: residual,
-            simulated: vec![0.0; n],
+            measured: residual.into(),
+            simulated: vec![0.0; n].into(),
             valid: vec![true; n],
         }],
         conditions: cond,
@@ -178,7 +178,7 @@ fn a_bump_is_located_to_its_stretch() {
     let n = 15_000;
     let (mut cmp, floors, floor) = null_drive(11, n, false);
     // +5 floor RMS between 40 and 60 s, cosine edges of 1 s
-    let r = &mut cmp.signals[0].measured;
+    let r = std::sync::Arc::make_mut(&mut cmp.signals[0].measured);
     for (i, v) in r.iter_mut().enumerate() {
         let t = i as f64 * DT;
         let w = if (41.0..=59.0).contains(&t) {
@@ -310,7 +310,7 @@ fn bad_and_empty_input_give_errors_or_empty_results() {
     let (cmp, floors, _) = null_drive(1, n, false);
     // all-NaN residual: nothing tested, nothing significant
     let mut nan = cmp.clone();
-    nan.signals[0].measured = vec![f64::NAN; n];
+    nan.signals[0].measured = vec![f64::NAN; n].into();
     let loc = locate(&nan, &floors, &[], &LocateConfig::default()).unwrap();
     assert!(loc.signals[0].windows.is_empty() && loc.mismatch.is_empty() && !loc.any_significant);
     // empty comparison
@@ -322,7 +322,7 @@ fn bad_and_empty_input_give_errors_or_empty_results() {
     assert!(loc.signals.is_empty() && loc.family_size == 0);
     // lengths that differ
     let mut short = cmp.clone();
-    short.signals[0].simulated.pop();
+    std::sync::Arc::make_mut(&mut short.signals[0].simulated).pop();
     assert!(matches!(
         locate(&short, &floors, &[], &LocateConfig::default()),
         Err(LocateError::Length { .. })
@@ -380,7 +380,11 @@ fn a_noise_copy_of_the_columns_the_models_read_compares_bit_for_bit_as_the_whole
         let values = c
             .iter()
             .flat_map(|x| {
-                let m = x.measured.iter().chain(&x.simulated).map(|v| v.to_bits());
+                let m = x
+                    .measured
+                    .iter()
+                    .chain(x.simulated.iter())
+                    .map(|v| v.to_bits());
                 m.chain(x.valid.iter().map(|&v| u64::from(v)))
             })
             .collect();
