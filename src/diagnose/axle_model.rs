@@ -7,13 +7,13 @@
 
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
-use super::model_inputs::{corrected_log, filled, INPUT_EFFECTS};
+use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::axle::{AxleExtensions, AxleParams};
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::sim::axle::{AxleInputs, HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
-use crate::table::DriveLog;
+use crate::table::{DriveLog, LogView};
 use std::sync::{Arc, OnceLock};
 
 /// The axle-load model of one recording, extended by the catalogue's axle effects (and by the
@@ -115,9 +115,13 @@ impl<'a> AxleModel<'a> {
         let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
         let d = &tm.driveline;
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
-        let log = corrected_log(self.log, theta, cured.as_deref(), None);
+        // the corrected columns alone, read over the recording
+        let replaced = corrected_columns(self.log, theta, cured.as_deref(), None);
         let rec = axle_inputs_from_log(
-            &log,
+            LogView {
+                log: self.log,
+                replaced: &replaced,
+            },
             a.mass_kg(),
             a.wheel_radius_m,
             a.gravity_m_per_s2,

@@ -75,7 +75,7 @@ use super::recorded::{pieces, relative_times, slope_input, RecordedError};
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
-use crate::table::DriveLog;
+use crate::table::LogView;
 
 /// Where the acceleration input comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -273,7 +273,7 @@ fn drive_torque_inverse_dynamics(
 /// `wheel_radius_m` are the axle model's (for the holding force at standstill).
 #[allow(clippy::too_many_arguments)]
 pub fn axle_inputs_from_log(
-    log: &DriveLog,
+    log: LogView<'_>,
     mass_kg: f64,
     wheel_radius_m: f64,
     gravity_m_per_s2: f64,
@@ -283,8 +283,8 @@ pub fn axle_inputs_from_log(
     slope_column: Option<&str>,
     cfg: &AxleRecordConfig,
 ) -> Result<RecordedAxleInputs, RecordedError> {
-    let file = log.meta.source_file.clone();
-    let t = relative_times(log)?;
+    let file = log.log.meta.source_file.clone();
+    let t = relative_times(log.log)?;
     let column =
         |name: &str, interp: Interpolation| log.signal(name).and_then(|v| fill_gaps(v, interp));
     let missing = |c: &str| RecordedError::Missing {
@@ -430,7 +430,7 @@ pub fn axle_inputs_from_log(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::{DriveMeta, Signal};
+    use crate::table::{DriveLog, DriveMeta, Signal};
 
     #[test]
     fn standing_brakes_hold_with_the_force_the_grade_asks_for() {
@@ -452,7 +452,7 @@ mod tests {
             ],
         };
         let r = axle_inputs_from_log(
-            &log,
+            LogView::of(&log),
             18_700.0,
             0.5,
             9.81,
@@ -505,7 +505,7 @@ mod tests {
         };
         let (p, ratios) = diesel();
         let r = axle_inputs_from_log(
-            &log,
+            LogView::of(&log),
             m,
             p.wheel_radius_m,
             g,

@@ -17,7 +17,7 @@ use crate::model::axle::{Axle, AxleParams};
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
-use crate::table::DriveLog;
+use crate::table::{DriveLog, LogView};
 
 /// Validation settings.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -153,7 +153,7 @@ pub fn validate_axle(
 ) -> Result<AxleValidation, AxleValidationError> {
     require_pressures(log)?;
     let rec = axle_inputs_from_log(
-        log,
+        LogView::of(log),
         p.mass_kg(),
         p.wheel_radius_m,
         p.gravity_m_per_s2,

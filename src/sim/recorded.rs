@@ -95,14 +95,6 @@ pub(crate) fn relative_times(log: &DriveLog) -> Result<Arc<[f64]>, RecordedError
 /// The slope input of a log: the named column, else `road_slope`, else a flat road (`None`),
 /// gaps filled by holding.
 pub(crate) fn slope_input<'a>(
-    log: &'a DriveLog,
-    slope_column: Option<&str>,
-) -> (Option<String>, Cow<'a, [f64]>) {
-    slope_input_of(LogView::of(log), slope_column)
-}
-
-/// [`slope_input`] of a log view.
-fn slope_input_of<'a>(
     log: LogView<'a>,
     slope_column: Option<&str>,
 ) -> (Option<String>, Cow<'a, [f64]>) {
@@ -193,7 +185,7 @@ pub fn scenario_from_view(
             *b += k * r;
         }
     }
-    let (slope_name, slope) = slope_input_of(log, slope_column);
+    let (slope_name, slope) = slope_input(log, slope_column);
     // neutral: clutch open in the last engaged gear (the first engaged one before any)
     let first_engaged = gear_raw.iter().copied().find(|g| *g >= 1.0).unwrap_or(1.0);
     let mut last = first_engaged;
