@@ -134,7 +134,7 @@ pub struct LongitudinalModel<'a> {
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
-/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`corrected_log`]) and the
+/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`super::model_inputs::corrected_log`]) and the
 /// final drive and wheel radius, which no catalogue effect changes; so every simulation at the nominal sensor parameters —
 /// most of a diagnosis's — reads the same ones, built once
 /// ([`LongitudinalModel::read_inputs`]).
@@ -286,7 +286,7 @@ impl<'a> LongitudinalModel<'a> {
     }
 
     /// The plant of `theta`: the nominal vehicle with `theta`'s longitudinal model effects
-    /// injected (the sensor effects are corrected on the inputs instead, [`corrected_log`]).
+    /// injected (the sensor effects are corrected on the inputs instead, [`super::model_inputs::corrected_log`]).
     ///
     /// # Errors
     /// [`ExtendedError`] for a parameter outside its domain.
@@ -421,7 +421,7 @@ impl<'a> LongitudinalModel<'a> {
 
     /// [`LongitudinalModel::simulate_windows`] with the windows spread over `threads`
     /// integrators (1: one after the other on this thread, the samples straight onto the rows;
-    /// more: a batch of [`WINDOW_BATCH`] windows at a time, each integrator a contiguous run of
+    /// more: a batch of 32 windows at a time, each integrator a contiguous run of
     /// them in parallel, the samples pushed in window order). The outputs are the same, bit for
     /// bit, whatever `threads`: every window starts from the measured state.
     ///

@@ -37,7 +37,7 @@ pub struct NullPsd {
     pub dc_power: f64,
 }
 
-/// Mean over Welch segments (`nperseg` rows, half overlap, as [`csd_pieces`] cuts them) of the
+/// Mean over Welch segments (`nperseg` rows, half overlap, as [`crate::signal::csd_pieces`] cuts them) of the
 /// squared segment mean of each piece: the power slower than one segment, which the Welch PSD
 /// leaves out (0 without a full segment).
 pub fn segment_mean_square(pieces: &[&[f64]], nperseg: usize) -> f64 {

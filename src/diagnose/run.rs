@@ -12,7 +12,7 @@
 //!    native samples, propagated through the model by Monte-Carlo copies; the same copies
 //!    give the engine speed's null variance on the clutch-actuated rows, which weights the
 //!    explain step's clutch-actuation view and is not located.
-//! 4. Locate ([`locate`]): windows in time, stretches in distance, bands, coherence, lags,
+//! 4. Locate ([`super::locate::locate`]): windows in time, stretches in distance, bands, coherence, lags,
 //!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule. Then
 //!    the shuffle modes after clutch engagements ([`super::modal`]): when their drive-level test
 //!    flags (its own test at α = 0.01 with a 3 % margin), one more engine-speed mismatch

@@ -1,7 +1,7 @@
 //! JSON for floating-point fields that may be NaN: JSON has no NaN, and `serde_json` writes a
 //! non-finite number as `null`, which it then refuses to read back into an `f64`. With
 //! `#[serde(with = "crate::io::json_f64")]` a field writes `null` for a non-finite value and
-//! reads `null` back as NaN; [`array`] does the same for a fixed-size array.
+//! reads `null` back as NaN; [`mod@array`] does the same for a fixed-size array.
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
