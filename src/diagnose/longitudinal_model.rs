@@ -134,7 +134,8 @@ pub struct LongitudinalModel<'a> {
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
-/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs, [`super::model_inputs::corrected_log`]) and the
+/// effects ([`INPUT_EFFECTS`], which correct the recorded inputs,
+/// [`super::model_inputs::corrected_log`]) and the
 /// final drive and wheel radius, which no catalogue effect changes; so every simulation at the nominal sensor parameters —
 /// most of a diagnosis's — reads the same ones, built once
 /// ([`LongitudinalModel::read_inputs`]).
@@ -286,7 +287,8 @@ impl<'a> LongitudinalModel<'a> {
     }
 
     /// The plant of `theta`: the nominal vehicle with `theta`'s longitudinal model effects
-    /// injected (the sensor effects are corrected on the inputs instead, [`super::model_inputs::corrected_log`]).
+    /// injected (the sensor effects are corrected on the inputs instead,
+    /// [`super::model_inputs::corrected_log`]).
     ///
     /// # Errors
     /// [`ExtendedError`] for a parameter outside its domain.

@@ -37,9 +37,9 @@ pub struct NullPsd {
     pub dc_power: f64,
 }
 
-/// Mean over Welch segments (`nperseg` rows, half overlap, as [`crate::signal::csd_pieces`] cuts them) of the
-/// squared segment mean of each piece: the power slower than one segment, which the Welch PSD
-/// leaves out (0 without a full segment).
+/// Mean over Welch segments (`nperseg` rows, half overlap, as [`crate::signal::csd_pieces`]
+/// cuts them) of the squared segment mean of each piece: the power slower than one segment,
+/// which the Welch PSD leaves out (0 without a full segment).
 pub fn segment_mean_square(pieces: &[&[f64]], nperseg: usize) -> f64 {
     segment_mean_square_stream(pieces.iter().map(|&x| Cow::Borrowed(x)), nperseg)
 }
@@ -279,10 +279,10 @@ impl NoiseFloor {
         // spectrum reaches it (all copies' stretches at once would be 8 bytes per copy and
         // usable row: 0.17 GB on a 10-hour drive)
         let nperseg = ((cfg.psd_segment_s / dt_s).round() as usize).max(8);
-        let stretches_of = runs(&usable);
+        let usable_runs = runs(&usable);
         let stretches = || {
             copies.iter().flat_map(|c| {
-                stretches_of
+                usable_runs
                     .iter()
                     .map(move |&(a, b)| c[a..b].iter().map(|x| f64::from(*x)).collect::<Vec<f64>>())
             })

@@ -12,12 +12,12 @@
 //!    native samples, propagated through the model by Monte-Carlo copies; the same copies
 //!    give the engine speed's null variance on the clutch-actuated rows, which weights the
 //!    explain step's clutch-actuation view and is not located.
-//! 4. Locate ([`super::locate::locate`]): windows in time, stretches in distance, bands, coherence, lags,
-//!    operating-condition cells; Holm-corrected at α = 0.01 with a practical 1.5× rule. Then
-//!    the shuffle modes after clutch engagements ([`super::modal`]): when their drive-level test
-//!    flags (its own test at α = 0.01 with a 3 % margin), one more engine-speed mismatch
-//!    stretch, and the mismatch counts as significant. Then the two tests on the recorded
-//!    channels alone ([`speed_consistency`]; [`resistance_stretch`], on the slope
+//! 4. Locate ([`super::locate::locate`]): windows in time, stretches in distance, bands,
+//!    coherence, lags, operating-condition cells; Holm-corrected at α = 0.01 with a practical
+//!    1.5× rule. Then the shuffle modes after clutch engagements ([`super::modal`]): when their
+//!    drive-level test flags (its own test at α = 0.01 with a 3 % margin), one more engine-speed
+//!    mismatch stretch, and the mismatch counts as significant. Then the two tests on the
+//!    recorded channels alone ([`speed_consistency`]; [`resistance_stretch`], on the slope
 //!    reconstructed between the sensor's steps): a flagged one adds a located stretch, which
 //!    no estimate within the tolerances explains.
 //! 5. Explain ([`explain`]) with the noise floors as the signal weights; the verdict
@@ -346,7 +346,10 @@ pub fn diagnose(
     let mut signals = models.compared(log, &setup.nominal)?;
     signals.retain(|c| c.name != ACTUATION_CHANNEL);
     // the problem holds the same speeds and nominal simulation: one storage for both
-    let pool: Vec<_> = (problem.channels().iter().map(|c| &c.measured))
+    let pool: Vec<_> = problem
+        .channels()
+        .iter()
+        .map(|c| &c.measured)
         .chain(problem.nominal_outputs().iter().flatten())
         .filter_map(RowColumn::dense_storage)
         .collect();
