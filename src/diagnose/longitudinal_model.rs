@@ -239,6 +239,7 @@ impl<'a> LongitudinalModel<'a> {
             self.ratios.len(),
             None,
             Some(p.final_drive_ratio / p.wheel_radius_m),
+            p.engine_torque_lag_s,
         )?;
         // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
         // a window's engine side starts from the recorded engine speed without it

@@ -179,9 +179,10 @@ pub fn estimate(log: &DriveLog, p: &DrivelineParams, ratios: &[f64]) -> SlipEsti
     }
 }
 
-/// The slip `κ = b F_x` on every row of `log` for the slip per newton `slip_per_newton`: 0 where
-/// the torque or gear is not finite or the clutch is not closed (position above 0.02; the
-/// engine then does not follow the wheels).
+/// The slip `κ = b F_x` on every row of `log` for the slip per newton `slip_per_newton`, `F_x`
+/// from the torque the engine produces (the recorded one through `p`'s
+/// `engine_torque_lag_s`): 0 where the torque or gear is not finite or the clutch is not closed
+/// (position above 0.02; the engine then does not follow the wheels).
 pub fn slip_of_rows(
     log: LogView<'_>,
     p: &DrivelineParams,
@@ -194,6 +195,15 @@ pub fn slip_of_rows(
     if slip_per_newton == 0.0 {
         return vec![0.0; log.len()];
     }
+    // the torque the engine produces: the reported one through the engine's lag
+    let produced;
+    let torque = if p.engine_torque_lag_s > 0.0 {
+        let t = log.log.seconds_from_start();
+        produced = crate::signal::first_order_lag(&t, torque, p.engine_torque_lag_s);
+        produced.as_slice()
+    } else {
+        torque
+    };
     let clutch = log.signal("clutch_position");
     (0..log.len())
         .map(|i| {

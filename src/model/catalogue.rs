@@ -15,8 +15,9 @@
 //! # Model-form allowance
 //! No model is the truck: the longitudinal model has one lumped shaft, rigid tyres up to a
 //! fitted slip and share, a single-stage clutch damper, an engine whose torque is the ECU's
-//! figure, no wind and no tyre temperature. Its estimate of a parameter on a healthy truck
-//! therefore misses the truck's true value by more than its 95 % interval says. The row's
+//! figure (the calibration's vehicle file states no engine lag), no wind and no tyre
+//! temperature. Its estimate of a parameter on a healthy truck therefore misses the truck's
+//! true value by more than its 95 % interval says. The row's
 //! `model_form` is that miss, measured on the truth plant's no-effect drives (a virtual truck
 //! with that structure, docs/models/truth-plant.md) of calibration seeds that no reported proof
 //! figure uses: the largest distance from the truck's value to the estimate's interval, as a

@@ -60,6 +60,9 @@ pub struct KeySpec {
     /// For a curve: the key whose length it must match.
     #[serde(default)]
     pub pair: Option<String>,
+    /// The value an absent key stands for; `None`: the key is required.
+    #[serde(default)]
+    pub default: Option<f64>,
     /// Symbol and meaning.
     pub meaning: String,
 }
@@ -79,9 +82,9 @@ pub struct VehicleSchema {
     pub sensors: Vec<KeySpec>,
 }
 
-/// Checks a raw vehicle-file table against its key specs: no unknown key, every key present,
-/// numeric, finite and inside its range; per-gear lists one value per forward gear; curves at
-/// least 2 points and as long as their pair.
+/// Checks a raw vehicle-file table against its key specs: no unknown key, every key without a
+/// default present, numeric, finite and inside its range; per-gear lists one value per forward
+/// gear; curves at least 2 points and as long as their pair.
 ///
 /// # Errors
 /// The first problem as `(key, value, rule)`.
@@ -99,6 +102,9 @@ pub fn check_keys(
     let mut lengths: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for spec in specs {
         let Some(v) = table.get(&spec.key) else {
+            if spec.default.is_some() {
+                continue;
+            }
             return Err(problem(
                 &spec.key,
                 "missing".into(),
@@ -228,6 +234,18 @@ pub struct DrivelineParams {
     pub engine_min_torque_nm: f64,
     pub pi_kp_nm_s_per_rad: f64,
     pub pi_ki_nm_per_rad: f64,
+    #[serde(default = "default_engine_torque_lag_s")]
+    pub engine_torque_lag_s: f64,
+}
+
+/// The engine-torque lag a `[driveline]` table without `engine_torque_lag_s` stands for, s: none,
+/// the model driven by the reported torque, as vehicle files written before the key read. A
+/// turbocharged heavy-duty diesel's produced torque follows its ECU's figure with a time
+/// constant of about 0.1 s, which a file states (schemas/vehicle.toml).
+pub const DEFAULT_ENGINE_TORQUE_LAG_S: f64 = 0.0;
+
+fn default_engine_torque_lag_s() -> f64 {
+    DEFAULT_ENGINE_TORQUE_LAG_S
 }
 
 /// A `[driveline]` table that breaks a rule: `(key, value as written, rule)`.
@@ -387,7 +405,31 @@ mod tests {
         let doc = truck_40t();
         let t = doc["driveline"].as_table().unwrap();
         let p = DrivelineParams::from_table(t, 12).unwrap();
-        assert_eq!(t.len(), vehicle_schema().driveline.len());
+        let fields: Vec<String> = toml::Table::try_from(&p).unwrap().keys().cloned().collect();
+        let mut keys: Vec<String> = vehicle_schema()
+            .driveline
+            .iter()
+            .map(|s| s.key.clone())
+            .collect();
+        keys.sort();
+        assert_eq!(fields, keys);
+        assert_eq!(p.engine_torque_lag_s, DEFAULT_ENGINE_TORQUE_LAG_S);
+        // a key with a default may be left out, which the default then stands for; no other
+        for spec in &vehicle_schema().driveline {
+            let mut without = t.clone();
+            without.remove(&spec.key);
+            match (spec.default, DrivelineParams::from_table(&without, 12)) {
+                (Some(d), Ok(q)) => {
+                    let q = toml::Table::try_from(&q).unwrap();
+                    assert_eq!(q[&spec.key].as_float(), Some(d), "{}", spec.key);
+                }
+                (None, Err((key, value, _))) => {
+                    assert_eq!((key, value), (spec.key.clone(), "missing".to_string()))
+                }
+                (d, r) => panic!("{}: default {d:?}, parsed {}", spec.key, r.is_ok()),
+            }
+        }
+        assert_eq!(DEFAULT_ENGINE_TORQUE_LAG_S, 0.0);
         assert_eq!(p.j_t_kg_m2.len(), 12);
         assert_eq!(p.engine_max_torque(120.0), 2600.0);
         assert_eq!(p.engine_max_torque(0.0), 1100.0);

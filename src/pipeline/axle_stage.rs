@@ -112,6 +112,7 @@ pub fn run(
                 v.gearbox.ratios.len(),
                 slope,
                 Some(d.final_drive_ratio / d.wheel_radius_m),
+                d.engine_torque_lag_s,
             )
             .map_err(|e| AxleStageError::Driveline(e.into()))?;
             let t: Vec<f64> = sim

@@ -146,6 +146,8 @@ struct VehicleKeyDoc {
     shape: String,
     #[serde(default)]
     pair: Option<String>,
+    #[serde(default)]
+    default: Option<f64>,
     meaning: String,
 }
 
@@ -186,6 +188,10 @@ pub fn vehicle_section_markdown(vehicle_toml: &str, section: &str) -> Result<Str
                     ),
                 ))
             }
+        };
+        let shape = match k.default {
+            Some(d) => format!("{shape}; optional, absent: {}", number(d)),
+            None => shape,
         };
         out.push_str(&format!(
             "| {} | {} | {} … {} | {} | {} |\n",

@@ -1,5 +1,5 @@
 //! Signal processing for fleet logs: resampling to distance ([`distance`]), reading a series
-//! between its samples ([`interp_linear`]), sensor
+//! between its samples ([`interp_linear`]), a first-order lag ([`first_order_lag`]), sensor
 //! quantisation ([`quantization`]) and its consistent reconstruction ([`dequantise`]), Butterworth design in second-order
 //! sections, causal and zero-phase filtering, Welch spectra, cross-spectra and coherence.
 //!
@@ -21,6 +21,7 @@ pub mod distance;
 mod error;
 pub mod fft_plans;
 mod filtfilt;
+mod first_order_lag;
 mod interp;
 pub mod quantization;
 pub mod sensor_noise;
@@ -39,6 +40,7 @@ pub use filtfilt::{
     impulse_decay_len, matched_default_fit_len, ramp_zi, scipy_default_padlen, sosfiltfilt,
     EdgeMode, MATCHED_DECAY_THRESHOLD,
 };
+pub use first_order_lag::first_order_lag;
 pub use interp::{interp_linear, interp_linear_at, LinearResampler};
 pub use sos::{
     sosfilt, sosfilt_in_place, sosfilt_in_place_rev, sosfilt_zi, FREE_RESPONSE_FLOOR,

@@ -9,7 +9,9 @@
 //!   or when present with [`AccelSource::Auto`]; otherwise the derivative of `vehicle_speed`,
 //!   a centred difference over ±`speed_derivative_half_window_s`;
 //! - drive torque at the driven wheels: with the vehicle's driveline parameters, the drive-shaft
-//!   torque `M_d` of docs/models/driveline.md by inverse dynamics (see below); without them
+//!   torque `M_d` of docs/models/driveline.md by inverse dynamics (see below), from the torque
+//!   the engine produces (the recorded ECU figure through the driveline's
+//!   `engine_torque_lag_s`, [`crate::signal::first_order_lag`]); without them
 //!   `T = M_e · i_t(gear) · i_f` while a gear is engaged and the clutch closed (`clutch_position` <
 //!   0.5, or absent), else 0, driveline inertia and losses not modelled (they act as a resistance
 //!   the model closes at `resistance_height_m`);
@@ -75,6 +77,7 @@ use super::recorded::{pieces, relative_times, slope_input, RecordedError};
 use crate::model::driveline::DrivelineParams;
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
+use crate::signal::first_order_lag;
 use crate::table::LogView;
 
 /// Where the acceleration input comes from.
@@ -307,7 +310,11 @@ pub fn axle_inputs_from_log(
     let (slope_name, slope) = slope_input(log, slope_column);
     let mut brake = column("brake_force", Interpolation::Linear);
     let retarder = column("retarder_torque", Interpolation::Linear);
-    let torque = column("engine_torque", Interpolation::Linear);
+    // the torque the engine produces: the ECU's reported figure through the engine's lag
+    let torque = column("engine_torque", Interpolation::Linear).map(|m| match driveline {
+        Some(d) if d.engine_torque_lag_s > 0.0 => first_order_lag(&t, &m, d.engine_torque_lag_s),
+        _ => m,
+    });
     let torque_inputs = torque.is_some() || retarder.is_some();
     let i_f = if torque_inputs {
         Some(final_drive_ratio.ok_or_else(|| {

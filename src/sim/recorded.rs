@@ -8,6 +8,10 @@
 //! - short gaps (NaN; ingest bounds their length) are filled as the column's kind allows;
 //! - gear 0 (neutral) is simulated as the clutch fully open in the last engaged gear — the model
 //!   has no neutral (Myklebust & Eriksson (2012), §2.3);
+//! - the engine torque column is the torque the ECU reports; the scenario drives the
+//!   model with the torque the engine produces, that column through the engine's first-order
+//!   lag `τ_e Ṁ_e = M_rep − M_e` (`engine_torque_lag_s` of the vehicle file, passed in;
+//!   [`crate::signal::first_order_lag`]);
 //! - absent optional columns: clutch engaged (x = 0), no service brake (F_b = 0);
 //! - the slope comes from the named column (e.g. the filtered slope of the slope stage), else
 //!   `road_slope`; without any slope column the road is flat, and this is reported;
@@ -25,6 +29,7 @@ use super::hybrid::{EngineInput, Scenario};
 use super::inputs::{Between, Piecewise};
 use crate::schema::Interpolation;
 use crate::signal::distance::{fill_gaps, fill_gaps_borrowed};
+use crate::signal::first_order_lag;
 use crate::table::{DriveLog, LogView};
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -129,7 +134,8 @@ pub(crate) fn pieces(t: &Arc<[f64]>, v: &[f64], interp: Interpolation) -> Piecew
 /// `retarder_n_per_nm = i_f / r_w` (1/m) a `retarder_torque` column (N·m on the propeller shaft,
 /// positive braking) adds its wheel-equivalent force `T_r i_f / r_w` to the service-brake force:
 /// the retarder's torque taken at the wheels, without the propeller shaft's torsion, as the synthetic
-/// generator applies it (`synth::retarder`). `None` ignores the column.
+/// generator applies it (`synth::retarder`). `None` ignores the column. The engine torque is
+/// the recorded one through the engine's lag `engine_lag_s` (s; 0: as recorded).
 ///
 /// # Errors
 /// [`RecordedError`] for logs shorter than 2 rows, missing engine torque or gear, or gears
@@ -139,12 +145,14 @@ pub fn scenario_from_log(
     forward_gears: usize,
     slope_column: Option<&str>,
     retarder_n_per_nm: Option<f64>,
+    engine_lag_s: f64,
 ) -> Result<RecordedScenario, RecordedError> {
     scenario_from_view(
         LogView::of(log),
         forward_gears,
         slope_column,
         retarder_n_per_nm,
+        engine_lag_s,
     )
 }
 
@@ -157,6 +165,7 @@ pub fn scenario_from_view(
     forward_gears: usize,
     slope_column: Option<&str>,
     retarder_n_per_nm: Option<f64>,
+    engine_lag_s: f64,
 ) -> Result<RecordedScenario, RecordedError> {
     let file = log.log.meta.source_file.clone();
     let t = relative_times(log.log)?;
@@ -170,8 +179,11 @@ pub fn scenario_from_view(
         file: file.clone(),
         column: c.into(),
     };
-    let torque = column_ref("engine_torque", Interpolation::Linear)
+    let mut torque = column_ref("engine_torque", Interpolation::Linear)
         .ok_or_else(|| missing("engine_torque"))?;
+    if engine_lag_s > 0.0 {
+        torque = Cow::Owned(first_order_lag(&t, &torque, engine_lag_s));
+    }
     let gear_raw = column_ref("gear", Interpolation::Hold).ok_or_else(|| missing("gear"))?;
     let mut clutch =
         column("clutch_position", Interpolation::Linear).unwrap_or_else(|| vec![0.0; log.len()]);
@@ -291,11 +303,11 @@ mod tests {
     #[test]
     fn zero_length_and_single_row_drives_are_errors() {
         assert!(matches!(
-            scenario_from_log(&log(0, 3.0), 12, None, None),
+            scenario_from_log(&log(0, 3.0), 12, None, None, 0.0),
             Err(RecordedError::TooShort { rows: 0, .. })
         ));
         assert!(matches!(
-            scenario_from_log(&log(1, 3.0), 12, None, None),
+            scenario_from_log(&log(1, 3.0), 12, None, None, 0.0),
             Err(RecordedError::TooShort { rows: 1, .. })
         ));
     }
@@ -304,12 +316,12 @@ mod tests {
     fn neutral_is_an_open_clutch_in_the_last_gear_and_bad_gears_are_errors() {
         let mut l = log(4, 3.0);
         l.signals[2].values = vec![3.0, 0.0, 0.0, 4.0];
-        let r = scenario_from_log(&l, 12, None, None).unwrap();
+        let r = scenario_from_log(&l, 12, None, None, 0.0).unwrap();
         assert_eq!(r.scenario.gear.eval(0.015), 3.0);
         assert_eq!(r.scenario.clutch_x.eval(0.015), 1.0);
         assert_eq!(r.slope_column, None, "no slope column: flat road, reported");
         assert!(matches!(
-            scenario_from_log(&log(4, 13.0), 12, None, None),
+            scenario_from_log(&log(4, 13.0), 12, None, None, 0.0),
             Err(RecordedError::Gear { row: 0, .. })
         ));
     }
@@ -319,7 +331,7 @@ mod tests {
         let mut l = log(5, 3.0);
         l.signals[1].values = vec![100.0, f64::NAN, f64::NAN, 400.0, 500.0]; // engine torque: linear
         l.signals[2].values = vec![3.0, f64::NAN, 4.0, 4.0, 4.0]; // gear: held
-        let r = scenario_from_log(&l, 12, None, None).unwrap();
+        let r = scenario_from_log(&l, 12, None, None, 0.0).unwrap();
         let EngineInput::Torque(m) = &r.scenario.engine else {
             panic!()
         };

@@ -264,6 +264,7 @@ pub fn validate_shuffle(
         ratios.len(),
         slope_column,
         Some(p.final_drive_ratio / p.wheel_radius_m),
+        p.engine_torque_lag_s,
     )?;
     let measured = |column: &str| {
         log.signal(column)

@@ -7,9 +7,12 @@
 //! time, travelled distance, speed, slope, engine speed and whether the engine is coupled
 //! (AMT driving in a gear), and commands a torque fraction (negative: engine brake), a
 //! retarder torque and a service-brake force ([`super::driver`], brake blending); the AMT turns
-//! the fraction into gear, clutch position and engine torque; a one-step
-//! [`Scenario`] with these inputs held (and the road slope at the step's start position, looked
-//! up by the travelled distance) is simulated with [`FastDriveline::simulate_span`] at
+//! the fraction into gear, clutch position and engine torque (the ECU's figure, which the log
+//! records; the plant is driven by the torque the engine produces, that figure through the
+//! vehicle file's first-order engine lag `engine_torque_lag_s`); a one-step [`Scenario`] with
+//! these inputs held (the produced torque following its lag; the road slope at the step's
+//! start position, looked up by the travelled distance) is simulated with
+//! [`FastDriveline::simulate_span`] at
 //! [`DriveConfig::sample_dt_s`] (0.01 s), carrying the state and the clutch mode. The
 //! retarder's wheel-equivalent force `T_r i_f / r_w` is added to the service-brake force input
 //! of the step ([`super::retarder`]: the driveline model has no retarder of its own). Rolling
@@ -246,6 +249,7 @@ pub fn simulate_drive_with(
     let mut finished_at: Option<f64> = None;
     let mut shift_start: Option<(f64, f64)> = None;
     let mut launch_start: Option<f64> = None;
+    let mut produced = ProducedTorque::new(plant.engine_torque_lag_s);
     loop {
         let t = k as f64 * dt;
         if let Some(tf) = finished_at {
@@ -334,7 +338,7 @@ pub fn simulate_drive_with(
                         st.force_n(x, plant.mass_kg, plant.gravity_m_per_s2, slope)
                     }),
             ),
-            engine: EngineInput::Torque(Piecewise::constant(t1, o.engine_torque_nm)),
+            engine: EngineInput::Torque(produced.over_step(o.engine_torque_nm, t, t1, ds)),
             smoothing: false,
             standstill_events: true,
         };
@@ -350,7 +354,8 @@ pub fn simulate_drive_with(
             out.distance_m.push(x);
             out.speed_mps.push(p.wheel_radius_m * yj[7]);
             out.engine_speed_rad_s.push(yj[0]);
-            out.engine_torque_nm.push(tr.torques[j][0]);
+            // the ECU's figure: the command, which the produced torque follows
+            out.engine_torque_nm.push(o.engine_torque_nm);
             out.drive_torque_nm.push(tr.torques[j][3]);
             out.gear.push(o.gear as f64);
             out.clutch_x.push(o.clutch_x);
@@ -379,6 +384,45 @@ pub fn simulate_drive_with(
         k += 1;
     }
     Ok(out)
+}
+
+/// The torque the engine produces: the AMT's command (the ECU's figure, which the log
+/// records) through the engine's first-order lag `τ_e Ṁ_e = M_cmd − M_e`
+/// ([`DrivelineParams::engine_torque_lag_s`]), starting at the first command.
+#[derive(Debug, Clone, Copy)]
+struct ProducedTorque {
+    lag_s: f64,
+    state: Option<f64>,
+}
+
+impl ProducedTorque {
+    fn new(lag_s: f64) -> Self {
+        Self { lag_s, state: None }
+    }
+
+    /// The produced torque over one control step `[t, t1]` with `command` held: the lag's
+    /// exact response at every sample `t + j·ds`, linear between them; the command itself,
+    /// held, without a lag.
+    fn over_step(&mut self, command: f64, t: f64, t1: f64, ds: f64) -> Piecewise {
+        if self.lag_s <= 0.0 {
+            return Piecewise::constant(t1, command);
+        }
+        let mut m = *self.state.get_or_insert(command);
+        let steps = ((t1 - t) / ds).round().max(1.0) as usize;
+        let times: Vec<f64> = (0..=steps)
+            .map(|j| if j == steps { t1 } else { t + j as f64 * ds })
+            .collect();
+        let mut values = Vec::with_capacity(times.len());
+        values.push(m);
+        for w in times.windows(2) {
+            m = command + (m - command) * (-(w[1] - w[0]) / self.lag_s).exp();
+            values.push(m);
+        }
+        self.state = Some(m);
+        let times: std::sync::Arc<[f64]> = times.into();
+        Piecewise::through_samples(&times, &values, crate::sim::inputs::Between::Linear)
+            .expect("increasing times and finite torques")
+    }
 }
 
 /// Every `k`-th sample of a span trajectory (the first kept).

@@ -433,3 +433,62 @@ fn clean_highway_drive_is_reproduced_by_the_nominal_driveline_and_axle_models() 
     check_driveline(&veh, &sd, "highway-se 2 km seed 3");
     check_axles(&veh, &sd, "highway-se 2 km seed 3");
 }
+
+/// The engine's torque lag (`engine_torque_lag_s`): a drive made with it records the ECU's
+/// figure and drives its plant with the lagged torque; the driveline simulation of the
+/// recording reads the recorded torque through the file's lag and reproduces the engine speed
+/// as well as on the same drive made without a lag, and far better than when it reads the
+/// torque as recorded. City drive, 2 km, seed 3, the seed-002 truck; measured engine-speed RMSE
+/// (30 s windows): 1.839 rad/s on the drive without a lag, 1.883 rad/s on the drive with a
+/// 0.1 s lag read through it, 4.285 rad/s read without it. Bounds: within 10 % of the lag-free
+/// drive's (the lag read from the 50 Hz record of a command that steps every 0.1 s), and at
+/// least twice as large without the lag.
+#[test]
+fn a_lagged_engine_is_reproduced_through_the_files_lag() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = ValidationConfig::default();
+    // (the drive made with `lag_s`, its vehicle file's driveline)
+    let made = |lag_s: f64| {
+        let text = std::fs::read_to_string(fixture(VEHICLE)).unwrap().replace(
+            "[driveline]\n",
+            &format!("[driveline]\nengine_torque_lag_s = {lag_s:?}\n"),
+        );
+        let file = dir.path().join(format!("lag-{lag_s}.toml"));
+        std::fs::write(&file, &text).unwrap();
+        let vf = VehicleFile::load(&file).unwrap();
+        let sd = synth_drive(
+            &file,
+            "city-se",
+            2.0,
+            3,
+            &dir.path().join(format!("drive-{lag_s}")),
+            &DriveConfig::default(),
+            None,
+        )
+        .unwrap();
+        (sd, vf)
+    };
+    let rmse = |sd: &SynthDrive, vf: &VehicleFile, lag_s: f64| {
+        let p = DrivelineParams {
+            engine_torque_lag_s: lag_s,
+            ..vf.driveline.clone().unwrap()
+        };
+        let val = validate_shuffle(&sd.log, &p, &vf.gearbox.ratios, None, &cfg).unwrap();
+        val.metrics
+            .iter()
+            .find(|m| m.signal == "engine_speed" && m.gear.is_none())
+            .unwrap()
+            .rmse
+    };
+    let (plain, vf0) = made(0.0);
+    let (lagged, vf1) = made(0.1);
+    assert_eq!(vf1.driveline.as_ref().unwrap().engine_torque_lag_s, 0.1);
+    let reference = rmse(&plain, &vf0, 0.0);
+    let (with, without) = (rmse(&lagged, &vf1, 0.1), rmse(&lagged, &vf1, 0.0));
+    eprintln!(
+        "engine-speed RMSE {reference:.3} rad/s without a lag; with a 0.1 s lag {with:.3} rad/s \
+         read through it, {without:.3} rad/s read without"
+    );
+    assert!(with < 1.1 * reference, "{with} vs {reference}");
+    assert!(without > 2.0 * reference, "{without} vs {reference}");
+}
