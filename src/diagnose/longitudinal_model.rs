@@ -135,9 +135,9 @@ pub struct LongitudinalModel<'a> {
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
 /// effects ([`INPUT_EFFECTS`], which correct the recorded inputs,
-/// [`super::model_inputs::corrected_log`]) and the
-/// final drive and wheel radius, which no catalogue effect changes; so every simulation at the nominal sensor parameters —
-/// most of a diagnosis's — reads the same ones, built once
+/// [`super::model_inputs::corrected_log`]), the final drive and wheel radius, and the engine's
+/// torque lag (`engine_torque_lag_s`), which no catalogue effect changes; so every simulation
+/// at the nominal sensor parameters — most of a diagnosis's — reads the same ones, built once
 /// ([`LongitudinalModel::read_inputs`]).
 #[derive(Debug)]
 struct ReadInputs {
@@ -424,7 +424,7 @@ impl<'a> LongitudinalModel<'a> {
 
     /// [`LongitudinalModel::simulate_windows`] with the windows spread over `threads`
     /// integrators (1: one after the other on this thread, the samples straight onto the rows;
-    /// more: a batch of 32 windows at a time, each integrator a contiguous run of
+    /// more: a batch of `WINDOW_BATCH` (32) windows at a time, each integrator a contiguous run of
     /// them in parallel, the samples pushed in window order). The outputs are the same, bit for
     /// bit, whatever `threads`: every window starts from the measured state.
     ///
