@@ -314,10 +314,15 @@ pub(crate) mod tests {
             (soft.slip_per_newton - b_max).abs() < 1e-12 * b_max,
             "{soft:?}"
         );
-        // the rows' slip follows the torque and is 0 without one
+        // the rows' slip follows the torque the engine produces (the recorded one through the
+        // file's lag) and is 0 without one
         let log = drive(&p, &ratios, 0.0, 0.0);
         let k = slip_of_rows(LogView::of(&log), &p, &ratios, 1.0 / c);
-        let tq = log.signal("engine_torque").unwrap();
+        let tq = crate::signal::first_order_lag(
+            &log.seconds_from_start(),
+            log.signal("engine_torque").unwrap(),
+            p.engine_torque_lag_s,
+        );
         let g = log.signal("gear").unwrap();
         let expect = tq[5] * ratios[g[5] as usize - 1] * p.final_drive_ratio / p.wheel_radius_m / c;
         assert!((k[5] - expect).abs() < 1e-15);

@@ -213,6 +213,22 @@ pub fn at_domain_edge(e: Effect, r: &EstimateRow) -> bool {
     !f.switch && eps > 0.0 && (stopped_at(lo) || stopped_at(hi))
 }
 
+/// The band a vehicle's pooled estimate of `e` is judged against: the drives' band of `r` (the
+/// file's tolerance widened by the catalogue's model-form allowance of a full fit,
+/// [`crate::model::catalogue::EffectSpec::model_form`]), each side widened further to the
+/// allowance of the linearised estimates where that is the larger
+/// ([`crate::model::catalogue::EffectSpec::linearised_form`]): the pool holds estimates of
+/// both kinds, and most are linearised.
+pub fn pooled_band(e: Effect, r: &EstimateRow) -> (f64, f64) {
+    let spec = e.spec();
+    let (full_below, full_above) = spec.model_form.widths(r.nominal);
+    let (lin_below, lin_above) = spec.linearised_form.widths(r.nominal);
+    (
+        r.tolerance_low - (lin_below - full_below).max(0.0),
+        r.tolerance_high + (lin_above - full_above).max(0.0),
+    )
+}
+
 /// The evidence of one vehicle from its drives (any order; sorted by start time, then drive id):
 /// for every persistent catalogue parameter (not [`PER_TRIP`], not a switch) the drives'
 /// estimates (those that stopped at the edge of the fit domain left out, [`at_domain_edge`]),
@@ -257,7 +273,7 @@ pub fn vehicle_evidence(vehicle_id: &str, mut drives: Vec<DriveEstimates>) -> Ve
         let Some(cur) = segs.last() else {
             continue;
         };
-        let band = (last.tolerance_low, last.tolerance_high);
+        let band = pooled_band(e, last);
         let status = if cur.end - cur.start < MIN_SEGMENT {
             Status::TooFewDrives
         } else if cur.pooled.ci_low > band.1 || cur.pooled.ci_high < band.0 {
@@ -314,30 +330,52 @@ mod tests {
     }
 
     #[test]
-    fn a_lost_fairing_is_dated_and_set_against_the_file() {
-        // 12 drives at the file's value, then 18 at 6.9 m², alternating ±0.1 around each level
-        let drives: Vec<DriveEstimates> = (0..30)
-            .map(|i| {
-                let level = if i < 12 { 5.6 } else { 6.9 };
-                drive(i, level + if i.is_multiple_of(2) { 0.1 } else { -0.1 })
-            })
-            .collect();
-        let v = vehicle_evidence("TRK-1", drives.into_iter().rev().collect());
-        let p = &v.parameters[0];
-        assert_eq!(p.effect, Effect::AeroDrag);
-        assert_eq!(p.changes.len(), 1);
-        assert_eq!(p.changes[0].at, 12);
-        assert_eq!(p.status, Status::Changed);
-        let s = p.sentence();
-        assert!(s.starts_with("aero_drag: 6.90 m^2"), "{s}");
-        assert!(
-            s.contains("since 2023-11-26") && s.contains("23.2 % above the file (5.60 m^2)"),
-            "{s}"
-        );
-        assert!(
-            s.contains("the 12 drives before: 5.60 m^2") && s.contains("consistent with it"),
-            "{s}"
-        );
+    fn a_changed_drag_area_is_dated_and_set_against_the_pooled_band() {
+        // the pooled band: the rows' 5.32–5.88 m², widened below by the linearised estimates'
+        // allowance (28 % of 5.6 m², none for a full fit) and above by what it adds to the full
+        // fit's (170 % against 110 %)
+        let (lo, hi) = pooled_band(Effect::AeroDrag, &drive(0, 5.6).rows[0]);
+        assert!((lo - (5.32 - 0.28 * 5.6)).abs() < 1e-9, "{lo}");
+        assert!((hi - (5.88 + 0.6 * 5.6)).abs() < 1e-9, "{hi}");
+        // 12 drives at the file's value, then 18 at a new level, alternating ±0.1 around each
+        for (level, status, words) in [
+            // a lost fairing: dated, but within what the models' own error allows
+            (
+                6.9,
+                Status::Consistent,
+                "23.2 % above the file (5.60 m^2), within its tolerance",
+            ),
+            // 79 % above: flagged
+            (
+                10.0,
+                Status::Changed,
+                "78.6 % above the file (5.60 m^2), outside its tolerance",
+            ),
+        ] {
+            let drives: Vec<DriveEstimates> = (0..30)
+                .map(|i| {
+                    let l = if i < 12 { 5.6 } else { level };
+                    drive(i, l + if i.is_multiple_of(2) { 0.1 } else { -0.1 })
+                })
+                .collect();
+            let v = vehicle_evidence("TRK-1", drives.into_iter().rev().collect());
+            let p = &v.parameters[0];
+            assert_eq!(p.effect, Effect::AeroDrag);
+            assert_eq!(p.band, (lo, hi));
+            assert_eq!(p.changes.len(), 1);
+            assert_eq!(p.changes[0].at, 12);
+            assert_eq!(p.status, status, "{level}");
+            let s = p.sentence();
+            assert!(
+                s.starts_with(&format!("aero_drag: {} m^2", sig(level))),
+                "{s}"
+            );
+            assert!(s.contains("since 2023-11-26") && s.contains(words), "{s}");
+            assert!(
+                s.contains("the 12 drives before: 5.60 m^2") && s.contains("consistent with it"),
+                "{s}"
+            );
+        }
     }
 
     #[test]

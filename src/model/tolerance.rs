@@ -121,14 +121,15 @@ impl Tolerances {
         self.given.contains_key(e.parameter())
     }
 
-    /// The band `(θ₀ − w, θ₀ + w)` of `e`'s parameter around `nominal` that an estimate must
-    /// leave to be named: the half-width `w` is the file's tolerance ([`Tolerances::of_effect`])
-    /// plus the catalogue's model-form allowance ([`crate::model::catalogue::EffectSpec::model_form`]),
-    /// the two added because a healthy truck may sit at the edge of the one and its estimate
-    /// miss it by the other.
+    /// The band `(θ₀ − w − m₋, θ₀ + w + m₊)` of `e`'s parameter around `nominal` that an
+    /// estimate must leave to be named: `w` is the file's tolerance ([`Tolerances::of_effect`]),
+    /// `m₋` and `m₊` the catalogue's model-form allowance below and above
+    /// ([`crate::model::catalogue::EffectSpec::model_form`]), added because a healthy truck may
+    /// sit at the edge of the one and its estimate miss it by the other.
     pub fn band(&self, e: Effect, nominal: f64) -> (f64, f64) {
-        let w = self.of_effect(e).half_width(nominal) + e.spec().model_form.half_width(nominal);
-        (nominal - w, nominal + w)
+        let w = self.of_effect(e).half_width(nominal);
+        let (below, above) = e.spec().model_form.widths(nominal);
+        (nominal - w - below, nominal + w + above)
     }
 
     /// The entries the table gave, by key.
@@ -170,12 +171,17 @@ mod tests {
         assert_eq!(t.of_key("wheel_radius_m"), None);
         // the band: the file's tolerance plus the catalogue's model-form allowance
         let (lo, hi) = t.band(Effect::VehicleMass, 40_000.0);
-        let w = 0.05 * 40_000.0 + Effect::VehicleMass.spec().model_form.half_width(40_000.0);
-        assert!(w > 2000.0);
-        assert!((lo - (40_000.0 - w)).abs() < 1e-9 && (hi - (40_000.0 + w)).abs() < 1e-9);
+        let (below, above) = Effect::VehicleMass.spec().model_form.widths(40_000.0);
+        assert!(below > 0.0 && above > 0.0);
+        assert!((lo - (40_000.0 - 2000.0 - below)).abs() < 1e-9);
+        assert!((hi - (40_000.0 + 2000.0 + above)).abs() < 1e-9);
         let (lo, hi) = Tolerances::default().band(Effect::GradeOffset, 0.0);
-        let w = 0.002 + Effect::GradeOffset.spec().model_form.half_width(0.0);
-        assert_eq!((lo, hi), (-w, w));
+        let (below, above) = Effect::GradeOffset.spec().model_form.widths(0.0);
+        assert_eq!((lo, hi), (-0.002 - below, 0.002 + above));
+        // an allowance measured on one side only widens that side: the clutch's estimates on
+        // healthy trucks missed upwards only
+        let (lo, hi) = Tolerances::default().band(Effect::ClutchSlip, 3000.0);
+        assert!((lo - 2700.0).abs() < 1e-9 && hi > 3300.0, "{lo} {hi}");
         // a switch has neither
         assert_eq!(
             Tolerances::default().band(Effect::SlopeQuantization, 0.01),

@@ -94,11 +94,48 @@ pub struct EstimateSpread {
     pub median_abs_error: f64,
     /// Drives whose interval misses the truck's value.
     pub missed: usize,
-    /// Largest distance from the truck's value to the interval: the model-form allowance
-    /// this run measures ([`crate::model::catalogue::EffectSpec::model_form`]).
+    /// The misses with the estimate below the truck's value.
+    pub below: MissSide,
+    /// The misses with the estimate above the truck's value.
+    pub above: MissSide,
+}
+
+/// The misses of one side of the truck's value: the model-form allowance this run measures on
+/// that side ([`crate::model::catalogue::EffectSpec::model_form`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MissSide {
+    /// Drives whose interval misses the truck's value on this side.
+    pub missed: usize,
+    /// Largest distance from the truck's value to the interval (0 when none missed).
     pub max_miss: f64,
-    /// The case of the largest miss.
-    pub max_miss_case: usize,
+    /// The case of the largest miss (`None` when none missed).
+    pub max_miss_case: Option<usize>,
+}
+
+impl MissSide {
+    fn of<'a>(misses: impl Iterator<Item = (usize, f64)> + 'a) -> Self {
+        let mut side = MissSide {
+            missed: 0,
+            max_miss: 0.0,
+            max_miss_case: None,
+        };
+        for (case, miss) in misses.filter(|&(_, m)| m > 0.0) {
+            side.missed += 1;
+            // the largest, and the first case among equal ones
+            if miss > side.max_miss {
+                side.max_miss = miss;
+                side.max_miss_case = Some(case);
+            }
+        }
+        side
+    }
+
+    fn cell(&self) -> String {
+        match self.max_miss_case {
+            Some(c) => format!("{}, {:.4} (case {c})", self.missed, self.max_miss),
+            None => "0".to_string(),
+        }
+    }
 }
 
 /// Per parameter, in catalogue order, the spread of [`CaseScore::estimate_misses`] over the
@@ -115,17 +152,25 @@ fn estimate_spreads(scores: &[CaseScore]) -> Vec<EstimateSpread> {
                 // estimate's interval is the first round's approximation
                 .filter(|(_, m)| m.effect == id && m.method != "linearised")
                 .collect();
-            let (case, worst) = m
-                .iter()
-                .max_by(|a, b| a.1.miss.total_cmp(&b.1.miss).then(b.0.cmp(&a.0)))?;
+            if m.is_empty() {
+                return None;
+            }
+            // a miss lies on the side of the truck's value the estimate is on
+            let side = |above: bool| {
+                MissSide::of(
+                    m.iter()
+                        .filter(move |(_, x)| (x.error > 0.0) == above)
+                        .map(|(c, x)| (*c, x.miss)),
+                )
+            };
             Some(EstimateSpread {
                 effect: id,
                 drives: m.len(),
                 median_abs_error: median(m.iter().map(|(_, x)| x.error.abs()).collect())
                     .unwrap_or(f64::NAN),
                 missed: m.iter().filter(|(_, x)| x.miss > 0.0).count(),
-                max_miss: worst.miss,
-                max_miss_case: *case,
+                below: side(false),
+                above: side(true),
             })
         })
         .collect()
@@ -407,16 +452,22 @@ impl ProofSummary {
                 "\n### Estimates on no-effect drives\n\nEach parameter's full fit (a finding, \
                  or an estimate within the band) against the truck's true value, as a fraction of the file's value (drag, rolling \
                  resistance, mass, stiffness, clutch capacity) or in its unit (offsets, delay, \
-                 lash); the largest miss of the truck's value by the 95 % interval is the \
-                 model-form allowance this run measures.\n\n\
+                 lash); the largest miss of the truck's value by the 95 % interval on each side \
+                 is the model-form allowance this run measures.\n\n\
                  | parameter | drives with a fit | median abs. error | intervals missing the truck | \
-                 largest miss | its case |\n|---|---|---|---|---|---|"
+                 below: misses, largest (its case) | above: misses, largest (its case) |\n\
+                 |---|---|---|---|---|---|"
             );
             for e in &self.no_effect_estimates {
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {:.4} | {} | {:.4} | {} |",
-                    e.effect, e.drives, e.median_abs_error, e.missed, e.max_miss, e.max_miss_case
+                    "| {} | {} | {:.4} | {} | {} | {} |",
+                    e.effect,
+                    e.drives,
+                    e.median_abs_error,
+                    e.missed,
+                    e.below.cell(),
+                    e.above.cell()
                 );
             }
         }
@@ -651,5 +702,74 @@ mod tests {
             (4, 1, 1)
         );
         assert!(sum.to_markdown().contains("| 1 of 4 / 1 of 4 |"));
+    }
+
+    #[test]
+    fn no_effect_misses_are_measured_on_each_side_apart() {
+        use super::super::score::EstimateMiss;
+        let clean = |index: usize, misses: &[(f64, f64, &'static str)]| CaseScore {
+            index,
+            estimate_misses: misses
+                .iter()
+                .map(|&(error, miss, method)| EstimateMiss {
+                    effect: "clutch_slip",
+                    error,
+                    miss,
+                    method,
+                })
+                .collect(),
+            ..score(
+                &ProofCase {
+                    index,
+                    seed: 1,
+                    rules: "highway-se",
+                    length_km: 3.0,
+                    hidden: Hidden::Nothing,
+                },
+                &ProofTruth {
+                    hidden: Hidden::Nothing,
+                    injection: None,
+                    stretch: None,
+                },
+                &diag(None, Verdict::NoSignificantMismatch),
+                600.0,
+                1.0,
+            )
+        };
+        let sum = summarize(
+            &[
+                clean(3, &[(0.3, 0.2, "fitted")]),
+                clean(4, &[(0.25, 0.1, "named"), (-0.9, 0.8, "linearised")]),
+                clean(5, &[(-0.02, 0.01, "fitted")]),
+                clean(6, &[(0.05, 0.0, "fitted")]),
+            ],
+            &[],
+        );
+        let e = sum
+            .no_effect_estimates
+            .iter()
+            .find(|e| e.effect == "clutch_slip")
+            .unwrap();
+        // the linearised estimate is not a full fit and does not count
+        assert_eq!((e.drives, e.missed), (4, 3));
+        assert_eq!(
+            e.above,
+            MissSide {
+                missed: 2,
+                max_miss: 0.2,
+                max_miss_case: Some(3)
+            }
+        );
+        assert_eq!(
+            e.below,
+            MissSide {
+                missed: 1,
+                max_miss: 0.01,
+                max_miss_case: Some(5)
+            }
+        );
+        assert!(sum.to_markdown().contains(
+            "| clutch_slip | 4 | 0.1500 | 3 | 1, 0.0100 (case 5) | 2, 0.2000 (case 3) |"
+        ));
     }
 }

@@ -45,12 +45,18 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         t => format!("{}{unit} {}", num(nominal), width(t)),
     };
     // the model's own allowance widens the band the estimate is judged against
-    let allowance = e.spec().model_form;
-    let model = match allowance {
-        Tolerance::Relative(x) | Tolerance::Absolute(x) if x > 0.0 => {
-            format!(" and the model's own {}", width(allowance))
+    let mf = e.spec().model_form;
+    let model = match (mf.below, mf.above) {
+        (Tolerance::None, Tolerance::None) => String::new(),
+        (b, a) if b == a => format!(" and the model's own {}", width(a)),
+        (b, a) => {
+            let side = |t: Tolerance, sign: char| match t {
+                Tolerance::Relative(r) => format!("{sign} {} %", num(100.0 * r)),
+                Tolerance::Absolute(x) => format!("{sign} {}{unit}", num(x)),
+                Tolerance::None => format!("{sign} 0"),
+            };
+            format!(" and the model's own {} / {}", side(b, '−'), side(a, '+'))
         }
-        _ => String::new(),
     };
     format!(
         "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}{model}: \

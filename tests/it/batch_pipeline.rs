@@ -3,6 +3,7 @@
 //! versions. Every run goes through the real binary.
 
 use crate::common::*;
+use fleetdyn::model::catalogue::Effect;
 use fleetdyn::pipeline::spec::PipelineSpec;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use std::path::{Path, PathBuf};
@@ -207,7 +208,64 @@ fn nightly_runs_every_fixture_with_skips_recorded_and_partitioned_outputs() {
             .num_rows()
     };
     assert_eq!(rows("fleet_vehicles.parquet"), 4);
-    assert!(rows("fleet_parameters.parquet") >= 4 * 8);
+    // a vehicle's persistent parameters are those its drive informs: an estimate with an
+    // interval of some width (a linearised estimate the data push beyond its fit domain has
+    // one of none, at the domain's end), not a per-trip mass and not a switch
+    let pooled = {
+        let f = std::fs::File::open(fleet.join("fleet_parameters.parquet")).unwrap();
+        let r = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(f)
+            .unwrap()
+            .build()
+            .unwrap();
+        let mut v: Vec<(String, String)> = Vec::new();
+        for b in r {
+            let b = b.unwrap();
+            let col = |name: &str| {
+                arrow::compute::cast(
+                    b.column_by_name(name).unwrap(),
+                    &arrow::datatypes::DataType::Utf8,
+                )
+                .unwrap()
+            };
+            let (ids, ps) = (col("vehicle_id"), col("parameter"));
+            let (ids, ps) = (
+                ids.as_any()
+                    .downcast_ref::<arrow::array::StringArray>()
+                    .unwrap(),
+                ps.as_any()
+                    .downcast_ref::<arrow::array::StringArray>()
+                    .unwrap(),
+            );
+            for i in 0..b.num_rows() {
+                v.push((ids.value(i).to_string(), ps.value(i).to_string()));
+            }
+        }
+        v
+    };
+    for (n, date) in [(1, "03-02"), (2, "03-02"), (3, "03-03"), (4, "03-03")] {
+        let (est, _) = fleetdyn::fleet::series::read_parameter_estimates(&out.join(format!(
+            "parameter_estimates/model_version=2026.1/vehicle_id=TRK-000{n}/date=2026-{date}/truck-000{n}.parquet"
+        )))
+        .unwrap();
+        let mut informed: Vec<String> = est
+            .iter()
+            .filter(|r| {
+                !["vehicle_mass", "cg_position", "slope_quantization"].contains(&r.effect.as_str())
+                    && r.value.is_finite()
+                    && r.ci_high > r.ci_low
+            })
+            .map(|r| Effect::from_id(&r.effect).unwrap().parameter().to_string())
+            .collect();
+        let mut got: Vec<String> = pooled
+            .iter()
+            .filter(|(id, _)| *id == format!("TRK-000{n}"))
+            .map(|(_, p)| p.clone())
+            .collect();
+        informed.sort();
+        got.sort();
+        assert!(informed.len() >= 6, "TRK-000{n}: {informed:?}");
+        assert_eq!(got, informed, "TRK-000{n}");
+    }
     assert_eq!(rows("fleet_changes.parquet"), 0);
     // each 40 t drive informs its trip's mass: one row per drive, never pooled
     assert_eq!(rows("fleet_trips.parquet"), 4);

@@ -82,8 +82,10 @@ fn headless(browser: &Path, args: &[&str], page: &Path) -> std::process::Output 
 
 #[test]
 fn fleet_page_renders_in_a_headless_browser() {
-    let fairing = (0..30).map(|i| {
-        let level = if i < 12 { 5.6 } else { 6.9 };
+    // a drag area 79 % above the file after 12 drives: outside the pooled band (the drives'
+    // band widened to the linearised estimates' allowance, 3.75–9.24 m²)
+    let changed = (0..30).map(|i| {
+        let level = if i < 12 { 5.6 } else { 10.0 };
         drive(
             "TRK-0100",
             i,
@@ -98,7 +100,7 @@ fn fleet_page_renders_in_a_headless_browser() {
         )
     });
     let vehicles = vec![
-        vehicle_evidence("TRK-0100", fairing.collect()),
+        vehicle_evidence("TRK-0100", changed.collect()),
         vehicle_evidence("TRK-0200", clean.collect()),
     ];
     let html = fleet_html(
@@ -146,7 +148,7 @@ fn fleet_page_renders_in_a_headless_browser() {
     let dom = String::from_utf8_lossy(&o.stdout);
     assert!(dom.contains("<svg"), "no plot in the DOM");
     assert!(
-        dom.contains("aero_drag: 6.90 m^2"),
+        dom.contains("aero_drag: 10.0 m^2"),
         "no sentence in the DOM"
     );
     assert!(dom.contains("TRK-0100") && dom.contains("TRK-0200"));
