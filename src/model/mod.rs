@@ -6,6 +6,7 @@ pub mod axle_estimate_output;
 pub mod axle_estimation;
 pub mod axle_measurement;
 pub mod catalogue;
+pub mod catalogue_table;
 pub mod driveline;
 pub mod extended_vehicle;
 pub mod linear;

@@ -51,11 +51,16 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         (b, a) if b == a => format!(" and the model's own {}", width(a)),
         (b, a) => {
             let side = |t: Tolerance, sign: char| match t {
-                Tolerance::Relative(r) => format!("{sign} {} %", num(100.0 * r)),
-                Tolerance::Absolute(x) => format!("{sign} {}{unit}", num(x)),
-                Tolerance::None => format!("{sign} 0"),
+                Tolerance::Relative(r) => Some(format!("{sign} {} %", num(100.0 * r))),
+                Tolerance::Absolute(x) => Some(format!("{sign} {}{unit}", num(x))),
+                Tolerance::None => None,
             };
-            format!(" and the model's own {} / {}", side(b, '−'), side(a, '+'))
+            match (side(b, '−'), side(a, '+')) {
+                (Some(b), Some(a)) => format!(" and the model's own {b} / {a}"),
+                (Some(b), None) => format!(" and the model's own {b} below"),
+                (None, Some(a)) => format!(" and the model's own {a} above"),
+                (None, None) => String::new(),
+            }
         }
     };
     format!(
@@ -243,6 +248,44 @@ pub fn statement_text(s: &Statement) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_one_sided_allowance_is_named_with_its_side() {
+        use crate::diagnose::explanation::{ConsistentEstimate, ParameterEstimate};
+        use crate::model::catalogue::Tolerance;
+        let c = |effect: &'static str, value: f64, nominal: f64, unit: &'static str| {
+            ConsistentEstimate {
+                effect,
+                estimate: ParameterEstimate {
+                    value,
+                    ci_low: 0.98 * value,
+                    ci_high: 1.02 * value,
+                    unit,
+                },
+                nominal,
+                band_low: 0.0,
+                band_high: 2.0 * nominal,
+                band_from_file: false,
+                round: 0,
+                ambiguous_with: Vec::new(),
+                file_tolerance: Tolerance::Relative(0.1),
+            }
+        };
+        // the clutch's estimates on healthy trucks missed upwards only
+        let s = consistent_sentence(&c("clutch_slip", 4000.0, 3500.0, "N.m"));
+        assert!(
+            s.contains(
+                "within the vehicle file's 3500 N.m ± 10.0 % and the model's own + 24.0 % above:"
+            ),
+            "{s}"
+        );
+        // both sides measured
+        let s = consistent_sentence(&c("vehicle_mass", 41_000.0, 40_000.0, "kg"));
+        assert!(
+            s.contains("and the model's own − 1.10 % / + 2.80 %:"),
+            "{s}"
+        );
+    }
 
     #[test]
     fn statements_read_as_words_with_their_share() {

@@ -1,9 +1,9 @@
 //! Reference pages generated from the code stay equal to it: the effect catalogue table in
-//! docs/diagnosis/catalogue.md is `model::catalogue::catalogue_markdown()`, between the markers
+//! docs/diagnosis/catalogue.md is `model::catalogue_table::catalogue_markdown()`, between the markers
 //! of section `catalogue` (`fleetdyn::schema::reference`). Run with `FLEETDYN_WRITE_DOCS=1` to
 //! rewrite the page's table from the code.
 
-use fleetdyn::model::catalogue::catalogue_markdown;
+use fleetdyn::model::catalogue_table::catalogue_markdown;
 use fleetdyn::schema::reference::{section, splice};
 
 const PAGE: &str = "docs/diagnosis/catalogue.md";
