@@ -99,11 +99,11 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
 /// 15 %: its force is a constant ∝ m·g, which a rolling resistance could only match at about
 /// four times the file's coefficient, outside that effect's fit domain (2.5 times).
 /// Two shafts 31 % and 35 % softer are read within 25 % as well, but their intervals reach
-/// into the band of acceptance rule 4 (the file's ±10 % widened by the model-form allowance of
-/// ±20 %): each is reported as an estimate consistent with the file, not named. On the 3.4 km
-/// urban drive of the 31 % softer shaft the residual the shaft leaves is then taken up by a
-/// drag area fitted 144 % high and named `aero_drag`, a wrong name the proof counts
-/// (docs/validation/proof.md); it is not asserted here.
+/// into the band of acceptance rule 4 (the file's ±10 % widened below by the model-form
+/// allowance's 20 %): each is reported as an estimate consistent with the file, not named. On
+/// the 3.4 km urban drive of the 31 % softer shaft the residual the shaft leaves is then taken
+/// up by a drag area fitted 137 % high and named `aero_drag`, a wrong name `fleetdyn prove`
+/// counts as one; it is not asserted here.
 #[test]
 fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() {
     let cfg = ProofConfig {
