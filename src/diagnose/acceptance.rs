@@ -47,7 +47,8 @@
 //!
 //! 4. **the interval lies outside the vehicle file's tolerance**: the 95 % interval does not
 //!    overlap the band `θ₀ ± w` around the file's value ([`crate::model::tolerance`]: the
-//!    file's `[tolerance]` entry, else the default of the parameter's kind). A vehicle file's
+//!    file's `[tolerance]` entry, else the default of the parameter's kind), each side widened
+//!    by the catalogue's model-form allowance of that side. A vehicle file's
 //!    values are nominal: a healthy truck's drag area or shaft stiffness is never exactly the
 //!    file's, and a long drive fits it tightly enough to exclude the file's value. When the
 //!    best candidate that passes rules 1 to 3 has an interval inside or across its band, the

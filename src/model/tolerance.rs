@@ -1,7 +1,8 @@
 //! Tolerances of a vehicle file's values: how far a healthy truck's true parameter may lie from the
 //! file's nominal value. The diagnosis names a catalogue effect only when the fitted interval of
-//! its parameter lies wholly outside the band `θ₀ ± w` (docs/diagnosis/method.md); an estimate
-//! inside or overlapping the band is reported as consistent with the file.
+//! its parameter lies wholly outside the band `θ₀ ± w` widened on each side by the catalogue's
+//! model-form allowance of that side ([`Tolerances::band`], docs/diagnosis/method.md); an
+//! estimate inside or overlapping the band is reported as consistent with the file.
 //!
 //! # The `[tolerance]` table
 //! Optional. One key per parameter, named as in the vehicle file (`mass_kg`, `c_w_a_f_m2`,
