@@ -113,7 +113,7 @@ pub struct MissSide {
 }
 
 impl MissSide {
-    fn of<'a>(misses: impl Iterator<Item = (usize, f64)> + 'a) -> Self {
+    fn of(misses: impl Iterator<Item = (usize, f64)>) -> Self {
         let mut side = MissSide {
             missed: 0,
             max_miss: 0.0,

@@ -46,22 +46,19 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
     };
     // the model's own allowance widens the band the estimate is judged against
     let mf = e.spec().model_form;
-    let model = match (mf.below, mf.above) {
-        (Tolerance::None, Tolerance::None) => String::new(),
-        (b, a) if b == a => format!(" and the model's own {}", width(a)),
-        (b, a) => {
-            let side = |t: Tolerance, sign: char| match t {
-                Tolerance::Relative(r) => Some(format!("{sign} {} %", num(100.0 * r))),
-                Tolerance::Absolute(x) => Some(format!("{sign} {}{unit}", num(x))),
-                Tolerance::None => None,
-            };
-            match (side(b, '−'), side(a, '+')) {
-                (Some(b), Some(a)) => format!(" and the model's own {b} / {a}"),
-                (Some(b), None) => format!(" and the model's own {b} below"),
-                (None, Some(a)) => format!(" and the model's own {a} above"),
-                (None, None) => String::new(),
-            }
+    let side = |t: Tolerance, sign: char| match t {
+        Tolerance::Relative(r) => Some(format!("{sign} {} %", num(100.0 * r))),
+        Tolerance::Absolute(x) => Some(format!("{sign} {}{unit}", num(x))),
+        Tolerance::None => None,
+    };
+    let model = match (side(mf.below, '−'), side(mf.above, '+')) {
+        (Some(_), Some(_)) if mf.below == mf.above => {
+            format!(" and the model's own {}", width(mf.above))
         }
+        (Some(b), Some(a)) => format!(" and the model's own {b} / {a}"),
+        (Some(b), None) => format!(" and the model's own {b} below"),
+        (None, Some(a)) => format!(" and the model's own {a} above"),
+        (None, None) => String::new(),
     };
     format!(
         "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}{model}: \
