@@ -92,6 +92,15 @@ pub struct ProveCmd {
     /// driver and ignores it.
     #[arg(long, value_enum, default_value = "drawn")]
     driving: DrivingArg,
+    /// Independent truth only: drives without wind (no mean wind, no gusts). A study of what
+    /// the wind costs the diagnosis (docs/validation/proof.md), not the proof.
+    #[arg(long, conflicts_with = "fleet")]
+    calm: bool,
+    /// Independent truth only: tyres that start warm, at the rolling resistance the file
+    /// states, instead of cold. A study of what their warm-up costs the diagnosis
+    /// (docs/validation/proof.md), not the proof.
+    #[arg(long, conflicts_with = "fleet")]
+    warm_tyres: bool,
     /// The fleet-level proof instead (docs/fleet.md): trucks drawn once from the independent
     /// truth, payload per trip, some developing a fault part-way; every drive diagnosed, the
     /// fleet evidence scored (detection delay, false alarms per vehicle-month, estimate errors).
@@ -178,6 +187,8 @@ impl ProveCmd {
                 DrivingArg::Drawn => Driving::Drawn,
                 DrivingArg::Fixed => Driving::Fixed,
             },
+            wind: !self.calm,
+            warm_tyres: self.warm_tyres,
             ..base
         };
         cfg.validate().map_err(setting)?;

@@ -156,6 +156,8 @@ fn generate_independent(
         &vf,
         &IndependentDriveConfig {
             effect,
+            wind: cfg.wind,
+            warm_tyres: cfg.warm_tyres,
             ..IndependentDriveConfig::new(case.rules, case.length_km, case.seed)
         },
     )?;

@@ -29,6 +29,12 @@ pub struct ProofConfig {
     pub only: Vec<usize>,
     /// Where the drives' truth comes from.
     pub truth: TruthSource,
+    /// Wind on the independent truth's drives (true, the proof) or calm (false: a study of
+    /// what the wind costs the diagnosis, not the proof). The model truth has no wind.
+    pub wind: bool,
+    /// The independent truth's tyres start warm (true: a study of what their warm-up costs the
+    /// diagnosis, not the proof) or cold (false, the proof).
+    pub warm_tyres: bool,
 }
 
 impl Default for ProofConfig {
@@ -62,6 +68,18 @@ impl ProofConfig {
             hi,
             "must be finite and at least min_km",
         )?;
+        require(
+            self.wind || self.truth == TruthSource::Independent,
+            "calm",
+            true,
+            "applies to the independent truth only (the model truth has no wind)",
+        )?;
+        require(
+            !self.warm_tyres || self.truth == TruthSource::Independent,
+            "warm_tyres",
+            true,
+            "applies to the independent truth only (the model truth has no tyre temperature)",
+        )?;
         match self.only.iter().find(|&&c| c >= self.drives) {
             Some(c) => Err(crate::settings::InvalidSetting::new(
                 "cases",
@@ -90,6 +108,8 @@ impl ProofConfig {
             driving: Driving::Drawn,
             only: Vec::new(),
             truth: TruthSource::Independent,
+            wind: true,
+            warm_tyres: false,
         }
     }
 
@@ -346,6 +366,40 @@ mod tests {
                 .stop_every_m,
             drive_config(&case, &fixed).driver.stop_every_m
         );
+    }
+
+    #[test]
+    fn the_study_flags_apply_to_the_independent_truth_only_and_leave_the_plan_alone() {
+        let study = ProofConfig {
+            wind: false,
+            warm_tyres: true,
+            ..ProofConfig::independent()
+        };
+        assert!(study.validate().is_ok());
+        // the same drives hide the same effects: only the plant's physics differs
+        assert_eq!(plan(&study), plan(&ProofConfig::independent()));
+        for (name, cfg) in [
+            (
+                "calm",
+                ProofConfig {
+                    wind: false,
+                    ..ProofConfig::model()
+                },
+            ),
+            (
+                "warm_tyres",
+                ProofConfig {
+                    warm_tyres: true,
+                    ..ProofConfig::model()
+                },
+            ),
+        ] {
+            let e = cfg.validate().unwrap_err().to_string();
+            assert!(
+                e.contains(name) && e.contains("independent truth only"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

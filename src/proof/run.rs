@@ -61,6 +61,11 @@ pub struct ProofRun {
     pub driving: Driving,
     /// Where the drives' truth came from (`--truth`).
     pub truth: TruthSource,
+    /// Wind on the independent truth's drives (false with `--calm`, a study, not the proof).
+    pub wind: bool,
+    /// Tyres warm at the start of the independent truth's drives (true with `--warm-tyres`, a
+    /// study, not the proof).
+    pub warm_tyres: bool,
     /// Worker threads.
     pub jobs: usize,
     /// Scored cases, in plan order.
@@ -313,6 +318,8 @@ pub fn run_proof(
         length_km: cfg.length_km,
         driving: cfg.driving,
         truth: cfg.truth,
+        wind: cfg.wind,
+        warm_tyres: cfg.warm_tyres,
         jobs,
         scores,
         failed,
@@ -322,14 +329,35 @@ pub fn run_proof(
     Ok(run)
 }
 
+/// The sentence that marks a study run (`--calm`, `--warm-tyres`) as not the proof; empty for
+/// the proof itself.
+fn study_sentence(cfg: &ProofConfig) -> String {
+    let mut parts = Vec::new();
+    if !cfg.wind {
+        parts.push("calm (no mean wind, no gusts)");
+    }
+    if cfg.warm_tyres {
+        parts.push("driven on tyres that start warm");
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " The drives are {}: a study of what that physics costs the diagnosis, not the \
+             proof.",
+            parts.join(" and ")
+        )
+    }
+}
+
 fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), ProveError> {
     use crate::io::{write_table, AtomicFile, OutColumn, OutData, TableMeta};
     let io = |path: PathBuf| move |source| ProveError::Io { path, source };
     let md = format!(
         "# Diagnosis proof\n\n`fleetdyn prove --truth {} --drives {} --seed {} --min-km {} \
-         --max-km {} --driving {}{}`: \
+         --max-km {} --driving {}{}{}{}`: \
          {} synthetic drives, each hiding one catalogue effect (random magnitude), nothing, or \
-         an effect outside the catalogue on one stretch; diagnosed blind. {}\n\n{}\n\
+         an effect outside the catalogue on one stretch; diagnosed blind. {}{}\n\n{}\n\
          ## Cases\n\n{}",
         cfg.truth.label(),
         cfg.drives,
@@ -349,6 +377,8 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
                     .join(",")
             )
         },
+        if cfg.wind { "" } else { " --calm" },
+        if cfg.warm_tyres { " --warm-tyres" } else { "" },
         run.summary.drives,
         match cfg.truth {
             TruthSource::Independent => {
@@ -361,6 +391,7 @@ fn write_proof(out: &Path, cfg: &ProofConfig, run: &ProofRun) -> Result<(), Prov
                  inversion check, not a proof."
             }
         },
+        study_sentence(cfg),
         run.summary.to_markdown(),
         cases_markdown(&run.scores, &run.failed)
     );

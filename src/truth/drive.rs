@@ -70,6 +70,9 @@ pub struct IndependentDriveConfig {
     pub mass_scale: f64,
     /// Wind on (true) or calm (false).
     pub wind: bool,
+    /// Tyres start cold, at ambient temperature (false: every drive, as a truck leaves the
+    /// depot), or warm, at the rise where the file's rolling resistance holds (true: a study).
+    pub warm_tyres: bool,
     /// Give up after this simulated time, s.
     pub max_duration_s: f64,
 }
@@ -87,6 +90,7 @@ impl IndependentDriveConfig {
             truck_seed: None,
             mass_scale: 1.0,
             wind: true,
+            warm_tyres: false,
             max_duration_s: length_km * 1000.0 / 2.0 + 600.0,
         }
     }
@@ -216,6 +220,9 @@ pub fn simulate_independent_drive(
         surface: extras.surface,
     };
     let (mut plant, mut x) = Plant::at_rest(params.clone(), grid);
+    if cfg.warm_tyres {
+        x[super::plant::DT] = params.thermal.warm_rise_k;
+    }
     let mut amt = Amt::new(&nominal);
     let integ = EventRk4::new(STEP_S);
     let n_est = (cfg.max_duration_s / CONTROL_DT_S) as usize / 4;
