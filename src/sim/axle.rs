@@ -16,6 +16,7 @@
 //! Hz, so a fixed step of at most 2 ms and at most 0.5/ρ (ρ the spectral radius of the
 //! linearised system with the dampers' steepest slopes) is accurate and stable; the reference
 //! test compares it with an independent derivation integrated by scipy (tests/it/axle_reference.rs).
+//! [`HalfTruck::with_max_step`] trades accuracy for speed up to the bound 0.5/ρ.
 //!
 //! Extensions ([`AxleExtensions`], [`HalfTruck::with_extensions`]) add physics the nominal model
 //! leaves out — the axle-load effects of the diagnosis catalogue (docs/diagnosis/catalogue.md).
@@ -152,6 +153,8 @@ pub struct HalfTruck<'a> {
     damper_d: [V5; 3],
     dampers: [DamperTable; 3],
     h_max: f64,
+    /// Bound of the step from the fastest mode, 0.5/ρ, s.
+    h_stable: f64,
     ext: AxleExtensions,
     /// Index of the rear arm's coordinate.
     rear_arm: usize,
@@ -264,7 +267,8 @@ impl<'a> HalfTruck<'a> {
             .iter()
             .map(|z| z.norm())
             .fold(0.0, f64::max);
-        let h_max = (0.5 / rho).min(2e-3);
+        let h_stable = 0.5 / rho;
+        let h_max = h_stable.min(2e-3);
         Self {
             p,
             st,
@@ -281,6 +285,7 @@ impl<'a> HalfTruck<'a> {
             damper_d,
             dampers,
             h_max,
+            h_stable,
             ext: AxleExtensions::default(),
             rear_arm: 3,
         }
@@ -289,6 +294,16 @@ impl<'a> HalfTruck<'a> {
     /// The same model with the given extensions (see [`AxleExtensions`]).
     pub fn with_extensions(mut self, ext: AxleExtensions) -> Self {
         self.ext = ext;
+        self
+    }
+
+    /// The same model integrated with a step of at most `h_s` (s) instead of 2 ms, and still at
+    /// most 0.5/ρ (module doc; RK4 is stable to |hλ| ≈ 2.8). The error this trades for speed is the
+    /// caller's to state: on recorded inputs it grows about linearly with the step, from the
+    /// kinks of the inputs between their samples and of the damper tables at zero rate, not
+    /// with RK4's fourth order (`sim::axle` tests, `diagnose::axle_model`).
+    pub fn with_max_step(mut self, h_s: f64) -> Self {
+        self.h_max = self.h_stable.min(h_s);
         self
     }
 
