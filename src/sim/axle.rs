@@ -298,12 +298,15 @@ impl<'a> HalfTruck<'a> {
     }
 
     /// The same model integrated with a step of at most `h_s` (s) instead of 2 ms, and still at
-    /// most 0.5/ρ (module doc; RK4 is stable to |hλ| ≈ 2.8). The error this trades for speed is the
-    /// caller's to state: on recorded inputs it grows about linearly with the step, from the
-    /// kinks of the inputs between their samples and of the damper tables at zero rate, not
-    /// with RK4's fourth order (`sim::axle` tests, `diagnose::axle_model`).
+    /// most 0.5/ρ (module doc; RK4 is stable to |hλ| ≈ 2.8). A non-positive or non-finite `h_s`
+    /// leaves the step as it is. The error this trades for speed is the caller's to state: on
+    /// recorded inputs it grows about linearly with the step, from the kinks of the inputs
+    /// between their samples and of the damper tables at zero rate, not with RK4's fourth order
+    /// (measured where the diagnosis sets its step, `diagnose::axle_model`).
     pub fn with_max_step(mut self, h_s: f64) -> Self {
-        self.h_max = self.h_stable.min(h_s);
+        if h_s.is_finite() && h_s > 0.0 {
+            self.h_max = self.h_stable.min(h_s);
+        }
         self
     }
 

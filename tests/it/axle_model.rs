@@ -268,6 +268,10 @@ fn the_diagnosis_step_keeps_the_fixture_pressures_within_5_percent_of_the_sensor
     let fine = HalfTruck::new(p);
     let coarse = HalfTruck::new(p).with_max_step(AXLE_STEP_S);
     assert!(coarse.step_s() > 2.0 * fine.step_s(), "{}", coarse.step_s());
+    // a step that is no step leaves the model's own
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert_eq!(HalfTruck::new(p).with_max_step(bad).step_s(), fine.step_s());
+    }
     let a = fine
         .simulate(&rec.inputs, &rec.t_s, Start::Steady)
         .pressure_pa;
