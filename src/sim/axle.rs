@@ -154,7 +154,7 @@ pub struct HalfTruck<'a> {
     dampers: [DamperTable; 3],
     h_max: f64,
     /// Bound of the step from the fastest mode, 0.5/ρ, s.
-    h_stable: f64,
+    h_mode: f64,
     ext: AxleExtensions,
     /// Index of the rear arm's coordinate.
     rear_arm: usize,
@@ -267,8 +267,8 @@ impl<'a> HalfTruck<'a> {
             .iter()
             .map(|z| z.norm())
             .fold(0.0, f64::max);
-        let h_stable = 0.5 / rho;
-        let h_max = h_stable.min(2e-3);
+        let h_mode = 0.5 / rho;
+        let h_max = h_mode.min(2e-3);
         Self {
             p,
             st,
@@ -285,7 +285,7 @@ impl<'a> HalfTruck<'a> {
             damper_d,
             dampers,
             h_max,
-            h_stable,
+            h_mode,
             ext: AxleExtensions::default(),
             rear_arm: 3,
         }
@@ -305,7 +305,7 @@ impl<'a> HalfTruck<'a> {
     /// (measured where the diagnosis sets its step, `diagnose::axle_model`).
     pub fn with_max_step(mut self, h_s: f64) -> Self {
         if h_s.is_finite() && h_s > 0.0 {
-            self.h_max = self.h_stable.min(h_s);
+            self.h_max = self.h_mode.min(h_s);
         }
         self
     }
