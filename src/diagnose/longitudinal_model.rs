@@ -135,17 +135,36 @@ pub struct LongitudinalModel<'a> {
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
 /// the driven tyres' slip on every row. Both depend on the parameters only through the sensor
 /// effects ([`INPUT_EFFECTS`], which correct the recorded inputs,
-/// [`super::model_inputs::corrected_log`]), the final drive and wheel radius, and the engine's
-/// torque lag (`engine_torque_lag_s`), which no catalogue effect changes; so every simulation
-/// at the nominal sensor parameters — most of a diagnosis's — reads the same ones, built once
-/// ([`LongitudinalModel::read_inputs`]).
+/// [`super::model_inputs::corrected_log`]), the final drive and wheel radius, the engine's
+/// torque lag (`engine_torque_lag_s`), which no catalogue effect changes, and, when the vehicle
+/// states a tyre warm-up, the cold tyres' extra rolling resistance, which follows the mass and
+/// the rolling-resistance coefficients ([`crate::sim::recorded`]); so every simulation at the
+/// nominal sensor parameters and that plant — most of a diagnosis's — reads the same ones, built
+/// once ([`LongitudinalModel::read_inputs`]).
 #[derive(Debug)]
 struct ReadInputs {
     rec: RecordedScenario,
     kappa: Vec<f64>,
-    /// The final drive ratio and wheel radius they were built with.
-    final_drive_ratio: f64,
-    wheel_radius_m: f64,
+    /// The plant's parameters they were built with ([`inputs_key`]).
+    key: [u64; 8],
+}
+
+/// The bits of the plant's parameters the read inputs depend on: the final drive ratio and
+/// wheel radius, and with a tyre warm-up its cold excess, distance, mass, gravity and
+/// rolling-resistance coefficients (zeros without one).
+fn inputs_key(p: &DrivelineParams) -> [u64; 8] {
+    let warm = crate::model::tyre_warm_up::TyreWarmUp::of(p).is_some();
+    let w = |x: f64| if warm { x.to_bits() } else { 0 };
+    [
+        p.final_drive_ratio.to_bits(),
+        p.wheel_radius_m.to_bits(),
+        w(p.tyre_cold_excess),
+        w(p.tyre_warm_up_distance_m),
+        w(p.mass_kg),
+        w(p.gravity_m_per_s2),
+        w(p.c_r1),
+        w(p.c_r2_s_per_m),
+    ]
 }
 
 /// Engine speed above the locked driveline's at which a window with the clutch closed starts
@@ -211,10 +230,7 @@ impl<'a> LongitudinalModel<'a> {
             let cached = self
                 .nominal_inputs
                 .get_or_init(|| self.build_inputs(&self.nominal, p).ok().map(Arc::new));
-            if let Some(c) = cached.as_ref().filter(|c| {
-                c.final_drive_ratio.to_bits() == p.final_drive_ratio.to_bits()
-                    && c.wheel_radius_m.to_bits() == p.wheel_radius_m.to_bits()
-            }) {
+            if let Some(c) = cached.as_ref().filter(|c| c.key == inputs_key(p)) {
                 return Ok(Arc::clone(c));
             }
         }
@@ -240,6 +256,7 @@ impl<'a> LongitudinalModel<'a> {
             None,
             Some(p.final_drive_ratio / p.wheel_radius_m),
             p.engine_torque_lag_s,
+            Some(p),
         )?;
         // the driven tyres' slip on every row from the corrected torque (super::tyre_slip):
         // a window's engine side starts from the recorded engine speed without it
@@ -247,8 +264,7 @@ impl<'a> LongitudinalModel<'a> {
         Ok(ReadInputs {
             rec,
             kappa,
-            final_drive_ratio: p.final_drive_ratio,
-            wheel_radius_m: p.wheel_radius_m,
+            key: inputs_key(p),
         })
     }
 

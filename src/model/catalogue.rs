@@ -16,7 +16,8 @@
 //! # Model-form allowance
 //! No model is the truck: the longitudinal model has one lumped shaft, rigid tyres up to a
 //! fitted slip and share, a single-stage clutch damper, an engine whose torque follows the
-//! ECU's figure by the vehicle file's lag, no wind and no tyre temperature. Its estimate of a
+//! ECU's figure by the vehicle file's lag, no wind, and no tyre temperature unless the file
+//! states a warm-up (`model::tyre_warm_up`; the proof's file does not). Its estimate of a
 //! parameter on a healthy truck therefore misses the truck's true value by more than its 95 %
 //! interval says. The row's `model_form` is that miss, measured on the truth plant's no-effect
 //! drives (a virtual truck with that structure, docs/models/truth-plant.md) of calibration

@@ -236,6 +236,10 @@ pub struct DrivelineParams {
     pub pi_ki_nm_per_rad: f64,
     #[serde(default = "default_engine_torque_lag_s")]
     pub engine_torque_lag_s: f64,
+    #[serde(default)]
+    pub tyre_cold_excess: f64,
+    #[serde(default = "default_tyre_warm_up_distance_m")]
+    pub tyre_warm_up_distance_m: f64,
 }
 
 /// The engine-torque lag a `[driveline]` table without `engine_torque_lag_s` stands for, s: none,
@@ -246,6 +250,15 @@ pub const DEFAULT_ENGINE_TORQUE_LAG_S: f64 = 0.0;
 
 fn default_engine_torque_lag_s() -> f64 {
     DEFAULT_ENGINE_TORQUE_LAG_S
+}
+
+/// The distance over which cold tyres' extra rolling resistance falls by e, when a
+/// `[driveline]` table states a cold excess without it, m: 20 km
+/// ([`super::tyre_warm_up`]; schemas/vehicle.toml).
+pub const DEFAULT_TYRE_WARM_UP_DISTANCE_M: f64 = 20_000.0;
+
+fn default_tyre_warm_up_distance_m() -> f64 {
+    DEFAULT_TYRE_WARM_UP_DISTANCE_M
 }
 
 /// A `[driveline]` table that breaks a rule: `(key, value as written, rule)`.

@@ -12,4 +12,5 @@ pub mod extended_vehicle;
 pub mod linear;
 pub mod resonance;
 pub mod tolerance;
+pub mod tyre_warm_up;
 pub mod vehicle;

@@ -113,6 +113,7 @@ pub fn run(
                 slope,
                 Some(d.final_drive_ratio / d.wheel_radius_m),
                 d.engine_torque_lag_s,
+                Some(d),
             )
             .map_err(|e| AxleStageError::Driveline(e.into()))?;
             let t: Vec<f64> = sim

@@ -13,6 +13,11 @@
 //!   lag `τ_e Ṁ_e = M_rep − M_e` (`engine_torque_lag_s` of the vehicle file, passed in;
 //!   [`crate::signal::first_order_lag`]);
 //! - absent optional columns: clutch engaged (x = 0), no service brake (F_b = 0);
+//! - cold tyres: when the vehicle passed in states a tyre warm-up
+//!   ([`crate::model::tyre_warm_up`]), its extra rolling resistance on every row, from the
+//!   recorded vehicle speed's distance, adds to the force that opposes the motion (the scenario's
+//!   `brake_n`, which the model takes with the motion's sign and counts at a standstill among
+//!   what holds the truck, as it does the rolling resistance);
 //! - the slope comes from the named column (e.g. the filtered slope of the slope stage), else
 //!   `road_slope`; without any slope column the road is flat, and this is reported;
 //! - rolling resistance is unsmoothed and the vehicle's stops are events
@@ -27,6 +32,8 @@
 
 use super::hybrid::{EngineInput, Scenario};
 use super::inputs::{Between, Piecewise};
+use crate::model::driveline::DrivelineParams;
+use crate::model::tyre_warm_up::TyreWarmUp;
 use crate::schema::Interpolation;
 use crate::signal::distance::{fill_gaps, fill_gaps_borrowed};
 use crate::signal::first_order_lag;
@@ -135,7 +142,9 @@ pub(crate) fn pieces(t: &Arc<[f64]>, v: &[f64], interp: Interpolation) -> Piecew
 /// positive braking) adds its wheel-equivalent force `T_r i_f / r_w` to the service-brake force:
 /// the retarder's torque taken at the wheels, without the propeller shaft's torsion, as the synthetic
 /// generator applies it (`synth::retarder`). `None` ignores the column. The engine torque is
-/// the recorded one through the engine's lag `engine_lag_s` (s; 0: as recorded).
+/// the recorded one through the engine's lag `engine_lag_s` (s; 0: as recorded). `tyres`, when
+/// given, is the vehicle whose tyre warm-up ([`TyreWarmUp::of`]) adds the cold tyres' extra
+/// rolling resistance to that force (module rules); `None` or a vehicle without one adds none.
 ///
 /// # Errors
 /// [`RecordedError`] for logs shorter than 2 rows, missing engine torque or gear, or gears
@@ -146,6 +155,7 @@ pub fn scenario_from_log(
     slope_column: Option<&str>,
     retarder_n_per_nm: Option<f64>,
     engine_lag_s: f64,
+    tyres: Option<&DrivelineParams>,
 ) -> Result<RecordedScenario, RecordedError> {
     scenario_from_view(
         LogView::of(log),
@@ -153,6 +163,7 @@ pub fn scenario_from_log(
         slope_column,
         retarder_n_per_nm,
         engine_lag_s,
+        tyres,
     )
 }
 
@@ -166,6 +177,7 @@ pub fn scenario_from_view(
     slope_column: Option<&str>,
     retarder_n_per_nm: Option<f64>,
     engine_lag_s: f64,
+    tyres: Option<&DrivelineParams>,
 ) -> Result<RecordedScenario, RecordedError> {
     let file = log.log.meta.source_file.clone();
     let t = relative_times(log.log)?;
@@ -195,6 +207,13 @@ pub fn scenario_from_view(
     ) {
         for (b, &r) in brake.iter_mut().zip(ret.iter()) {
             *b += k * r;
+        }
+    }
+    if let Some((p, w)) = tyres.and_then(|p| TyreWarmUp::of(p).map(|w| (p, w))) {
+        let v = column("vehicle_speed", Interpolation::Linear)
+            .ok_or_else(|| missing("vehicle_speed"))?;
+        for (b, f) in brake.iter_mut().zip(w.extra_force_n(p, &t, &v)) {
+            *b += f;
         }
     }
     let (slope_name, slope) = slope_input(log, slope_column);
@@ -303,11 +322,11 @@ mod tests {
     #[test]
     fn zero_length_and_single_row_drives_are_errors() {
         assert!(matches!(
-            scenario_from_log(&log(0, 3.0), 12, None, None, 0.0),
+            scenario_from_log(&log(0, 3.0), 12, None, None, 0.0, None),
             Err(RecordedError::TooShort { rows: 0, .. })
         ));
         assert!(matches!(
-            scenario_from_log(&log(1, 3.0), 12, None, None, 0.0),
+            scenario_from_log(&log(1, 3.0), 12, None, None, 0.0, None),
             Err(RecordedError::TooShort { rows: 1, .. })
         ));
     }
@@ -316,14 +335,44 @@ mod tests {
     fn neutral_is_an_open_clutch_in_the_last_gear_and_bad_gears_are_errors() {
         let mut l = log(4, 3.0);
         l.signals[2].values = vec![3.0, 0.0, 0.0, 4.0];
-        let r = scenario_from_log(&l, 12, None, None, 0.0).unwrap();
+        let r = scenario_from_log(&l, 12, None, None, 0.0, None).unwrap();
         assert_eq!(r.scenario.gear.eval(0.015), 3.0);
         assert_eq!(r.scenario.clutch_x.eval(0.015), 1.0);
         assert_eq!(r.slope_column, None, "no slope column: flat road, reported");
         assert!(matches!(
-            scenario_from_log(&log(4, 13.0), 12, None, None, 0.0),
+            scenario_from_log(&log(4, 13.0), 12, None, None, 0.0, None),
             Err(RecordedError::Gear { row: 0, .. })
         ));
+    }
+
+    #[test]
+    fn a_stated_tyre_warm_up_adds_the_cold_tyres_force_to_what_opposes_the_motion() {
+        // 5 m/s for 2000 rows of 10 ms: 100 m rolled; no brake column
+        let l = log(2001, 3.0);
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/vehicles/truck-40t-cold-start.toml"
+        ))
+        .unwrap();
+        let v = crate::model::vehicle::VehicleFile::parse(&text, "t").unwrap();
+        let p = v.driveline("t").unwrap();
+        let (beta, l_m) = (p.tyre_cold_excess, p.tyre_warm_up_distance_m);
+        assert!(beta > 0.0, "the cold-start truck states a warm-up");
+        let warm = scenario_from_log(&l, 12, None, None, 0.0, None).unwrap();
+        let cold = scenario_from_log(&l, 12, None, None, 0.0, Some(p)).unwrap();
+        let mg = p.mass_kg * p.gravity_m_per_s2;
+        let rolling = (p.c_r1 + p.c_r2_s_per_m * 5.0) * mg;
+        for (t, s) in [(0.0, 0.0), (10.0, 50.0), (20.0, 100.0)] {
+            assert_eq!(warm.scenario.brake_n.eval(t), 0.0);
+            let want = beta * (-s / l_m).exp() * rolling;
+            // the trapezoid of a constant speed is exact up to the sum's rounding
+            assert!((cold.scenario.brake_n.eval(t) - want).abs() < 1e-9 * want);
+        }
+        // a vehicle without a warm-up adds nothing
+        let mut off = p.clone();
+        off.tyre_cold_excess = 0.0;
+        let none = scenario_from_log(&l, 12, None, None, 0.0, Some(&off)).unwrap();
+        assert_eq!(none.scenario.brake_n, warm.scenario.brake_n);
     }
 
     #[test]
@@ -331,7 +380,7 @@ mod tests {
         let mut l = log(5, 3.0);
         l.signals[1].values = vec![100.0, f64::NAN, f64::NAN, 400.0, 500.0]; // engine torque: linear
         l.signals[2].values = vec![3.0, f64::NAN, 4.0, 4.0, 4.0]; // gear: held
-        let r = scenario_from_log(&l, 12, None, None, 0.0).unwrap();
+        let r = scenario_from_log(&l, 12, None, None, 0.0, None).unwrap();
         let EngineInput::Torque(m) = &r.scenario.engine else {
             panic!()
         };

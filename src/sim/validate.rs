@@ -265,6 +265,7 @@ pub fn validate_shuffle(
         slope_column,
         Some(p.final_drive_ratio / p.wheel_radius_m),
         p.engine_torque_lag_s,
+        Some(p),
     )?;
     let measured = |column: &str| {
         log.signal(column)
