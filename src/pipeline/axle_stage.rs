@@ -107,13 +107,16 @@ pub fn run(
                 ..Default::default()
             };
             let sim = validate_shuffle(log, d, &v.gearbox.ratios, slope, &dcfg)?;
+            // the axle model's brake force is the brakes' (and the retarder's) alone: the cold
+            // tyres' extra rolling resistance, which the driveline simulation above carries,
+            // joins the warm one in the remainder the axle model takes at the resistance height
             let sc = scenario_from_log(
                 log,
                 v.gearbox.ratios.len(),
                 slope,
                 Some(d.final_drive_ratio / d.wheel_radius_m),
                 d.engine_torque_lag_s,
-                Some(d),
+                None,
             )
             .map_err(|e| AxleStageError::Driveline(e.into()))?;
             let t: Vec<f64> = sim
