@@ -6,9 +6,9 @@
 //! itself heats the tyre, and the air cools it, so the temperature settles after some tens of
 //! kilometres (Mars and Luchini, "An Analytical Model for the Transient Rolling Resistance
 //! Behavior of Tires", Tire Science and Technology 27(3), 1999: a first-order heat balance;
-//! Hyttinen, Ussner, Österlöf, Jerrelind and Drugge, "Truck Tyre Transient Rolling Resistance
-//! and Temperature at Varying Vehicle Velocities", International Journal of Automotive
-//! Technology 23(6), 2022: truck tyres measured in a climate wind tunnel). At a steady speed
+//! Hyttinen, Ussner, Österlöf, Jerrelind and Drugge, International Journal of Automotive
+//! Technology 23(6), 1651–1661, 2022, doi:10.1007/s12239-022-0143-6: a truck tyre's rolling
+//! resistance measured from −30 to +25 °C in a climate wind tunnel). At a steady speed
 //! the heat balance is a first-order lag in the distance rolled, so the models take the
 //! rolling-resistance coefficients as
 //!
