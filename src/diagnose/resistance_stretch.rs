@@ -10,8 +10,8 @@
 //!     − m g sin α − m g cos α (c_r1 + c_r2 v) φ(s) − ½ ρ c_w A_f v² − m_v v̇        (N)
 //! ```
 //!
-//! `φ(s)` the cold tyres' factor at the distance `s` the recorded speed rolls from the log's
-//! first row (1 when the vehicle states no tyre warm-up; [`crate::model::tyre_warm_up`]),
+//! `φ(s)` the cold tyres' factor at the row's travelled distance `s` from the log's first row
+//! (1 when the vehicle states no tyre warm-up; [`crate::model::tyre_warm_up`]),
 //! `G = i_t i_f / r_w` in gear (0 in neutral), `F_b` the service-brake force, `M_ret` the
 //! retarder torque on the propeller shaft (0 when the log has none), `m_v = m + (J_w + J_f +
 //! J_d)/r_w² + (J_t + J_p) i_f²/r_w²` the vehicle's mass with the rotating parts behind the
@@ -206,7 +206,8 @@ fn derivative(x: &[f64], t: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The segment means of `log` (module documentation): rows grouped by `distance_m` into
+/// The segment means of `log` (module documentation): rows grouped by `distance_m` (each
+/// row's travelled distance from the first row, m, which also sets the cold tyres' factor) into
 /// [`StretchConfig::segment_m`] bins, the channels' gaps filled as the schema says
 /// ([`filled_column`]: a CAN dropout costs its own rows' precision, not the
 /// segment); a bin counts when at least [`StretchConfig::min_moving_share`] of its rows move
@@ -243,12 +244,12 @@ pub fn segments(
     let w_dot = derivative(w, t_s);
     let v_dot = derivative(v, t_s);
     let wheels = p.mass_kg + (p.j_w_kg_m2 + p.j_f_kg_m2 + p.j_d_kg_m2) / (r_w * r_w);
-    // the cold tyres' rolling-resistance factor φ(s) per row (crate::model::tyre_warm_up), over
-    // the distance the recorded speed rolls, as the simulation reads it
+    // the cold tyres' rolling-resistance factor φ(s) per row (crate::model::tyre_warm_up) at
+    // the row's travelled distance
     let warm_up = crate::model::tyre_warm_up::TyreWarmUp::of(p).map(|w| {
-        crate::model::tyre_warm_up::distance_rolled_m(t_s, v)
-            .into_iter()
-            .map(|s| 1.0 + w.excess(s))
+        distance_m
+            .iter()
+            .map(|&s| 1.0 + w.excess(s))
             .collect::<Vec<f64>>()
     });
     let row = |i: usize| -> Option<(f64, f64)> {
