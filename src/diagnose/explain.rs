@@ -20,6 +20,12 @@
 //!    sets), and **repeat** greedily on the remaining residual with the accepted parameter
 //!    fixed, until no candidate passes or [`MAX_FINDINGS`] (3) are accepted.
 //!
+//! Before the first round, each parameter measured outside the models
+//! ([`ExplainConfig::measured`]: the slope sensor's offset against the altitude) is set to
+//! its measured value and kept out of the screens; its effect is named when the measured
+//! interval lies outside the vehicle file's own tolerance, and reported as consistent with the
+//! file otherwise ([`measured_round`]).
+//!
 //! # Which signals
 //! An effect is fitted on the outputs of every model it changes: its own model, and for the
 //! longitudinal effects that also reach the axle model's inputs (mass, the slope and torque
@@ -70,8 +76,8 @@ pub use super::acceptance::{
     AMBIGUITY_MIN_CORRELATION, MIN_HELDOUT_GAIN, RULE_MIN_CHANGE_MS,
 };
 pub use super::explanation::{
-    verdict, ConsistentEstimate, Evidence, ExplainConfig, Explanation, Finding, ParameterEstimate,
-    Round, Verdict, MAX_CONSISTENT_ROUNDS, MAX_FINDINGS,
+    verdict, ConsistentEstimate, Evidence, ExplainConfig, Explanation, Finding, Measured,
+    ParameterEstimate, Round, Verdict, MAX_CONSISTENT_ROUNDS, MAX_FINDINGS,
 };
 pub use super::signal_fits::{fits_against, BeforeAfter, SignalFit, SignalMetrics};
 
@@ -104,6 +110,19 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         .iter()
         .map(|y| Arc::new(y.clone()))
         .collect();
+    for m in &cfg.measured {
+        let e = m.effect;
+        let ev = Evaluator::new(problem, theta, &bases, cfg.noise_floor.as_ref(), dt_s);
+        let base = ev.eval_outputs(f64::NAN, bases.clone());
+        let (best, taken) = measured_round(&ev, &base, m, &cfg.tolerances)?;
+        match taken {
+            Taken::Finding(f) => findings.push(*f),
+            Taken::Consistent(c) => consistent.push(c),
+        }
+        bases = best.outputs;
+        theta.set(e, m.estimate.value);
+        excluded.push(e);
+    }
     for round in 0..cfg.max_findings + MAX_CONSISTENT_ROUNDS {
         if findings.len() >= cfg.max_findings {
             break;
@@ -186,6 +205,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
                 band_from_file: cfg.tolerances.is_given(e),
                 round,
                 ambiguous_with: ambiguous.clone(),
+                measured_by: None,
             });
             bases = best.outputs.clone();
             theta.set(e, f.value);
@@ -237,6 +257,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             deviance_heldout_at_start: f.deviance_heldout_at_start,
             ambiguity_correlation: corr,
             evaluations: f.evaluations + ci.evaluations,
+            measured_by: None,
         };
         let est = ParameterEstimate {
             value: f.value,
@@ -276,6 +297,101 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
         linearised,
         theta,
     })
+}
+
+/// What a measured parameter becomes.
+enum Taken {
+    Finding(Box<Finding>),
+    Consistent(ConsistentEstimate),
+}
+
+/// The measured parameter `m` taken before the first round: every model simulated at its
+/// value; a finding when its interval lies outside the vehicle file's own tolerance (the
+/// evidence figures are those of the measured value against `base`, nothing fitted), else an
+/// estimate consistent with the file. Returns the evaluation at the measured value.
+fn measured_round(
+    ev: &Evaluator<'_, '_>,
+    base: &Eval,
+    m: &Measured,
+    tolerances: &crate::model::tolerance::Tolerances,
+) -> Result<(Eval, Taken), ExplainError> {
+    let e = m.effect;
+    let nominal = ev.problem.nominal().get(e);
+    let all = vec![true; ev.models.len()];
+    let best = ev.eval(base, &all, e, m.estimate.value)?;
+    let w = tolerances.of_effect(e).half_width(nominal);
+    let (band_low, band_high) = (nominal - w, nominal + w);
+    let est = m.estimate;
+    if est.ci_low <= band_high && est.ci_high >= band_low {
+        let c = ConsistentEstimate {
+            effect: e.id(),
+            estimate: est,
+            nominal,
+            band_low,
+            band_high,
+            band_from_file: tolerances.is_given(e),
+            round: 0,
+            ambiguous_with: Vec::new(),
+            file_tolerance: tolerances.of_effect(e),
+            measured_by: Some(m.source),
+        };
+        return Ok((best, Taken::Consistent(c)));
+    }
+    let active: Vec<bool> = (0..ev.models.len())
+        .map(|k| ev.changed(k, base, &best))
+        .collect();
+    let n_acf = ev.n_eff(&best, &active, Part::Train);
+    let (n_eff, threshold) = deviance_threshold(n_acf, None);
+    let dev = ev.deviance(base, &best, &active, n_eff, Part::Train);
+    let RuleFigures {
+        scored,
+        gain,
+        whiteness: (wb, wa),
+    } = rule_figures(ev, e, &active, base, &best, false);
+    let explained: f64 = (0..ev.models.len())
+        .map(|k| 1.0 - best.heldout[k] / base.heldout[k])
+        .sum();
+    let models = (0..ev.models.len())
+        .filter(|&k| active[k])
+        .map(|k| ModelScore {
+            domain: ev.models[k].domain,
+            view: ev.problem.views()[k].kind,
+            scored: scored[k],
+            train_before: base.train[k].sqrt(),
+            train_after: best.train[k].sqrt(),
+            heldout_before: base.heldout[k].sqrt(),
+            heldout_after: best.heldout[k].sqrt(),
+        })
+        .collect();
+    let (fit, metrics) = signal_fits(ev.problem, &base.outputs, &best.outputs, None);
+    let mut parameters = BTreeMap::new();
+    parameters.insert(e.parameter().to_string(), est);
+    let finding = Finding {
+        effect: e.id(),
+        ambiguous_with: Vec::new(),
+        parameters,
+        fit,
+        metrics,
+        evidence: Evidence {
+            round: 0,
+            domain: e.domain(),
+            nominal,
+            start: nominal,
+            models,
+            heldout_gain: gain,
+            explained,
+            whiteness_before: wb,
+            whiteness_after: wa,
+            n_eff,
+            deviance_threshold: threshold,
+            deviance_at_start: dev,
+            deviance_heldout_at_start: None,
+            ambiguity_correlation: BTreeMap::new(),
+            evaluations: 1,
+            measured_by: Some(m.source),
+        },
+    };
+    Ok((best, Taken::Finding(Box::new(finding))))
 }
 
 /// `fits` as a round keeps them: their figures without their simulations (a simulation holds

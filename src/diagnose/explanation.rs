@@ -37,6 +37,23 @@ pub struct ExplainConfig {
     /// Tolerances of the vehicle file's values: an effect is named only when its parameter's
     /// interval lies outside its band ([`super::acceptance`], rule 4).
     pub tolerances: Tolerances,
+    /// Parameters measured outside the models (the slope sensor's offset against the
+    /// altitude, [`super::altitude_offset`]): taken before the first round and not fitted.
+    pub measured: Vec<Measured>,
+}
+
+/// A catalogue parameter measured from a recorded reference rather than fitted: the explain
+/// step sets it before the first round, keeps it out of every round's screen, and names its
+/// effect when the interval lies outside the vehicle file's own tolerance (no model-form
+/// allowance: the measurement does not go through the models).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measured {
+    /// The effect whose parameter it is.
+    pub effect: crate::model::catalogue::Effect,
+    /// Value and 95 % interval, in the catalogue's unit.
+    pub estimate: ParameterEstimate,
+    /// What it was measured against (`"altitude"`).
+    pub source: &'static str,
 }
 
 impl Default for ExplainConfig {
@@ -46,6 +63,7 @@ impl Default for ExplainConfig {
             noise_floor: None,
             max_findings: MAX_FINDINGS,
             tolerances: Tolerances::default(),
+            measured: Vec::new(),
         }
     }
 }
@@ -73,9 +91,12 @@ pub struct ConsistentEstimate {
     /// cannot be told apart, and the within-tolerance reading is not overruled.
     pub ambiguous_with: Vec<&'static str>,
     /// The vehicle file's own tolerance of the parameter (the band adds the model-form
-    /// allowance to it).
+    /// allowance to it, except for a measured parameter).
     #[serde(skip)]
     pub file_tolerance: Tolerance,
+    /// What the parameter was measured against when it was not fitted ([`Measured`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured_by: Option<&'static str>,
 }
 
 /// One greedy round.
@@ -139,6 +160,11 @@ pub struct Evidence {
     pub ambiguity_correlation: BTreeMap<String, f64>,
     /// Simulations of the fit and interval.
     pub evaluations: usize,
+    /// What the parameter was measured against when it was not fitted ([`Measured`]); the
+    /// figures above are then those of the measured value, and the finding stands on the
+    /// measurement's interval alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured_by: Option<&'static str>,
 }
 
 /// One explained effect (docs/diagnosis/contract.md: `effect`, `ambiguous_with`,
@@ -213,7 +239,8 @@ impl Verdict {
 /// `significant_mismatch`: any accepted finding → `explained` (the acceptance rule is a
 /// significance test of its own, on held-out data, and may see a small spread-out effect a
 /// per-window test does not); otherwise `unexplained` when the mismatch is significant and no
-/// estimate within the file's tolerances explains it (passing rules 1 to 3), or when
+/// fitted estimate within the file's tolerances explains it (passing rules 1 to 3; a measured
+/// one, [`Measured`], is not fitted to the residual and does not count), or when
 /// `channel_mismatch` (a stretch located by one of the tests on the recorded channels alone,
 /// which parameters constant over the drive cannot produce whatever their values, so no
 /// estimate explains it); else `no_significant_mismatch`: nothing is wrong beyond the vehicle
@@ -224,9 +251,11 @@ pub fn verdict(
     significant_mismatch: bool,
     channel_mismatch: bool,
 ) -> Verdict {
+    // a measured parameter is not a fit to the located residual: it explains nothing of it
+    let fitted = consistent.iter().any(|c| c.measured_by.is_none());
     if !findings.is_empty() {
         Verdict::Explained
-    } else if channel_mismatch || (significant_mismatch && consistent.is_empty()) {
+    } else if channel_mismatch || (significant_mismatch && !fitted) {
         Verdict::Unexplained
     } else {
         Verdict::NoSignificantMismatch
@@ -259,6 +288,7 @@ mod tests {
             round: 0,
             ambiguous_with: Vec::new(),
             file_tolerance: Tolerance::Relative(0.05),
+            measured_by: None,
         };
         assert_eq!(
             verdict(&[], std::slice::from_ref(&within), true, false),

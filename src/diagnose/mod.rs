@@ -2,6 +2,7 @@
 //! show.
 
 pub mod acceptance;
+pub mod altitude_offset;
 pub mod axle_model;
 pub mod channel;
 pub mod clutch_engagements;

@@ -19,6 +19,9 @@ pub enum EstimateMethod {
     Fitted,
     /// Linearised from the first round's screen only.
     Linearised,
+    /// Measured outside the models (the slope sensor's offset against the altitude), its
+    /// interval overlapping the vehicle file's tolerance.
+    Measured,
 }
 
 impl EstimateMethod {
@@ -28,6 +31,7 @@ impl EstimateMethod {
             EstimateMethod::Named => "named",
             EstimateMethod::Fitted => "fitted",
             EstimateMethod::Linearised => "linearised",
+            EstimateMethod::Measured => "measured",
         }
     }
 }

@@ -20,8 +20,10 @@
 //!    recorded channels alone ([`speed_consistency`]; [`resistance_stretch`], on the slope
 //!    reconstructed between the sensor's steps): a flagged one adds a located stretch, which
 //!    no estimate within the tolerances explains.
-//! 5. Explain ([`explain`]) with the noise floors as the signal weights; the verdict
-//!    ([`verdict`]) from the findings and step 4's significance.
+//! 5. Explain ([`explain`]) with the noise floors as the signal weights, and with the slope
+//!    sensor's offset measured against the altitude where the log records one
+//!    ([`altitude_offset`]); the verdict ([`verdict`]) from the findings and step 4's
+//!    significance.
 //! 6. Show (`report::diagnosis_files::write_outputs`, a layer above this module):
 //!    `diagnosis.json`, `mismatch.parquet`, `findings.parquet`,
 //!    `report.md` with one residual SVG per compared signal (before: nominal; after: with the
@@ -29,7 +31,10 @@
 //!    band powers, coherence, lags, condition cells, statements, every greedy round's screen
 //!    and fits) for an engineer who wants to check a verdict.
 
-use super::explain::{explain, verdict, ExplainConfig, Explanation, Verdict};
+use super::altitude_offset::{altitude_offset, AltitudeOutcome};
+use super::explain::{
+    explain, verdict, ExplainConfig, Explanation, Measured, ParameterEstimate, Verdict,
+};
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig, Theta};
 use super::fit::fit_spec;
 use super::locate::{
@@ -250,6 +255,9 @@ pub struct Diagnosed {
     pub speed_consistency: Option<SpeedConsistency>,
     /// The force balance's stretch scan (`None` without the channels or enough road).
     pub resistance_stretch: Option<ResistanceStretch>,
+    /// The slope sensor's offset measured against the recorded altitude, or why not
+    /// ([`super::altitude_offset`]).
+    pub altitude_offset: AltitudeOutcome,
     /// Every catalogue parameter the drive informs ([`super::parameter_table`]).
     pub parameters: Vec<ParameterRow>,
     /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
@@ -413,11 +421,12 @@ pub fn diagnose(
     // stretch scan; a flagged one is a located mismatch
     let cond = &cmp.conditions;
     let driveline = &setup.nominal_truth.driveline;
+    // the slope reconstructed between the sensor's steps: what the force balance and the
+    // altitude measurement read
+    let grade = (setup.slope_resolution > 0.0)
+        .then(|| SlopeGrid::new(log).and_then(|g| g.cured(setup.slope_resolution)))
+        .flatten();
     let (consistency, stretch) = if setup.longitudinal {
-        // the force balance reads the slope reconstructed between the sensor's steps
-        let grade = (setup.slope_resolution > 0.0)
-            .then(|| SlopeGrid::new(log).and_then(|g| g.cured(setup.slope_resolution)))
-            .flatten();
         // the longitudinal model's own fit; estimated here only when the explain step left
         // that model out
         let slip = problem
@@ -473,12 +482,30 @@ pub fn diagnose(
     let t_s = std::mem::take(&mut cmp.conditions.t_s);
     drop(cmp);
     release();
+    // the slope sensor's offset against the altitude, when the log records one
+    let altitude = altitude_offset(log, grade.as_deref());
+    drop(grade);
+    let measured = altitude
+        .measured()
+        .map(|a| Measured {
+            effect: Effect::GradeOffset,
+            estimate: ParameterEstimate {
+                value: a.value_rad,
+                ci_low: a.ci_low_rad,
+                ci_high: a.ci_high_rad,
+                unit: Effect::GradeOffset.unit(),
+            },
+            source: "altitude",
+        })
+        .into_iter()
+        .collect();
     let explanation = explain(
         &problem,
         &ExplainConfig {
             noise_floor: Some(floors.summary()),
             max_findings: cfg.max_findings,
             tolerances: vehicle.tolerance.clone(),
+            measured,
         },
     )?;
     let v = verdict(
@@ -535,12 +562,13 @@ pub fn diagnose(
         modal,
         speed_consistency: consistency,
         resistance_stretch: stretch,
+        altitude_offset: altitude,
         actuation_variance,
     })
 }
 
-/// The rows of `ex` in catalogue order: a finding's fit, else a fit within tolerance, else the
-/// linearised estimate; effects the drive does not inform have no row. `nominal` holds the
+/// The rows of `ex` in catalogue order: a finding's fit, else a fit (or a measurement) within
+/// tolerance, else the linearised estimate; effects the drive does not inform have no row. `nominal` holds the
 /// vehicle file's parameters, `tolerances` its bands.
 pub fn parameter_rows(
     ex: &Explanation,
@@ -580,8 +608,18 @@ pub fn parameter_rows(
             ));
         } else if let Some(c) = ex.consistent.iter().find(|c| c.effect == id) {
             let p = &c.estimate;
+            // a measured estimate is judged against the band it was judged by: the file's own
+            let row = |method, value, ci_low, ci_high, n_eff| ParameterRow {
+                tolerance_low: c.band_low,
+                tolerance_high: c.band_high,
+                ..row(method, value, ci_low, ci_high, n_eff)
+            };
             rows.push(row(
-                EstimateMethod::Fitted,
+                if c.measured_by.is_some() {
+                    EstimateMethod::Measured
+                } else {
+                    EstimateMethod::Fitted
+                },
                 p.value,
                 p.ci_low,
                 p.ci_high,

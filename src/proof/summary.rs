@@ -139,7 +139,8 @@ impl MissSide {
 }
 
 /// Per parameter, in catalogue order, the spread of [`CaseScore::estimate_misses`] over the
-/// full fits (a finding's or an estimate within the band; not the linearised estimates).
+/// full fits (a finding's or an estimate within the band; not the linearised or measured
+/// estimates).
 fn estimate_spreads(scores: &[CaseScore]) -> Vec<EstimateSpread> {
     crate::model::catalogue::Effect::ALL
         .iter()
@@ -149,8 +150,9 @@ fn estimate_spreads(scores: &[CaseScore]) -> Vec<EstimateSpread> {
                 .iter()
                 .flat_map(|s| s.estimate_misses.iter().map(move |m| (s.index, m)))
                 // the full fits, which rule 4 of the acceptance rule judges; a linearised
-                // estimate's interval is the first round's approximation
-                .filter(|(_, m)| m.effect == id && m.method != "linearised")
+                // estimate's interval is the first round's approximation, and a measured one
+                // does not go through the models
+                .filter(|(_, m)| m.effect == id && !matches!(m.method, "linearised" | "measured"))
                 .collect();
             if m.is_empty() {
                 return None;

@@ -17,6 +17,7 @@ use super::axle_plot::PlotError;
 use super::contract::assemble;
 use super::diagnosis::{plot_residuals, write_report, ReportParts, ResidualSeries};
 use super::sentences::statement_text;
+use crate::diagnose::altitude_offset::AltitudeOutcome;
 use crate::diagnose::explain::{Explanation, SignalMetrics};
 use crate::diagnose::locate::Location;
 use crate::diagnose::modal::ModalComparison;
@@ -61,6 +62,7 @@ struct Detail<'a> {
     modal: &'a Option<ModalComparison>,
     speed_consistency: &'a Option<SpeedConsistency>,
     resistance_stretch: &'a Option<ResistanceStretch>,
+    altitude_offset: &'a AltitudeOutcome,
     explanation: &'a Explanation,
 }
 
@@ -254,6 +256,7 @@ fn write_staged(
         modal: &d.modal,
         speed_consistency: &d.speed_consistency,
         resistance_stretch: &d.resistance_stretch,
+        altitude_offset: &d.altitude_offset,
         explanation: &d.explanation,
     };
     let mut text = serde_json::to_string_pretty(&detail).map_err(|e| WriteError::Io {

@@ -52,6 +52,7 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         Tolerance::None => None,
     };
     let model = match (side(mf.below, '−'), side(mf.above, '+')) {
+        _ if c.measured_by.is_some() => String::new(),
         (Some(_), Some(_)) if mf.below == mf.above => {
             format!(" and the model's own {}", width(mf.above))
         }
@@ -60,8 +61,12 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         (None, Some(a)) => format!(" and the model's own {a} above"),
         (None, None) => String::new(),
     };
+    let how = match c.measured_by {
+        Some(source) => format!(", measured against the {source}"),
+        None => String::new(),
+    };
     format!(
-        "{} = {}{unit} (95 % CI {} to {}{unit}), within the vehicle file's {band}{model}: \
+        "{} = {}{unit} (95 % CI {} to {}{unit}{how}), within the vehicle file's {band}{model}: \
          consistent with the file, not named",
         e.parameter(),
         num(est.value),
@@ -115,9 +120,16 @@ pub fn finding_sentence(f: &Finding) -> String {
             more("heavier", "lighter")
         ),
         GradeOffset => format!(
-            "the slope sensor reads {:.2}° too {} (mounting angle), {ci}: residual force ∝ m·g, constant along the road",
+            "the slope sensor reads {:.2}° too {} (mounting angle), {ci}: {}",
             v.abs().to_degrees(),
-            if v >= 0.0 { "nose-up" } else { "nose-down" }
+            if v >= 0.0 { "nose-up" } else { "nose-down" },
+            match f.evidence.measured_by {
+                Some(source) => format!(
+                    "measured against the {source}: the height the slope readings integrate to \
+                     departs from it by the angle times the distance travelled"
+                ),
+                None => "residual force ∝ m·g, constant along the road".to_string(),
+            }
         ),
         SlopeQuantization => format!(
             "the slope sensor resolves only {:.2} % steps, coarser than the model assumes ({:.2} %), {ci}: fed the sensor's steps the model sees grade the road does not have (and shuffle the steps excite); the slope reconstructed within the sensor's cells, widened by its noise, fits better",
@@ -266,6 +278,7 @@ mod tests {
                 round: 0,
                 ambiguous_with: Vec::new(),
                 file_tolerance: Tolerance::Relative(0.1),
+                measured_by: None,
             }
         };
         // the clutch's estimates on healthy trucks missed upwards only
@@ -280,6 +293,20 @@ mod tests {
         let s = consistent_sentence(&c("vehicle_mass", 41_000.0, 40_000.0, "kg"));
         assert!(
             s.contains("and the model's own − 1.10 % / + 2.80 %:"),
+            "{s}"
+        );
+        // a measured parameter says so and is judged against the file's own band
+        let measured = ConsistentEstimate {
+            file_tolerance: Tolerance::Absolute(0.002),
+            measured_by: Some("altitude"),
+            ..c("grade_offset", 0.0004, 0.0, "rad")
+        };
+        let s = consistent_sentence(&measured);
+        assert!(
+            s.ends_with(
+                "measured against the altitude), within the vehicle file's 0 rad ± 0.00200 rad: \
+                 consistent with the file, not named"
+            ),
             "{s}"
         );
     }

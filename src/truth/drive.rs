@@ -14,18 +14,21 @@
 //! sensor-fault stretch), `engine_speed` (rad/s), `engine_torque` (N·m, **as the ECU reports
 //! it**, map error included), `gear` (CAN gear: index + 1, 0 in neutral), `clutch_position`
 //! (0 engaged … 1 open), `road_slope` (tan α as the sensor sees it, mounting angle included;
-//! the bus quantises it), `brake_force` (N, the service-brake force applied). The bus's slope
-//! resolution and engine-torque delay come from the concealed effect.
+//! the bus quantises it), `brake_force` (N, the service-brake force applied), `altitude` (m, the
+//! GNSS receiver's reading of the road's elevation at the travelled distance, with the
+//! receiver's own errors: [`super::gnss`]; on J1939 VDS at 1 Hz). The bus's slope resolution and
+//! engine-torque delay come from the concealed effect.
 //!
 //! # Randomness
 //! One seed; independent streams per purpose, `Xoshiro256StarStar::seed_from_u64(seed ^ salt)`
-//! with fixed salts (parameters, effect, wind, driver), so adding draws to one purpose leaves the
+//! with fixed salts (parameters, effect, wind, driver, receiver), so adding draws to one purpose leaves the
 //! others unchanged. The road is generated from `seed` as [`crate::road::synth::generate`] does.
 
 use super::amt::{Amt, AmtInput, GearAction};
 use super::driver::Driver;
 use super::effects::{apply, Concealed, PlantExtras, SensorSetup, TruthEffect};
 use super::engine::{command, reported};
+use super::gnss::{altitude_message, receiver_altitude, ReceiverParams};
 use super::integrator::EventRk4;
 use super::params::TruckParams;
 use super::plant::{EventCounts, GearMode, Inputs, Plant, RoadGrid, STEP_S, V, W_E, W_P, X};
@@ -48,6 +51,7 @@ const SALT_PARAMS: u64 = 0x7472_7563_6b00_0001;
 const SALT_EFFECT: u64 = 0x7472_7563_6b00_0002;
 const SALT_WIND: u64 = 0x7472_7563_6b00_0003;
 const SALT_DRIVER: u64 = 0x7472_7563_6b00_0004;
+const SALT_RECEIVER: u64 = 0x7472_7563_6b00_0005;
 
 /// A drive to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -318,6 +322,15 @@ pub fn simulate_independent_drive(
             c.delay_s = sensors.torque_delay_s;
         }
     }
+    bus.messages.push(altitude_message());
+    let altitude = receiver_altitude(
+        &ReceiverParams::default(),
+        road.profile.step_m,
+        &road.profile.elevation_m,
+        &rec.t,
+        &rec.x,
+        &mut stream(cfg.seed, SALT_RECEIVER),
+    );
     let mut speed = rec.v.clone();
     if let Some((a, b)) = sensors.speed_stuck {
         let mut held: Option<f64> = None;
@@ -337,6 +350,7 @@ pub fn simulate_independent_drive(
             ("clutch_position".into(), rec.clutch.clone()),
             ("road_slope".into(), rec.sensed.clone()),
             ("brake_force".into(), rec.brake.clone()),
+            ("altitude".into(), altitude),
         ],
     };
     Ok(IndependentDrive {

@@ -15,6 +15,7 @@
 //!   the element laws;
 //! - [`params`]: the truck's parameters and their per-drive draw within tolerances;
 //! - [`driver`], [`amt`]: the driver and the automated gearbox;
+//! - [`gnss`]: the GNSS receiver's altitude and its errors;
 //! - [`effects`]: concealed effects (catalogue and out-of-catalogue);
 //! - [`drive`]: a whole drive, its CAN truth and log;
 //! - [`linear`]: numerical linearisation and mode extraction (verification).
@@ -28,6 +29,7 @@ pub mod drive;
 pub mod driver;
 pub mod effects;
 pub mod engine;
+pub mod gnss;
 pub mod integrator;
 pub mod linear;
 pub mod params;

@@ -96,8 +96,10 @@ fn an_independent_proof_diagnoses_blind_with_the_answers_kept_apart() {
 /// speeds alone — the shuffle modes, whose tyre share is fitted at the file's mass, are not
 /// scored for it; the shaft through the shuffle modes, whose tyre share is itself estimated).
 /// A slope sensor mounted 0.019 rad nose-down must be named `grade_offset`, its angle within
-/// 15 %: its force is a constant ∝ m·g, which a rolling resistance could only match at about
-/// four times the file's coefficient, outside that effect's fit domain (2.5 times).
+/// 15 %: the truck logs a GNSS altitude, against which the diagnosis measures the angle before
+/// it fits anything (the clean drives' measured angles stay inside the file's ±0.002 rad), so
+/// the rolling resistance, which adds the same nearly constant force, is never fitted for it
+/// beyond its domain (2.5 times the file's coefficient).
 /// Two shafts 31 % and 35 % softer are read within 25 % as well, but their intervals reach
 /// into the band of acceptance rule 4 (the file's ±10 % widened below by the model-form
 /// allowance's 20 %): each is reported as an estimate consistent with the file, not named. On
@@ -130,6 +132,15 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         let d = detail(i);
         assert_eq!(d["speed_consistency"]["flagged"], false, "{i}");
         assert_eq!(d["resistance_stretch"]["flagged"], false, "{i}");
+        // the truck's GNSS altitude measures the healthy slope sensor's offset inside the
+        // file's ±0.002 rad, to within the receiver's drift over the drive
+        let a = &d["altitude_offset"]["measured"];
+        let (v, lo, hi) = (
+            a["value_rad"].as_f64().unwrap(),
+            a["ci_low_rad"].as_f64().unwrap(),
+            a["ci_high_rad"].as_f64().unwrap(),
+        );
+        assert!(v.abs() < 0.0015 && lo < 0.002 && hi > -0.002, "{i}: {a}");
     }
     // outside the catalogue: an unreported retarder on 2.5–4.5 km of a 5.6 km drive, a wet
     // stretch (1.5 times the rolling resistance) on 1.6–3.3 km of a 5.8 km drive, and a speed
@@ -161,6 +172,20 @@ fn a_reduced_independent_proof_names_the_faults_and_leaves_clean_drives_alone() 
         assert_eq!(s.verdict, Verdict::Explained);
         let e = s.parameter_error.unwrap();
         assert!(e < max_error, "{effect}: parameter error {e}");
+    }
+    // the mounting angle is measured against the altitude, not fitted: named on the
+    // measurement, and kept out of every round's screen
+    let d = detail(20);
+    let f = &d["explanation"]["findings"][0];
+    assert_eq!(f["effect"], "grade_offset");
+    assert_eq!(f["evidence"]["measured_by"], "altitude");
+    assert_eq!(
+        f["parameters"]["slope_offset_rad"]["value"],
+        d["altitude_offset"]["measured"]["value_rad"]
+    );
+    for r in d["explanation"]["rounds"].as_array().unwrap() {
+        let screened = r["screen"]["entries"].as_array().unwrap();
+        assert!(screened.iter().all(|e| e["effect"] != "grade_offset"));
     }
     // no rolling-resistance fit of the mounting-angle drive leaves its fit domain
     let nominal_c_r1 = fleetdyn::model::vehicle::VehicleFile::load(&vehicle)
