@@ -44,8 +44,9 @@
 //! No `altitude` column, or fewer than [`MIN_DISTANCE_M`] travelled or [`MIN_DURATION_S`]
 //! recorded between the first and last usable row, or an altitude that does not follow the
 //! slope readings (residual RMS above [`MAX_RESIDUAL_RMS_M`]: a frozen channel, a receiver
-//! that lost its fix). Rows whose `altitude_accuracy_m` (when the log has it) exceeds
-//! [`MAX_ACCURACY_M`] are not used (an unconverged receiver). The reason is reported.
+//! that lost its fix), or an offset beyond [`MAX_OFFSET_RAD`]. Rows whose
+//! `altitude_accuracy_m` (when the log has it) exceeds [`MAX_ACCURACY_M`] are not used (an
+//! unconverged receiver). The reason is reported.
 
 use crate::schema::Interpolation;
 use crate::signal::distance::fill_gaps;
@@ -66,6 +67,10 @@ pub const MIN_DURATION_S: f64 = 120.0;
 /// Largest RMS of the altitude about the fitted height, m: beyond it the altitude does not
 /// follow the slope readings.
 pub const MAX_RESIDUAL_RMS_M: f64 = 10.0;
+/// Largest offset taken as a measurement, rad (5.7°, the catalogue's fit domain of
+/// `slope_offset_rad`): beyond it the altitude and the slope readings disagree by more than a
+/// mounting angle can (another quantity logged as altitude, a slope channel in other units).
+pub const MAX_OFFSET_RAD: f64 = 0.1;
 /// Largest reported vertical accuracy of a usable row, m (as the road-profile reader's).
 pub const MAX_ACCURACY_M: f64 = 5.0;
 /// Least time between the rows used, s: a receiver reports its altitude at 1–10 Hz, and rows
@@ -201,6 +206,12 @@ pub fn altitude_offset(log: &DriveLog, slope: Option<&[f64]>) -> AltitudeOutcome
         return no(format!(
             "the altitude departs from the height the slope readings integrate to by \
              {residual_rms_m:.1} m RMS (at most {MAX_RESIDUAL_RMS_M} m)"
+        ));
+    }
+    if delta.abs() > MAX_OFFSET_RAD {
+        return no(format!(
+            "the altitude and the slope readings disagree by {delta:.3} rad, more than a \
+             mounting angle can (at most {MAX_OFFSET_RAD} rad)"
         ));
     }
     // Newey–West: Var(b) = Σ_j w_j Σ_i u_i u_{i+j} / Sxx², u = (C − C̄) r, w_j = 1 − |j|/(L+1)
@@ -385,6 +396,14 @@ mod tests {
             altitude_offset(&log, None),
             AltitudeOutcome::NotMeasured(w) if w.contains("RMS")
         ));
+        // an altitude that climbs 3 km over the 20 km the slope readings call rolling
+        let mut steep = drive(0.0, 20.0, 1000.0, |t| 0.15 * 20.0 * t);
+        assert!(matches!(
+            altitude_offset(&steep, None),
+            AltitudeOutcome::NotMeasured(w) if w.contains("mounting angle")
+        ));
+        steep = drive(0.05, 20.0, 1000.0, |_| 0.0);
+        assert!(altitude_offset(&steep, None).measured().is_some());
         // no column, or every row unconverged
         let bare = road.with_columns(Some(&["vehicle_speed", "road_slope"]));
         assert!(altitude_offset(&bare, None).measured().is_none());

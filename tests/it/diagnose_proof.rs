@@ -36,8 +36,13 @@ use crate::common::fixture;
 use fleetdyn::proof::{run_proof, CaseScore, Driving, ProofConfig, ProofRun};
 use fleetdyn::report::contract::Verdict;
 
-const IDENTIFIED: [&str; 13] = [
-    "rolling_resistance",
+/// Effects these reduced inversion checks must name. The rolling resistance is not among them:
+/// its model-form allowance (−19 % / +41 %, measured on the independent truth's healthy trucks,
+/// whose cold tyres and wind read as rolling resistance) puts the changes these drives hide
+/// inside the band, where they are reported as estimates consistent with the file; the proof
+/// reports this as the inversion check's cost of the allowance (docs/validation/proof.md). A
+/// rolling-resistance drive must still carry no wrong name.
+const IDENTIFIED: [&str; 12] = [
     "vehicle_mass",
     "grade_offset",
     "engine_torque_offset",
@@ -256,7 +261,8 @@ fn identified_drawn(hidden: &str) -> bool {
 /// The first cycle under the drawn driving (`fleetdyn prove --seed 1`, drives 0–21: the same roads,
 /// effects and magnitudes as the fixed-driving cycle above, each drive with its own driver —
 /// acceleration, braking, speed holding, torque tips, lift-offs, stop time). Measured
-/// (docs/validation/proof.md, drawn driving): eleven effects named first, aero drag named as
+/// (docs/validation/proof.md, drawn driving): ten effects named first (case 1's
+/// rolling-resistance change lies inside its band: [`IDENTIFIED`]), aero drag named as
 /// `grade_offset` with itself in the ambiguity set, no clean or out-of-catalogue drive with a
 /// finding. What the drawn driving costs is pinned as a ratchet (these assertions hold while it
 /// stays, and still hold when it is mended): the slope quantisation of case 4 (invisible to the
@@ -266,7 +272,7 @@ fn identified_drawn(hidden: &str) -> bool {
 /// case 6 and the stiffness of case 7 do not pass the rule even at their truth on these drives'
 /// driving.
 #[test]
-fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_drives() {
+fn reduced_proof_with_drawn_driving_names_ten_effects_and_nothing_on_clean_drives() {
     let (dir, run) = proof(&ProofConfig {
         drives: 22,
         ..ProofConfig::model()
@@ -308,7 +314,7 @@ fn reduced_proof_with_drawn_driving_names_eleven_effects_and_nothing_on_clean_dr
             }
         }
     }
-    assert_eq!(identified, 11);
+    assert_eq!(identified, 10);
     // aero drag: named as the grade offset it cannot be told from on this drive, itself in
     // the ambiguity set
     assert!(run.scores[0].correct || run.scores[0].ambiguous_correct);
@@ -587,12 +593,11 @@ fn a_switch_is_scored_on_every_row_of_the_views_it_moves() {
 /// A slope sensor's rounding whose reconstruction the train blocks barely see
 /// (`fleetdyn prove --seed 5001 --cases 26 --driving fixed`): the cure (a switch, nothing
 /// fitted) lowers the held-out weighted RMSE of the speeds by more than half and the held-out
-/// whiteness, but its likelihood-ratio statistic on the train part alone is 0.72 against
-/// the 3.84 of rule 3. With nothing fitted, rule 3 tests the switch on both parts
-/// (`diagnose::explain`, rule 3): the drive is named, and the statistic that decides it is
-/// mostly the held-out part's. The screen takes a switch on every row too, with no threshold
-/// (`diagnose::fit`): on the train part alone the cure removes 9.5 % of the SSE, under the
-/// screen's 10 % for a fitted parameter, so a threshold would leave it untested.
+/// whiteness. With nothing fitted, rule 3 tests the switch on both parts
+/// (`diagnose::explain`, rule 3): the drive is named, and the held-out part's
+/// likelihood-ratio statistic is the larger (measured 10.4 against the train part's 4.9, the
+/// threshold 3.84). The screen takes a switch on every row too, with no threshold
+/// (`diagnose::fit`), so a drive whose train part sees little of the cure still has it tested.
 #[test]
 fn a_switch_is_tested_on_every_row() {
     let (s, detail) = named_slope_case(5001, 26, Driving::Fixed);
@@ -602,7 +607,6 @@ fn a_switch_is_tested_on_every_row() {
     let train = ev["deviance_at_start"].as_f64().unwrap();
     let heldout = ev["deviance_heldout_at_start"].as_f64().unwrap();
     let threshold = ev["deviance_threshold"].as_f64().unwrap();
-    assert!(train < threshold, "{ev}");
     assert!(train + heldout > threshold, "{ev}");
     assert!(heldout > train, "{ev}");
 }
