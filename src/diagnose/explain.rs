@@ -348,21 +348,7 @@ fn measured_round(
         gain,
         whiteness: (wb, wa),
     } = rule_figures(ev, e, &active, base, &best, false);
-    let explained: f64 = (0..ev.models.len())
-        .map(|k| 1.0 - best.heldout[k] / base.heldout[k])
-        .sum();
-    let models = (0..ev.models.len())
-        .filter(|&k| active[k])
-        .map(|k| ModelScore {
-            domain: ev.models[k].domain,
-            view: ev.problem.views()[k].kind,
-            scored: scored[k],
-            train_before: base.train[k].sqrt(),
-            train_after: best.train[k].sqrt(),
-            heldout_before: base.heldout[k].sqrt(),
-            heldout_after: best.heldout[k].sqrt(),
-        })
-        .collect();
+    let (explained, models) = model_scores(ev, base, &best, &active, &scored);
     let (fit, metrics) = signal_fits(ev.problem, &base.outputs, &best.outputs, None);
     let mut parameters = BTreeMap::new();
     parameters.insert(e.parameter().to_string(), est);
@@ -392,6 +378,34 @@ fn measured_round(
         },
     };
     Ok((best, Taken::Finding(Box::new(finding))))
+}
+
+/// The held-out mean square explained from `base` to `best`, summed over the models, and the
+/// weighted RMSE before and after of each changed view (`active`), `scored` saying which rule 1
+/// scored.
+fn model_scores(
+    ev: &Evaluator<'_, '_>,
+    base: &Eval,
+    best: &Eval,
+    active: &[bool],
+    scored: &[bool],
+) -> (f64, Vec<ModelScore>) {
+    let explained = (0..ev.models.len())
+        .map(|m| 1.0 - best.heldout[m] / base.heldout[m])
+        .sum();
+    let models = (0..ev.models.len())
+        .filter(|&m| active[m])
+        .map(|m| ModelScore {
+            domain: ev.models[m].domain,
+            view: ev.problem.views()[m].kind,
+            scored: scored[m],
+            train_before: base.train[m].sqrt(),
+            train_after: best.train[m].sqrt(),
+            heldout_before: base.heldout[m].sqrt(),
+            heldout_after: best.heldout[m].sqrt(),
+        })
+        .collect();
+    (explained, models)
 }
 
 /// `fits` as a round keeps them: their figures without their simulations (a simulation holds
@@ -432,21 +446,7 @@ fn candidate_fit(
         gain,
         whiteness: (wb, wa),
     } = rule_figures(ev, e, active, base, &best, switch);
-    let explained: f64 = (0..ev.models.len())
-        .map(|m| 1.0 - best.heldout[m] / base.heldout[m])
-        .sum();
-    let models = (0..ev.models.len())
-        .filter(|&m| active[m])
-        .map(|m| ModelScore {
-            domain: ev.models[m].domain,
-            view: ev.problem.views()[m].kind,
-            scored: scored[m],
-            train_before: base.train[m].sqrt(),
-            train_after: best.train[m].sqrt(),
-            heldout_before: base.heldout[m].sqrt(),
-            heldout_after: best.heldout[m].sqrt(),
-        })
-        .collect();
+    let (explained, models) = model_scores(ev, base, &best, active, &scored);
     let rule = AcceptanceRule::FIXED;
     let passes_heldout = gain >= rule.min_heldout_gain;
     let passes_whiteness = !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power;
