@@ -16,7 +16,8 @@
 //!    ([`super::problem::whiteness`]: the root of the Ljung–Box statistic per sample `Q/n` of
 //!    the non-centred autocorrelation at lags 0.1…2 s, times the residual's weighted mean
 //!    square — the RMS of the weighted autocovariance at those lags) is lower after the fit
-//!    than before;
+//!    than before, unless it is zero on both sides (no scored view long enough to measure it,
+//!    [`AcceptanceRule::whiteness_passes`]);
 //! 3. **the interval excludes "no effect"**: the 95 % profile-likelihood interval of the
 //!    parameter does not contain the round's value (the nominal, "no effect") — tested first
 //!    as the likelihood-ratio statistic `N_eff ln(J_before/J_after)` against the interval's
@@ -144,7 +145,7 @@ pub const RULE_MIN_CHANGE_MS: f64 = 1e-2;
 pub struct AcceptanceRule {
     /// Least relative fall of the held-out weighted RMSE.
     pub min_heldout_gain: f64,
-    /// The held-out whiteness statistic must fall.
+    /// The held-out whiteness statistic must fall ([`AcceptanceRule::whiteness_passes`]).
     pub whiteness_must_improve: bool,
     /// Deviance threshold of the interval and the likelihood-ratio test when the residual's
     /// autocorrelation sets the effective sample count (χ²₁, 95 %); when the between-block
@@ -153,6 +154,14 @@ pub struct AcceptanceRule {
 }
 
 impl AcceptanceRule {
+    /// Rule 2 on the held-out non-white power before (`before`) and after the fit: it must
+    /// fall. Zero on both sides means no scored view holds a residual long enough for the
+    /// statistic (an events view with too few held-out events): rule 2 cannot judge and does
+    /// not refuse; rules 1 and 3 still must hold.
+    pub fn whiteness_passes(&self, before: f64, after: f64) -> bool {
+        !self.whiteness_must_improve || after < before || (before == 0.0 && after == 0.0)
+    }
+
     /// The rule fixed in advance.
     pub const FIXED: AcceptanceRule = AcceptanceRule {
         min_heldout_gain: MIN_HELDOUT_GAIN,
@@ -312,7 +321,7 @@ pub fn rules_at(
         nonwhite_before: wb.nonwhite_power,
         nonwhite_after: wa.nonwhite_power,
         passes_heldout: gain >= rule.min_heldout_gain,
-        passes_whiteness: !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power,
+        passes_whiteness: rule.whiteness_passes(wb.nonwhite_power, wa.nonwhite_power),
     }))
 }
 
@@ -468,4 +477,20 @@ pub(super) fn ambiguity_set(
             (c.abs() >= AMBIGUITY_MIN_CORRELATION).then_some((other.effect, c))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn whiteness_must_fall_unless_it_cannot_be_measured() {
+        let r = AcceptanceRule::FIXED;
+        assert!(r.whiteness_passes(0.30, 0.20));
+        assert!(!r.whiteness_passes(0.20, 0.20));
+        assert!(!r.whiteness_passes(0.20, 0.21));
+        // zero on both sides: no scored view long enough for the statistic
+        assert!(r.whiteness_passes(0.0, 0.0));
+        assert!(!r.whiteness_passes(0.0, 0.01));
+    }
 }

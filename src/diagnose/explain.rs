@@ -67,7 +67,7 @@ use super::long_drive::{is_long, map_in_order};
 use super::problem::{ExplainError, Part, Problem};
 use super::row_column::RowColumn;
 use super::signal_fits::signal_fits;
-use crate::model::catalogue::Effect;
+use crate::model::catalogue::{Effect, ModelForm};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -198,6 +198,7 @@ pub fn explain(problem: &Problem<'_>, cfg: &ExplainConfig) -> Result<Explanation
             consistent.push(ConsistentEstimate {
                 effect: e.id(),
                 file_tolerance: cfg.tolerances.of_effect(e),
+                model_form: cfg.tolerances.model_form(e),
                 estimate,
                 nominal: nominal.get(e),
                 band_low,
@@ -333,6 +334,7 @@ fn measured_round(
             round: 0,
             ambiguous_with: Vec::new(),
             file_tolerance: tolerances.of_effect(e),
+            model_form: ModelForm::NONE,
             measured_by: Some(m.source),
         };
         return Ok((best, Taken::Consistent(c)));
@@ -449,7 +451,7 @@ fn candidate_fit(
     let (explained, models) = model_scores(ev, base, &best, active, &scored);
     let rule = AcceptanceRule::FIXED;
     let passes_heldout = gain >= rule.min_heldout_gain;
-    let passes_whiteness = !rule.whiteness_must_improve || wa.nonwhite_power < wb.nonwhite_power;
+    let passes_whiteness = rule.whiteness_passes(wb.nonwhite_power, wa.nonwhite_power);
     let passes_interval = dev + dev_heldout.unwrap_or(0.0) > threshold;
     let passes = passes_heldout && passes_whiteness && passes_interval;
     CandidateFit {

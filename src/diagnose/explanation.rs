@@ -14,7 +14,7 @@ use super::linearised::LinearisedEstimate;
 use super::problem::{Split, Whiteness};
 use super::signal_fits::{SignalFit, SignalMetrics};
 use crate::model::catalogue::Domain;
-use crate::model::catalogue::Tolerance;
+use crate::model::catalogue::{ModelForm, Tolerance};
 use crate::model::tolerance::Tolerances;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -94,6 +94,10 @@ pub struct ConsistentEstimate {
     /// allowance to it, except for a measured parameter).
     #[serde(skip)]
     pub file_tolerance: Tolerance,
+    /// The catalogue's model-form allowance the band was widened by, for this vehicle file
+    /// ([`crate::model::tolerance::Tolerances::model_form`]).
+    #[serde(skip)]
+    pub model_form: ModelForm,
     /// What the parameter was measured against when it was not fitted ([`Measured`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub measured_by: Option<&'static str>,
@@ -288,6 +292,7 @@ mod tests {
             round: 0,
             ambiguous_with: Vec::new(),
             file_tolerance: Tolerance::Relative(0.05),
+            model_form: ModelForm::NONE,
             measured_by: None,
         };
         assert_eq!(

@@ -4,7 +4,8 @@
 use crate::model::catalogue::{Domain, DrawRange, ModelForm, Scale, Tolerance, CATALOGUE};
 
 /// The catalogue as a Markdown table (one row per effect: id, domain, parameter and unit,
-/// default tolerance, the two model-form allowances, draw range, fit step and domain,
+/// default tolerance, the model-form allowances (full fit without and with the tyres' warm-up
+/// stated, linearised estimate), draw range, fit step and domain,
 /// fingerprint), as docs/diagnosis/catalogue.md carries it; a test keeps the two equal.
 pub fn catalogue_markdown() -> String {
     fn g(x: f64) -> String {
@@ -15,8 +16,8 @@ pub fn catalogue_markdown() -> String {
         g((x * 1000.0).round() / 10.0)
     }
     let mut out = String::from(
-        "| id | domain | parameter (unit) | default tolerance | model-form allowance (full fit) | (linearised estimate) | proof draw | fit step | fit domain | fingerprint |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+        "| id | domain | parameter (unit) | default tolerance | model-form allowance (full fit) | (full fit, warm-up stated) | (linearised estimate) | proof draw | fit step | fit domain | fingerprint |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in CATALOGUE.iter() {
         let u = if r.unit == "1" { "" } else { r.unit };
@@ -34,7 +35,11 @@ pub fn catalogue_markdown() -> String {
             (Tolerance::None, Tolerance::None) => "—".to_string(),
             (b, a) => format!("{} / {}", side(b, "−"), side(a, "+")),
         };
-        let (allowance, linearised) = (sides(r.model_form), sides(r.linearised_form));
+        let (allowance, warm_up, linearised) = (
+            sides(r.model_form),
+            sides(r.model_form_warm_up),
+            sides(r.linearised_form),
+        );
         let draw = match r.draw {
             DrawRange::Relative { lo, hi, down_only } => format!(
                 "{}{}–{} % of θ₀",
@@ -76,9 +81,10 @@ pub fn catalogue_markdown() -> String {
             Domain::Longitudinal => "longitudinal",
             Domain::Axle => "axle",
         };
-        let cells = [tol, allowance, linearised, draw, step, dom].map(|c| c.trim_end().to_string());
+        let cells = [tol, allowance, warm_up, linearised, draw, step, dom]
+            .map(|c| c.trim_end().to_string());
         out.push_str(&format!(
-            "| `{}` | {domain} | `{}` ({}) | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| `{}` | {domain} | `{}` ({}) | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.id,
             r.parameter,
             r.unit,
@@ -88,6 +94,7 @@ pub fn catalogue_markdown() -> String {
             cells[3],
             cells[4],
             cells[5],
+            cells[6],
             r.fingerprint
         ));
     }

@@ -22,7 +22,7 @@
 //! ([`ToleranceKind::default_tolerance`]); a key outside the vehicle schema and the catalogue
 //! is an error, so a misspelt key cannot silently fall back to a default.
 
-use super::catalogue::{Effect, Tolerance, ToleranceKind, CATALOGUE};
+use super::catalogue::{Effect, ModelForm, Tolerance, ToleranceKind, CATALOGUE};
 use std::collections::BTreeMap;
 
 /// The tolerances of one vehicle file: the `[tolerance]` table's entries; every other
@@ -30,6 +30,9 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Tolerances {
     given: BTreeMap<String, Tolerance>,
+    /// Whether the vehicle file states the tyres' warm-up (`tyre_cold_excess` > 0), which
+    /// selects the catalogue's allowance measured with it ([`Tolerances::model_form`]).
+    tyre_warm_up: bool,
 }
 
 /// The kind of a vehicle-file key, for its default tolerance: a catalogue parameter's row
@@ -96,7 +99,31 @@ impl Tolerances {
             };
             given.insert(key.clone(), tol);
         }
-        Ok(Self { given })
+        Ok(Self {
+            given,
+            tyre_warm_up: false,
+        })
+    }
+
+    /// The same tolerances for a vehicle file that does (`true`) or does not state the tyres'
+    /// warm-up ([`Tolerances::model_form`]).
+    pub fn with_tyre_warm_up(mut self, stated: bool) -> Self {
+        self.tyre_warm_up = stated;
+        self
+    }
+
+    /// The catalogue's model-form allowance of `e` for this vehicle file: the one measured with
+    /// the tyres' warm-up stated ([`crate::model::catalogue::EffectSpec::model_form_warm_up`])
+    /// when the file states it, else the one measured without
+    /// ([`crate::model::catalogue::EffectSpec::model_form`]). Each was measured with the
+    /// models as such a file makes them, and the rolling resistance and drag area they fit on
+    /// cold tyres differ.
+    pub fn model_form(&self, e: Effect) -> ModelForm {
+        if self.tyre_warm_up {
+            e.spec().model_form_warm_up
+        } else {
+            e.spec().model_form
+        }
     }
 
     /// The tolerance of a vehicle-file key or catalogue parameter: the table's entry, else
@@ -124,12 +151,12 @@ impl Tolerances {
 
     /// The band `(θ₀ − w − m₋, θ₀ + w + m₊)` of `e`'s parameter around `nominal` that an
     /// estimate must leave to be named: `w` is the file's tolerance ([`Tolerances::of_effect`]),
-    /// `m₋` and `m₊` the catalogue's model-form allowance below and above
-    /// ([`crate::model::catalogue::EffectSpec::model_form`]), added because a healthy truck may
-    /// sit at the edge of the one and its estimate miss it by the other.
+    /// `m₋` and `m₊` the catalogue's model-form allowance below and above for this file
+    /// ([`Tolerances::model_form`]), added because a healthy truck may sit at the edge of the
+    /// one and its estimate miss it by the other.
     pub fn band(&self, e: Effect, nominal: f64) -> (f64, f64) {
         let w = self.of_effect(e).half_width(nominal);
-        let (below, above) = e.spec().model_form.widths(nominal);
+        let (below, above) = self.model_form(e).widths(nominal);
         (nominal - w - below, nominal + w + above)
     }
 
@@ -187,6 +214,32 @@ mod tests {
         assert_eq!(
             Tolerances::default().band(Effect::SlopeQuantization, 0.01),
             (0.01, 0.01)
+        );
+    }
+
+    #[test]
+    fn a_file_that_states_the_tyres_warm_up_is_judged_with_its_own_allowance() {
+        use crate::model::vehicle::VehicleFile;
+        let load = |name: &str| {
+            let path = format!("{}/fixtures/vehicles/{name}", env!("CARGO_MANIFEST_DIR"));
+            VehicleFile::parse(&std::fs::read_to_string(&path).unwrap(), name).unwrap()
+        };
+        let (plain, cold) = (load("truck-40t.toml"), load("truck-40t-cold-start.toml"));
+        let c_w = 5.5;
+        for (file, form) in [
+            (&plain, Effect::AeroDrag.spec().model_form),
+            (&cold, Effect::AeroDrag.spec().model_form_warm_up),
+        ] {
+            assert_eq!(file.tolerance.model_form(Effect::AeroDrag), form);
+            let (below, above) = form.widths(c_w);
+            let (lo, hi) = file.tolerance.band(Effect::AeroDrag, c_w);
+            assert!((lo - (c_w * 0.95 - below)).abs() < 1e-9, "{lo}");
+            assert!((hi - (c_w * 1.05 + above)).abs() < 1e-9, "{hi}");
+        }
+        // the two measurements differ where cold tyres push the resistances
+        assert_ne!(
+            cold.tolerance.band(Effect::AeroDrag, c_w),
+            plain.tolerance.band(Effect::AeroDrag, c_w)
         );
     }
 

@@ -277,6 +277,11 @@ impl VehicleFile {
                 }
             })?;
         }
+        let warm_up = v
+            .driveline
+            .as_ref()
+            .is_some_and(|d| d.tyre_cold_excess > 0.0);
+        v.tolerance = std::mem::take(&mut v.tolerance).with_tyre_warm_up(warm_up);
         Ok(v)
     }
 

@@ -45,7 +45,7 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         t => format!("{}{unit} {}", num(nominal), width(t)),
     };
     // the model's own allowance widens the band the estimate is judged against
-    let mf = e.spec().model_form;
+    let mf = c.model_form;
     let side = |t: Tolerance, sign: char| match t {
         Tolerance::Relative(r) => Some(format!("{sign} {} %", num(100.0 * r))),
         Tolerance::Absolute(x) => Some(format!("{sign} {}{unit}", num(x))),
@@ -278,6 +278,10 @@ mod tests {
                 round: 0,
                 ambiguous_with: Vec::new(),
                 file_tolerance: Tolerance::Relative(0.1),
+                model_form: crate::model::catalogue::Effect::from_id(effect)
+                    .unwrap()
+                    .spec()
+                    .model_form,
                 measured_by: None,
             }
         };
@@ -298,6 +302,7 @@ mod tests {
         // a measured parameter says so and is judged against the file's own band
         let measured = ConsistentEstimate {
             file_tolerance: Tolerance::Absolute(0.002),
+            model_form: crate::model::catalogue::ModelForm::NONE,
             measured_by: Some("altitude"),
             ..c("grade_offset", 0.0004, 0.0, "rad")
         };
