@@ -536,34 +536,22 @@ impl<'a> LongitudinalModel<'a> {
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
             let (mut y, mut mode) = (y0, mode);
             for (j, &(a, b, is_fine)) in pieces.iter().enumerate() {
-                let run = match (is_fine, fine.as_mut()) {
-                    (true, Some(f)) => f.simulate_span(sc, a, b, y, mode),
-                    _ => fast.simulate_span(sc, a, b, y, mode),
+                // a piece's last sample is the next piece's (or window's) first
+                let last = w + 1 == n_win && j + 1 == pieces.len();
+                // the engine turns faster than the vehicle's speed carries it by the slip
+                let mut sample = |t: f64, y: &[f64; crate::sim::hybrid::N_STATES]| {
+                    out(t, [p.wheel_radius_m * y[7], y[0] * (1.0 + slip_of(y))]);
                 };
-                let tr = run.map_err(|source| ExtendedError::Sim {
+                let run = match (is_fine, fine.as_mut()) {
+                    (true, Some(f)) => {
+                        f.simulate_span_states(sc, (a, b), y, mode, last, &mut sample)
+                    }
+                    _ => fast.simulate_span_states(sc, (a, b), y, mode, last, &mut sample),
+                };
+                (y, mode) = run.map_err(|source| ExtendedError::Sim {
                     file: file.clone(),
                     source,
                 })?;
-                let (Some(&y_end), Some(&m_end)) = (tr.y.last(), tr.mode.last()) else {
-                    continue;
-                };
-                (y, mode) = (y_end, m_end);
-                // a piece's last sample is the next piece's (or window's) first
-                let keep = if w + 1 == n_win && j + 1 == pieces.len() {
-                    tr.t.len()
-                } else {
-                    tr.t.len() - 1
-                };
-                // the engine turns faster than the vehicle's speed carries it by the slip
-                for k in 0..keep {
-                    out(
-                        tr.t[k],
-                        [
-                            p.wheel_radius_m * tr.y[k][7],
-                            tr.y[k][0] * (1.0 + slip_of(&tr.y[k])),
-                        ],
-                    );
-                }
             }
             Ok(())
         };

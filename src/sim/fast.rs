@@ -36,7 +36,7 @@
 use super::dopri::Stats;
 use super::hybrid::{ClutchMode, EngineInput, Event, Scenario, SimError, Trajectory, N_STATES};
 use crate::model::driveline::DrivelineParams;
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{DMatrix, SMatrix};
 
 const N_IN: usize = 4;
 
@@ -303,9 +303,7 @@ impl<'a> FastDriveline<'a> {
         y0: [f64; N_STATES],
         mode0: ClutchMode,
     ) -> Result<Trajectory, SimError> {
-        let p = self.p;
-        let dt = self.dt;
-        let n = ((t_end - t_start) / dt).round() as usize;
+        let n = ((t_end - t_start) / self.dt).round() as usize;
         let mut traj = Trajectory {
             t: Vec::with_capacity(n + 1),
             y: Vec::with_capacity(n + 1),
@@ -315,6 +313,48 @@ impl<'a> FastDriveline<'a> {
             events: Vec::new(),
             stats: Stats::default(),
         };
+        self.run_span(sc, t_start, t_end, y0, mode0, &mut traj)?;
+        Ok(traj)
+    }
+
+    /// [`FastDriveline::simulate_span`] with each sample's time and state handed to `out`
+    /// instead of a [`Trajectory`] (nothing else is computed for it: no torques, modes, gears
+    /// or events), the last sample only when `last` is set; returns the state and clutch mode
+    /// at `t_end`. The states are those of [`FastDriveline::simulate_span`], bit for bit.
+    ///
+    /// # Errors
+    /// As [`FastDriveline::simulate_span`].
+    pub fn simulate_span_states(
+        &mut self,
+        sc: &Scenario,
+        (t_start, t_end): (f64, f64),
+        y0: [f64; N_STATES],
+        mode0: ClutchMode,
+        last: bool,
+        out: &mut dyn FnMut(f64, &[f64; N_STATES]),
+    ) -> Result<([f64; N_STATES], ClutchMode), SimError> {
+        let mut sink = StateSink {
+            out,
+            last,
+            end: (y0, mode0),
+        };
+        self.run_span(sc, t_start, t_end, y0, mode0, &mut sink)?;
+        Ok(sink.end)
+    }
+
+    /// The integration loop of [`FastDriveline::simulate_span`], its samples into `sink`.
+    fn run_span<S: Sink>(
+        &mut self,
+        sc: &Scenario,
+        t_start: f64,
+        t_end: f64,
+        y0: [f64; N_STATES],
+        mode0: ClutchMode,
+        sink: &mut S,
+    ) -> Result<(), SimError> {
+        let p = self.p;
+        let dt = self.dt;
+        let n = ((t_end - t_start) / dt).round() as usize;
         let cur = Cursors::default();
         let mut y = y0;
         let mut mode = mode0;
@@ -353,25 +393,25 @@ impl<'a> FastDriveline<'a> {
         for k in 0..=n {
             let t = t_start + k as f64 * dt;
             let (me, pi_active, _) = engine_torque(t, &y);
-            let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
-            let mtr = match mode {
-                ClutchMode::Locked => self.m_trans_locked(me, mc),
-                ClutchMode::Slipping(s) => {
-                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
-                }
-            };
-            traj.t.push(t);
-            traj.y.push(y);
-            traj.mode.push(mode);
-            traj.torques.push([me, mc, mp, md, mtr]);
-            traj.gear.push(gear);
+            if S::TORQUES {
+                let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
+                let mtr = match mode {
+                    ClutchMode::Locked => self.m_trans_locked(me, mc),
+                    ClutchMode::Slipping(s) => {
+                        s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
+                    }
+                };
+                sink.sample(t, &y, mode, gear, [me, mc, mp, md, mtr], k == n);
+            } else {
+                sink.sample(t, &y, mode, gear, [0.0; 5], k == n);
+            }
             if k == n {
                 break;
             }
             let tm = t + 0.5 * dt;
             let g = gear_at(tm)?;
             if g != gear {
-                traj.events.push(Event {
+                sink.event(Event {
                     t,
                     kind: format!("gear_{gear}_to_{g}"),
                 });
@@ -410,13 +450,12 @@ impl<'a> FastDriveline<'a> {
             // in contact the nominal matrices act on the twist beyond the play
             let offset = side * 0.5 * self.lash;
             let (phi, gamma) = self.discrete(key);
-            let u = SVector::<f64, N_IN>::new(me_mid, m_trans_in, force, w_ref);
-            let mut z = SVector::<f64, N_STATES>::from_column_slice(&y);
+            let u = [me_mid, m_trans_in, force, w_ref];
+            let mut z = y;
             z[6] -= offset;
-            let mut z1 = phi * z + gamma * u;
-            z1[6] += offset;
-            y.copy_from_slice(z1.as_slice());
-            traj.stats.accepted += 1;
+            y = step(phi, gamma, &z, &u);
+            y[6] += offset;
+            sink.step();
             // mode switches at the step end
             let t1 = t + dt;
             if sc.standstill_events {
@@ -436,7 +475,7 @@ impl<'a> FastDriveline<'a> {
                     if stuck {
                         if drive.abs() > cap {
                             stuck = false;
-                            traj.events.push(Event {
+                            sink.event(Event {
                                 t: t1,
                                 kind: "breakaway".into(),
                             });
@@ -446,7 +485,7 @@ impl<'a> FastDriveline<'a> {
                     } else if drive.abs() <= cap {
                         stuck = true;
                         y[7] = 0.0;
-                        traj.events.push(Event {
+                        sink.event(Event {
                             t: t1,
                             kind: "stop".into(),
                         });
@@ -464,7 +503,7 @@ impl<'a> FastDriveline<'a> {
                             * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
                     {
                         mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
-                        traj.events.push(Event {
+                        sink.event(Event {
                             t: t1,
                             kind: "unlock".into(),
                         });
@@ -485,13 +524,13 @@ impl<'a> FastDriveline<'a> {
                         {
                             mode = ClutchMode::Locked;
                             y = yt;
-                            traj.events.push(Event {
+                            sink.event(Event {
                                 t: t1,
                                 kind: "lock".into(),
                             });
                         } else {
                             mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
-                            traj.events.push(Event {
+                            sink.event(Event {
                                 t: t1,
                                 kind: "slip_reversal".into(),
                             });
@@ -500,6 +539,107 @@ impl<'a> FastDriveline<'a> {
                 }
             }
         }
-        Ok(traj)
+        Ok(())
     }
+}
+
+/// One step `Φ z + Γ u`, each product accumulated column by column in column order and the
+/// two then added (the order of nalgebra's matrix-vector product, so the same bits as
+/// `phi * z + gamma * u`), written out so that the step inlines into the integration loop.
+#[inline(always)]
+fn step(phi: &Phi, gamma: &Gamma, z: &[f64; N_STATES], u: &[f64; N_IN]) -> [f64; N_STATES] {
+    let mut pz = [0.0; N_STATES];
+    for (i, p) in pz.iter_mut().enumerate() {
+        *p = phi[(i, 0)] * z[0];
+    }
+    for (j, zj) in z.iter().enumerate().skip(1) {
+        for (i, p) in pz.iter_mut().enumerate() {
+            *p += phi[(i, j)] * zj;
+        }
+    }
+    let mut gu = [0.0; N_STATES];
+    for (i, g) in gu.iter_mut().enumerate() {
+        *g = gamma[(i, 0)] * u[0];
+    }
+    for (j, uj) in u.iter().enumerate().skip(1) {
+        for (i, g) in gu.iter_mut().enumerate() {
+            *g += gamma[(i, j)] * uj;
+        }
+    }
+    std::array::from_fn(|i| pz[i] + gu[i])
+}
+
+/// Where [`FastDriveline::run_span`] puts its samples.
+trait Sink {
+    /// The sink reads the torques: they are computed for every sample.
+    const TORQUES: bool;
+    /// Sample at `t` (the last of the span when `last`); `torques` is (M_e, M_c, M_p, M_d,
+    /// M_trans) in N·m when [`Sink::TORQUES`], else zeros.
+    fn sample(
+        &mut self,
+        t: f64,
+        y: &[f64; N_STATES],
+        mode: ClutchMode,
+        gear: usize,
+        torques: [f64; 5],
+        last: bool,
+    );
+    /// A mode switch or gear change.
+    fn event(&mut self, e: Event);
+    /// One accepted step.
+    fn step(&mut self);
+}
+
+impl Sink for Trajectory {
+    const TORQUES: bool = true;
+    fn sample(
+        &mut self,
+        t: f64,
+        y: &[f64; N_STATES],
+        mode: ClutchMode,
+        gear: usize,
+        torques: [f64; 5],
+        _last: bool,
+    ) {
+        self.t.push(t);
+        self.y.push(*y);
+        self.mode.push(mode);
+        self.torques.push(torques);
+        self.gear.push(gear);
+    }
+    fn event(&mut self, e: Event) {
+        self.events.push(e);
+    }
+    fn step(&mut self) {
+        self.stats.accepted += 1;
+    }
+}
+
+/// The states alone, to a caller's closure ([`FastDriveline::simulate_span_states`]).
+struct StateSink<'o> {
+    out: &'o mut dyn FnMut(f64, &[f64; N_STATES]),
+    /// Hand over the span's last sample too.
+    last: bool,
+    /// The last sample's state and mode.
+    end: ([f64; N_STATES], ClutchMode),
+}
+
+impl Sink for StateSink<'_> {
+    const TORQUES: bool = false;
+    fn sample(
+        &mut self,
+        t: f64,
+        y: &[f64; N_STATES],
+        mode: ClutchMode,
+        _gear: usize,
+        _torques: [f64; 5],
+        last: bool,
+    ) {
+        self.end = (*y, mode);
+        if !last || self.last {
+            (self.out)(t, y);
+        }
+    }
+    fn event(&mut self, _e: Event) {}
+    fn step(&mut self) {}
 }
