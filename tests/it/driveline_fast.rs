@@ -421,3 +421,47 @@ fn lash_tip_out_is_the_same_in_the_generators_spans_and_in_one_run() {
         "1 ms vs 10 µs {d_ref} rad/s, dip {dip} rad/s"
     );
 }
+
+#[test]
+fn the_states_only_path_gives_the_trajectorys_states_bit_for_bit() {
+    let veh = VehicleFile::load(&fixture("fixtures/vehicles/truck-40t.toml")).unwrap();
+    let p = veh.driveline.as_ref().unwrap();
+    let r = &veh.gearbox.ratios;
+    let (sc, y0, mode0) = fleetdyn::sim::scenarios::mixed_gear_drive(p, r, 120.0);
+    for (lash, dt) in [(0.0, 0.005), (0.04, 1e-3)] {
+        // the whole drive in two spans, the second from where the first ended
+        let mid = 60.0;
+        let mut full = FastDriveline::new(p, r, dt).with_lash(lash);
+        let a = full.simulate_span(&sc, 0.0, mid, y0, mode0).unwrap();
+        let (ya, ma) = (*a.y.last().unwrap(), *a.mode.last().unwrap());
+        let b = full.simulate_span(&sc, mid, 120.0, ya, ma).unwrap();
+        let mut states = FastDriveline::new(p, r, dt).with_lash(lash);
+        let mut got: Vec<(f64, [f64; N_STATES])> = Vec::new();
+        let end_a = states
+            .simulate_span_states(&sc, (0.0, mid), y0, mode0, false, &mut |t, y| {
+                got.push((t, *y))
+            })
+            .unwrap();
+        assert!(
+            end_a.0 == ya && end_a.1 == ma,
+            "lash {lash}: first span's end"
+        );
+        let end_b = states
+            .simulate_span_states(&sc, (mid, 120.0), end_a.0, end_a.1, true, &mut |t, y| {
+                got.push((t, *y))
+            })
+            .unwrap();
+        // the first span's last sample is the second's first: handed over once
+        let want: Vec<(f64, [f64; N_STATES])> = a.t[..a.t.len() - 1]
+            .iter()
+            .zip(&a.y)
+            .chain(b.t.iter().zip(&b.y))
+            .map(|(&t, &y)| (t, y))
+            .collect();
+        assert_eq!(got.len(), want.len(), "lash {lash}");
+        assert!(got == want, "lash {lash}: states differ");
+        assert!(end_b.0 == *b.y.last().unwrap() && end_b.1 == *b.mode.last().unwrap());
+        // the drive switches clutch mode or gear, so the mode logic is exercised
+        assert!(!a.events.is_empty() || !b.events.is_empty());
+    }
+}
