@@ -36,7 +36,7 @@
 use super::dopri::Stats;
 use super::hybrid::{ClutchMode, EngineInput, Event, Scenario, SimError, Trajectory, N_STATES};
 use crate::model::driveline::DrivelineParams;
-use nalgebra::{DMatrix, SMatrix};
+use nalgebra::{DMatrix, SMatrix, SVector};
 
 const N_IN: usize = 4;
 
@@ -450,11 +450,12 @@ impl<'a> FastDriveline<'a> {
             // in contact the nominal matrices act on the twist beyond the play
             let offset = side * 0.5 * self.lash;
             let (phi, gamma) = self.discrete(key);
-            let u = [me_mid, m_trans_in, force, w_ref];
-            let mut z = y;
+            let u = SVector::<f64, N_IN>::new(me_mid, m_trans_in, force, w_ref);
+            let mut z = SVector::<f64, N_STATES>::from_column_slice(&y);
             z[6] -= offset;
-            y = step(phi, gamma, &z, &u);
-            y[6] += offset;
+            let mut z1 = phi * z + gamma * u;
+            z1[6] += offset;
+            y.copy_from_slice(z1.as_slice());
             sink.step();
             // mode switches at the step end
             let t1 = t + dt;
@@ -541,32 +542,6 @@ impl<'a> FastDriveline<'a> {
         }
         Ok(())
     }
-}
-
-/// One step `Φ z + Γ u`, each product accumulated column by column in column order and the
-/// two then added (the order of nalgebra's matrix-vector product, so the same bits as
-/// `phi * z + gamma * u`), written out so that the step inlines into the integration loop.
-#[inline(always)]
-fn step(phi: &Phi, gamma: &Gamma, z: &[f64; N_STATES], u: &[f64; N_IN]) -> [f64; N_STATES] {
-    let mut pz = [0.0; N_STATES];
-    for (i, p) in pz.iter_mut().enumerate() {
-        *p = phi[(i, 0)] * z[0];
-    }
-    for (j, zj) in z.iter().enumerate().skip(1) {
-        for (i, p) in pz.iter_mut().enumerate() {
-            *p += phi[(i, j)] * zj;
-        }
-    }
-    let mut gu = [0.0; N_STATES];
-    for (i, g) in gu.iter_mut().enumerate() {
-        *g = gamma[(i, 0)] * u[0];
-    }
-    for (j, uj) in u.iter().enumerate().skip(1) {
-        for (i, g) in gu.iter_mut().enumerate() {
-            *g += gamma[(i, j)] * uj;
-        }
-    }
-    std::array::from_fn(|i| pz[i] + gu[i])
 }
 
 /// Where [`FastDriveline::run_span`] puts its samples.
