@@ -22,6 +22,7 @@
 //!
 //! Units: vehicle speed m/s, engine speed rad/s, torque N·m, times s.
 
+use super::capacity_reach::CapacityReach;
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
 use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
@@ -36,6 +37,9 @@ use crate::sim::recorded::{scenario_from_view, RecordedScenario};
 use crate::table::{DriveLog, LogView};
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
+
+/// A sample of a window: time, s; vehicle speed, m/s, and engine speed, rad/s.
+type Sample = (f64, [f64; 2]);
 
 /// Windows simulated in parallel at a time ([`LongitudinalModel::simulate_windows`]): a batch's
 /// samples are held until they go onto the rows (32 windows of 20 s at 1 ms: about 15 MB).
@@ -130,6 +134,9 @@ pub struct LongitudinalModel<'a> {
     /// that reads them ([`ReadInputs`]); `None` when building them failed (each
     /// simulation then builds its own and reports the error).
     nominal_inputs: OnceLock<Option<Arc<ReadInputs>>>,
+    /// Simulations at other clutch capacities, whose locked windows later ones reuse
+    /// ([`CapacityReach`]).
+    reach: CapacityReach,
 }
 
 /// What a simulation reads off the recording besides the plant: the inputs as a scenario and
@@ -212,6 +219,7 @@ impl<'a> LongitudinalModel<'a> {
             slip,
             cfg,
             nominal_inputs: OnceLock::new(),
+            reach: CapacityReach::new(log.len()),
         })
     }
 
@@ -296,6 +304,12 @@ impl<'a> LongitudinalModel<'a> {
     /// Start times of the windows ([`window_starts`]), s from the first row.
     pub fn window_starts(&self) -> &[f64] {
         &self.starts
+    }
+
+    /// The records of simulations at other clutch capacities that later simulations read their
+    /// locked windows off ([`CapacityReach`]).
+    pub fn capacity_reach(&self) -> &CapacityReach {
+        &self.reach
     }
 
     /// Gear ratios of the nominal vehicle (1st gear first).
@@ -482,11 +496,16 @@ impl<'a> LongitudinalModel<'a> {
         // window `w`'s samples (time; vehicle speed, engine speed), simulated by `fast` and
         // `fine` (integrators of the window's steps: each window starts from the measured
         // state, so a window's samples do not depend on which integrator ran the one before)
+        // a record at a lower capacity, whose locked windows this simulation reads off it
+        let record = self.reach.best_for(theta);
+        let reached = |w: usize| record.as_ref().is_some_and(|r| r.locked[w]);
+        let skipped = |w: usize| needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true));
+        // returns whether the clutch was locked at every sample of the window
         let window = |w: usize,
                       fast: &mut FastDriveline<'_>,
                       fine: &mut Option<FastDriveline<'_>>,
                       out: &mut dyn FnMut(f64, [f64; 2])|
-         -> Result<(), ExtendedError> {
+         -> Result<bool, ExtendedError> {
             let ta = starts[w];
             let tb = starts
                 .get(w + 1)
@@ -494,7 +513,7 @@ impl<'a> LongitudinalModel<'a> {
                 .unwrap_or(sc.t_end_s)
                 .min(sc.t_end_s);
             if tb - ta < dt {
-                return Ok(());
+                return Ok(false);
             }
             let v0 = interp_linear(&self.t, &self.v_meas, ta).max(0.0);
             let gear = sc.gear.eval(ta + 1e-9).round() as usize;
@@ -527,14 +546,15 @@ impl<'a> LongitudinalModel<'a> {
                 // the steady twist carries the drive torque: in contact on its side
                 y0[6] += 0.5 * tm.lash_rad * y0[6].signum();
             }
-            if needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true)) {
+            if skipped(w) || reached(w) {
                 // the sample the window's first piece would start with
                 out(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
-                return Ok(());
+                return Ok(!skipped(w));
             }
             // the window piece by piece, each from the state and mode the last ended in
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
             let (mut y, mut mode) = (y0, mode);
+            let mut locked = true;
             for (j, &(a, b, is_fine)) in pieces.iter().enumerate() {
                 // a piece's last sample is the next piece's (or window's) first
                 let last = w + 1 == n_win && j + 1 == pieces.len();
@@ -548,12 +568,14 @@ impl<'a> LongitudinalModel<'a> {
                     }
                     _ => fast.simulate_span_states(sc, (a, b), y, mode, last, &mut sample),
                 };
-                (y, mode) = run.map_err(|source| ExtendedError::Sim {
+                let end = run.map_err(|source| ExtendedError::Sim {
                     file: file.clone(),
                     source,
                 })?;
+                (y, mode) = (end.y, end.mode);
+                locked &= end.locked_throughout;
             }
-            Ok(())
+            Ok(locked)
         };
         // one integrator per thread (its matrix cache carries over between windows)
         let mut sims: Vec<_> = (0..threads)
@@ -564,9 +586,10 @@ impl<'a> LongitudinalModel<'a> {
                 )
             })
             .collect();
+        let mut locked = Vec::with_capacity(n_win);
         if let [(fast, fine)] = sims.as_mut_slice() {
             for w in 0..n_win {
-                window(w, fast, fine, &mut |t, y| rows.push(t, y))?;
+                locked.push(window(w, fast, fine, &mut |t, y| rows.push(t, y))?);
             }
         } else {
             // windows in parallel a batch at a time, each thread a contiguous run of them, the
@@ -575,19 +598,23 @@ impl<'a> LongitudinalModel<'a> {
             let batch = WINDOW_BATCH.max(threads);
             let all: Vec<usize> = (0..n_win).collect();
             for ws in all.chunks(batch) {
-                let samples: Vec<Vec<(f64, [f64; 2])>> = sims
+                let samples: Vec<(Vec<Sample>, Vec<bool>)> = sims
                     .par_iter_mut()
                     .zip(ws.par_chunks(ws.len().div_ceil(threads)))
                     .map(|((fast, fine), run)| {
                         let mut got = Vec::new();
+                        let mut run_locked = Vec::with_capacity(run.len());
                         for &w in run {
-                            window(w, fast, fine, &mut |t, y| got.push((t, y)))?;
+                            run_locked.push(window(w, fast, fine, &mut |t, y| got.push((t, y)))?);
                         }
-                        Ok(got)
+                        Ok((got, run_locked))
                     })
                     .collect::<Result<_, ExtendedError>>()?;
-                for (t, y) in samples.into_iter().flatten() {
-                    rows.push(t, y);
+                for (got, run_locked) in samples {
+                    for (t, y) in got {
+                        rows.push(t, y);
+                    }
+                    locked.extend(run_locked);
                 }
             }
         }
@@ -596,22 +623,35 @@ impl<'a> LongitudinalModel<'a> {
             vehicle_speed,
             engine_speed,
         };
-        // the rows of each window left out (a window's rows: from its start to the next one's;
-        // the first window's from the first row), found per window, not per row
-        for (w, _) in needed
-            .into_iter()
-            .flatten()
-            .enumerate()
-            .filter(|(_, need)| !**need)
-        {
-            let row_at = |s: f64| self.t.partition_point(|&x| x < s);
+        // the rows of each window left out (NaN) or read off the record (a window's rows: from
+        // its start to the next one's; the first window's from the first row), found per
+        // window, not per row
+        let row_at = |s: f64| self.t.partition_point(|&x| x < s);
+        for w in 0..n_win {
+            let (left_out, read) = (skipped(w), reached(w));
+            if !left_out && !read {
+                continue;
+            }
             let lo = if w == 0 { 0 } else { row_at(starts[w]) };
             let hi = starts.get(w + 1).map_or(self.t.len(), |&s| row_at(s));
-            for i in lo..hi {
-                out.vehicle_speed[i] = f64::NAN;
-                out.engine_speed[i] = f64::NAN;
+            match (&record, left_out) {
+                (Some(r), false) => {
+                    out.vehicle_speed[lo..hi].copy_from_slice(&r.vehicle_speed[lo..hi]);
+                    out.engine_speed[lo..hi].copy_from_slice(&r.engine_speed[lo..hi]);
+                }
+                _ => {
+                    out.vehicle_speed[lo..hi].fill(f64::NAN);
+                    out.engine_speed[lo..hi].fill(f64::NAN);
+                }
             }
         }
+        self.reach.keep(
+            theta,
+            &self.nominal,
+            locked,
+            &out.vehicle_speed,
+            &out.engine_speed,
+        );
         Ok(out)
     }
 }

@@ -4,6 +4,7 @@
 pub mod acceptance;
 pub mod altitude_offset;
 pub mod axle_model;
+pub mod capacity_reach;
 pub mod channel;
 pub mod clutch_engagements;
 pub mod compare;

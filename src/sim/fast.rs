@@ -320,7 +320,13 @@ impl<'a> FastDriveline<'a> {
     /// [`FastDriveline::simulate_span`] with each sample's time and state handed to `out`
     /// instead of a [`Trajectory`] (nothing else is computed for it: no torques, modes, gears
     /// or events), the last sample only when `last` is set; returns the state and clutch mode
-    /// at `t_end`. The states are those of [`FastDriveline::simulate_span`], bit for bit.
+    /// at `t_end` and whether the clutch was locked at every sample. The states are those of
+    /// [`FastDriveline::simulate_span`], bit for bit.
+    ///
+    /// A span whose clutch stays locked reads the clutch capacity only in the test that would
+    /// unlock it (`|M_trans| > (M_s/M_k)·M_k(x)`), so the same span with a larger capacity gives
+    /// the same states, bit for bit: what the diagnosis's fits of the capacity rest on
+    /// ([`crate::diagnose::capacity_reach`]).
     ///
     /// # Errors
     /// As [`FastDriveline::simulate_span`].
@@ -332,14 +338,19 @@ impl<'a> FastDriveline<'a> {
         mode0: ClutchMode,
         last: bool,
         out: &mut dyn FnMut(f64, &[f64; N_STATES]),
-    ) -> Result<([f64; N_STATES], ClutchMode), SimError> {
+    ) -> Result<SpanEnd, SimError> {
         let mut sink = StateSink {
             out,
             last,
             end: (y0, mode0),
+            locked: true,
         };
         self.run_span(sc, t_start, t_end, y0, mode0, &mut sink)?;
-        Ok(sink.end)
+        Ok(SpanEnd {
+            y: sink.end.0,
+            mode: sink.end.1,
+            locked_throughout: sink.locked,
+        })
     }
 
     /// The integration loop of [`FastDriveline::simulate_span`], its samples into `sink`.
@@ -590,6 +601,17 @@ impl Sink for Trajectory {
     }
 }
 
+/// Where a span of [`FastDriveline::simulate_span_states`] ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpanEnd {
+    /// State at the span's end.
+    pub y: [f64; N_STATES],
+    /// Clutch mode at the span's end.
+    pub mode: ClutchMode,
+    /// The clutch was locked at every sample of the span, the first and the last included.
+    pub locked_throughout: bool,
+}
+
 /// The states alone, to a caller's closure ([`FastDriveline::simulate_span_states`]).
 struct StateSink<'o> {
     out: &'o mut dyn FnMut(f64, &[f64; N_STATES]),
@@ -597,6 +619,8 @@ struct StateSink<'o> {
     last: bool,
     /// The last sample's state and mode.
     end: ([f64; N_STATES], ClutchMode),
+    /// Every sample so far had the clutch locked.
+    locked: bool,
 }
 
 impl Sink for StateSink<'_> {
@@ -611,6 +635,7 @@ impl Sink for StateSink<'_> {
         last: bool,
     ) {
         self.end = (*y, mode);
+        self.locked &= mode == ClutchMode::Locked;
         if !last || self.last {
             (self.out)(t, y);
         }

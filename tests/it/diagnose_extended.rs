@@ -534,3 +534,65 @@ fn the_windows_give_the_same_rows_on_any_number_of_integrators() {
         }
     }
 }
+
+/// A simulation that reads the windows whose clutch stayed locked at a lower capacity off that
+/// simulation's record (`diagnose::capacity_reach`) gives the rows of one that integrates them,
+/// bit for bit: on a proof drive without an effect (`fleetdyn prove --seed 1`, case 38) at 50 %
+/// and then 80 % of the file's capacity, every window and every other one, on one integrator
+/// and on two; a capacity below every record's reads none.
+#[test]
+fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
+    let (vf, log) = proof_drive(1, 38);
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.001);
+    let model = || {
+        LongitudinalModel::new(
+            &log,
+            &truth,
+            &ratios,
+            nominal,
+            LongitudinalConfig::default(),
+        )
+        .unwrap()
+    };
+    let at = |f: f64| {
+        let mut th = nominal;
+        th.set(Effect::ClutchSlip, f * nominal.get(Effect::ClutchSlip));
+        th
+    };
+    let with_records = model();
+    assert!(with_records.capacity_reach().best_for(&at(0.8)).is_none());
+    let low = with_records.simulate_windows_on(&at(0.5), None, 1).unwrap();
+    let record = with_records.capacity_reach().best_for(&at(0.8)).unwrap();
+    let n_win = with_records.window_starts().len();
+    let reached = record.locked.iter().filter(|&&l| l).count();
+    // both kinds of window: read off the record and integrated
+    assert!(reached > 5 && reached < n_win, "{reached} of {n_win}");
+    // at 50 % the clutch slips where it does not at the file's capacity
+    let fresh = model().simulate_windows_on(&at(0.5), None, 1).unwrap();
+    assert_eq!(low, fresh);
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+    let every_other: Vec<bool> = (0..n_win).map(|w| w % 2 == 1).collect();
+    for needed in [None, Some(every_other.as_slice())] {
+        for threads in [1, 2] {
+            let got = with_records
+                .simulate_windows_on(&at(0.8), needed, threads)
+                .unwrap();
+            let want = model().simulate_windows_on(&at(0.8), needed, 1).unwrap();
+            assert_eq!(bits(&got.vehicle_speed), bits(&want.vehicle_speed));
+            assert_eq!(bits(&got.engine_speed), bits(&want.engine_speed));
+            assert!(got.engine_speed.iter().any(|v| v.is_finite()));
+            assert!(low.engine_speed != got.engine_speed);
+        }
+    }
+    // below every record: nothing to read, the same rows
+    assert!(with_records.capacity_reach().best_for(&at(0.3)).is_none());
+    let got = with_records.simulate_windows_on(&at(0.3), None, 1).unwrap();
+    let want = model().simulate_windows_on(&at(0.3), None, 1).unwrap();
+    assert_eq!(bits(&got.engine_speed), bits(&want.engine_speed));
+    // another parameter moved: the records do not serve it
+    let mut heavier = at(0.8);
+    heavier.set(Effect::VehicleMass, 1.1 * nominal.get(Effect::VehicleMass));
+    assert!(with_records.capacity_reach().best_for(&heavier).is_none());
+}

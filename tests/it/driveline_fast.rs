@@ -443,11 +443,11 @@ fn the_states_only_path_gives_the_trajectorys_states_bit_for_bit() {
             })
             .unwrap();
         assert!(
-            end_a.0 == ya && end_a.1 == ma,
+            end_a.y == ya && end_a.mode == ma,
             "lash {lash}: first span's end"
         );
         let end_b = states
-            .simulate_span_states(&sc, (mid, 120.0), end_a.0, end_a.1, true, &mut |t, y| {
+            .simulate_span_states(&sc, (mid, 120.0), end_a.y, end_a.mode, true, &mut |t, y| {
                 got.push((t, *y))
             })
             .unwrap();
@@ -460,7 +460,11 @@ fn the_states_only_path_gives_the_trajectorys_states_bit_for_bit() {
             .collect();
         assert_eq!(got.len(), want.len(), "lash {lash}");
         assert!(got == want, "lash {lash}: states differ");
-        assert!(end_b.0 == *b.y.last().unwrap() && end_b.1 == *b.mode.last().unwrap());
+        assert!(end_b.y == *b.y.last().unwrap() && end_b.mode == *b.mode.last().unwrap());
+        // "locked throughout" is the trajectory's modes, every sample of the span
+        let all_locked = |m: &[ClutchMode]| m.iter().all(|&m| m == ClutchMode::Locked);
+        assert_eq!(end_a.locked_throughout, all_locked(&a.mode), "lash {lash}");
+        assert_eq!(end_b.locked_throughout, all_locked(&b.mode), "lash {lash}");
         // the drive switches clutch mode or gear, so the mode logic is exercised
         assert!(!a.events.is_empty() || !b.events.is_empty());
     }
