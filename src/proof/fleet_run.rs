@@ -179,29 +179,21 @@ pub fn run_fleet_proof(
     jobs: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<FleetProofRun, ProveError> {
-    use rayon::prelude::*;
     let t0 = std::time::Instant::now();
     let vf = VehicleFile::load(vehicle)?;
     let (trucks, drives) = fleet_plan(cfg);
     let scratch = out.join("scratch");
     std::fs::create_dir_all(&scratch).map_err(io(&scratch))?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
-        .build()
-        .map_err(|e| ProveError::Pool(e.to_string()))?;
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<FleetDriveResult> = pool.install(|| {
-        drives
-            .par_iter()
-            .map(|d| {
-                let dir = scratch.join(format!("t{:03}-d{:03}", d.truck, d.day));
-                let r = run_drive(d, &trucks[d.truck], vehicle, &vf, &dir);
-                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                progress(k, drives.len());
-                r
-            })
-            .collect()
-    });
+    let results: Vec<FleetDriveResult> = super::workers::on_workers(
+        jobs,
+        &drives,
+        |d| {
+            let dir = scratch.join(format!("t{:03}-d{:03}", d.truck, d.day));
+            run_drive(d, &trucks[d.truck], vehicle, &vf, &dir)
+        },
+        &|k| progress(k, drives.len()),
+    )
+    .map_err(ProveError::Pool)?;
     let _ = std::fs::remove_dir_all(&scratch);
     let elapsed_s = t0.elapsed().as_secs_f64();
     let vehicle = vehicle.display().to_string();

@@ -54,6 +54,7 @@ pub mod plan;
 pub mod run;
 pub mod score;
 pub mod summary;
+pub mod workers;
 
 pub use fleet::{FleetFault, FleetProofConfig};
 pub use fleet_run::{rescore_fleet_proof, run_fleet_proof, FleetProofRun};

@@ -280,29 +280,16 @@ pub fn run_proof(
     jobs: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ProofRun, ProveError> {
-    use rayon::prelude::*;
-    use std::sync::atomic::{AtomicUsize, Ordering};
     crate::model::vehicle::VehicleFile::load(vehicle)?;
     let cases: Vec<ProofCase> = plan(cfg)
         .into_iter()
         .filter(|c| cfg.only.is_empty() || cfg.only.contains(&c.index))
         .collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
-        .build()
-        .map_err(|e| ProveError::Pool(e.to_string()))?;
-    let done = AtomicUsize::new(0);
-    let outcomes: Vec<CaseOutcome> = pool.install(|| {
-        cases
-            .par_iter()
-            .with_max_len(1)
-            .map(|c| {
-                let o = run_case(c, vehicle, cfg, out);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cases.len());
-                o
-            })
-            .collect()
-    });
+    let outcomes: Vec<CaseOutcome> =
+        super::workers::on_workers(jobs, &cases, |c| run_case(c, vehicle, cfg, out), &|k| {
+            progress(k, cases.len())
+        })
+        .map_err(ProveError::Pool)?;
     let mut scores = Vec::new();
     let mut failed = Vec::new();
     for o in outcomes {
