@@ -493,14 +493,16 @@ impl<'a> LongitudinalModel<'a> {
             let m_d = p.k_d_nm_per_rad * twist + p.c_d_nm_s_per_rad * (y[5] - y[7]);
             (self.slip.slip_per_newton * m_d / p.wheel_radius_m).clamp(-0.2, 0.2)
         };
-        // window `w`'s samples (time; vehicle speed, engine speed), simulated by `fast` and
-        // `fine` (integrators of the window's steps: each window starts from the measured
-        // state, so a window's samples do not depend on which integrator ran the one before)
         // a record at a lower capacity, whose locked windows this simulation reads off it
+        // (`reached`), and the windows the caller leaves out (`skipped`)
         let record = self.reach.best_for(theta);
         let reached = |w: usize| record.as_ref().is_some_and(|r| r.locked[w]);
         let skipped = |w: usize| needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true));
-        // returns whether the clutch was locked at every sample of the window
+        // window `w`'s samples (time; vehicle speed, engine speed), simulated by `fast` and
+        // `fine` (integrators of the window's steps: each window starts from the measured
+        // state, so a window's samples do not depend on which integrator ran the one before);
+        // returns whether the clutch was locked at every sample of the window (a window
+        // read off the record: as the record found it; one left out: false)
         let window = |w: usize,
                       fast: &mut FastDriveline<'_>,
                       fine: &mut Option<FastDriveline<'_>>,
