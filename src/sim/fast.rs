@@ -375,7 +375,7 @@ impl<'a> FastDriveline<'a> {
             y[1] = y[0];
         }
         let gear_at = |t: f64| -> Result<usize, SimError> {
-            let g = sc.gear.eval_from(&cur.gear, t).round() as i64;
+            let g = round_to_i64(sc.gear.eval_from(&cur.gear, t));
             if g < 1 || g as usize > self.ratios.len() {
                 return Err(SimError::Gear {
                     gear: g,
@@ -555,6 +555,19 @@ impl<'a> FastDriveline<'a> {
     }
 }
 
+/// `x.round() as i64`, without the libm call for a value that is already whole (a recorded
+/// gear, every step): the conversion truncates toward zero, which for a whole `x` in `i64`'s
+/// range is `x` itself, the same as rounding; any other value (NaN, out of range, fractional)
+/// takes `round`. The x86-64 baseline has no rounding instruction, so `f64::round` is a call.
+fn round_to_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if t as f64 == x {
+        t
+    } else {
+        x.round() as i64
+    }
+}
+
 /// Where [`FastDriveline::run_span`] puts its samples.
 trait Sink {
     /// The sink reads the torques: they are computed for every sample.
@@ -642,4 +655,32 @@ impl Sink for StateSink<'_> {
     }
     fn event(&mut self, _e: Event) {}
     fn step(&mut self) {}
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn whole_values_round_to_themselves_and_the_others_as_round_does() {
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            12.0,
+            -3.0,
+            0.5,
+            1.5,
+            2.5,
+            -2.5,
+            3.4999999999999996,
+            1e300,
+            -1e300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            9.2e18,
+            -9.3e18,
+        ] {
+            assert_eq!(super::round_to_i64(x), x.round() as i64, "{x}");
+        }
+    }
 }
