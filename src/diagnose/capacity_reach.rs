@@ -21,9 +21,11 @@
 //!
 //! # What is kept
 //! Simulations whose capacity departs from the vehicle file's are recorded (those of the
-//! capacity's fits), with the same other parameters or not, the newest first, within
-//! [`REACH_BUDGET_BYTES`] of rows per model; none on a long drive
-//! ([`super::long_drive::is_long`]), whose memory is budgeted without them. Whether a record
+//! capacity's fits; one with no window locked throughout is not), whatever their other
+//! parameters, within [`REACH_BUDGET_BYTES`] of rows per model, the oldest dropped first when
+//! the budget is full; none on a long drive ([`super::long_drive::is_long`]), whose memory is
+//! budgeted without them. A simulation reads the record with its other parameters that lets
+//! it skip the most windows. Whether a record
 //! exists changes the time a simulation takes, never its outputs: the rows of a window are the
 //! same whether it was integrated or read from a record, so the diagnosis's results do not
 //! depend on the order its parallel fits ran in.
@@ -33,7 +35,7 @@ use crate::model::catalogue::Effect;
 use std::sync::{Arc, Mutex};
 
 /// Bytes of recorded rows a model keeps at most (two series of `f64` per record): 32 MiB, about
-/// 17 records of a 20 km drive at 100 Hz.
+/// 17 records of a 20-minute drive at 100 Hz.
 pub const REACH_BUDGET_BYTES: usize = 32 << 20;
 
 /// One recorded simulation: its parameters, which windows stayed locked, and its rows.
