@@ -24,7 +24,7 @@
 //! ([`ExplainConfig::measured`]: the slope sensor's offset against the altitude) is set to
 //! its measured value and kept out of the screens; its effect is named when the measured
 //! interval lies outside the vehicle file's own tolerance, and reported as consistent with the
-//! file otherwise ([`measured_round`]).
+//! file otherwise (`measured_round`).
 //!
 //! # Which signals
 //! An effect is fitted on the outputs of every model it changes: its own model, and for the
