@@ -2,8 +2,8 @@
 //!
 //! A drive's diagnosis is parallel inside (a fit's start grid, the candidate fits, the noise
 //! floor's copies). Run as items of one shared pool, a thread waiting for its own drive's
-//! parallel work steals another drive whole and finishes it first, so a drive's measured time
-//! holds other drives' work and the drives in flight pile up on one thread's stack. On workers
+//! parallel work can steal another drive whole and finish it first, so a drive's measured time
+//! can hold other drives' work and drives in flight can pile up on one thread's stack. On workers
 //! of their own, each drive runs from start to end on one thread, with its inner parallel work
 //! done in turn there: a drive's time is the core-seconds it took, and `jobs` drives are in
 //! flight at most. The outputs are the same whatever the thread count (the diagnosis is
