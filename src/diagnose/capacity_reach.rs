@@ -25,10 +25,9 @@
 //! parameters, within [`REACH_BUDGET_BYTES`] of rows per model, the oldest dropped first when
 //! the budget is full; none on a long drive ([`super::long_drive::is_long`]), whose memory is
 //! budgeted without them. A simulation reads the record with its other parameters that lets
-//! it skip the most windows. Whether a record
-//! exists changes the time a simulation takes, never its outputs: the rows of a window are the
-//! same whether it was integrated or read from a record, so the diagnosis's results do not
-//! depend on the order its parallel fits ran in.
+//! it skip the most windows. Whether a record exists changes the time a simulation takes, never
+//! its outputs: the rows of a window are the same whether it was integrated or read from a
+//! record, so the diagnosis's results do not depend on the order its parallel fits ran in.
 
 use super::effect_parameters::{index, Theta};
 use crate::model::catalogue::Effect;

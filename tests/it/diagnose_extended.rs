@@ -537,7 +537,8 @@ fn the_windows_give_the_same_rows_on_any_number_of_integrators() {
 
 /// A simulation that reads the windows whose clutch stayed locked at a lower capacity off that
 /// simulation's record (`diagnose::capacity_reach`) gives the rows of one that integrates them,
-/// bit for bit: on a proof drive without an effect (`fleetdyn prove --seed 1`, case 38) at 50 %
+/// bit for bit: on a proof drive without an effect (`fleetdyn prove --truth model --seed 1`,
+/// case 38, as `proof_drive` makes it) at 50 %
 /// and then 80 % of the file's capacity, every window and every other one, on one integrator
 /// and on two; a capacity below every record's reads none.
 #[test]
@@ -569,7 +570,7 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
     let reached = record.locked.iter().filter(|&&l| l).count();
     // both kinds of window: read off the record and integrated
     assert!(reached > 5 && reached < n_win, "{reached} of {n_win}");
-    // at 50 % the clutch slips where it does not at the file's capacity
+    // the first simulation, with no record to read, is a fresh model's
     let fresh = model().simulate_windows_on(&at(0.5), None, 1).unwrap();
     assert_eq!(low, fresh);
     let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
@@ -583,6 +584,7 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
             assert_eq!(bits(&got.vehicle_speed), bits(&want.vehicle_speed));
             assert_eq!(bits(&got.engine_speed), bits(&want.engine_speed));
             assert!(got.engine_speed.iter().any(|v| v.is_finite()));
+            // at 50 % the clutch slips where it does not at 80 %
             assert!(low.engine_speed != got.engine_speed);
         }
     }
