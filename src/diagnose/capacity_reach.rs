@@ -14,7 +14,12 @@
 //!
 //! So a simulation at capacity `c` with every other parameter the same as a recorded
 //! simulation at `c_ref ≤ c` ([`Reach`]) need not integrate the windows the record found locked
-//! throughout: their rows are the record's. A fit of the capacity (the start grid of 50–100 %
+//! throughout: their rows are the record's. A window where the clutch unlocked at `c_ref` is the
+//! same up to the whole step in which it first unlocked, for the same reason: the simulation
+//! takes it up at that step's start from the state the record kept
+//! ([`crate::sim::fast::FastDriveline::resume_span_states`]), and the rows up to that step's
+//! start are the record's (those after it are interpolated from samples the resumed simulation
+//! gives, the step's start the first of them). A fit of the capacity (the start grid of 50–100 %
 //! of the file's in 1.5 % steps, then the secant steps and the interval's) asks for the same
 //! drive at dozens of capacities, and only the windows where the clutch slips at some of them —
 //! launches, shifts, full-torque climbs — change between them.
@@ -31,6 +36,7 @@
 
 use super::effect_parameters::{index, Theta};
 use crate::model::catalogue::Effect;
+use crate::sim::fast::Resume;
 use std::sync::{Arc, Mutex};
 
 /// Bytes of recorded rows a model keeps at most (two series of `f64` per record): 32 MiB, about
@@ -47,6 +53,9 @@ pub struct Reach {
     /// Per window: integrated with the clutch locked at every sample (or read from a record
     /// of a lower capacity that was). A window the simulation left out is `false`.
     pub locked: Vec<bool>,
+    /// Per window that began locked and unlocked: its piece ([`super::simulation_windows`])
+    /// and the whole step of that piece where a larger capacity takes it up.
+    pub resume: Vec<Option<(usize, Resume)>>,
     /// Vehicle speed on the log's rows, m/s.
     pub vehicle_speed: Vec<f64>,
     /// Engine speed on the log's rows, rad/s.
@@ -54,10 +63,11 @@ pub struct Reach {
 }
 
 impl Reach {
-    /// Windows this record lets a simulation at `capacity_nm` skip.
+    /// Windows this record lets a simulation at `capacity_nm` skip or take up part-way.
     fn reaches(&self, key: &[u64; 16], capacity_nm: f64) -> usize {
         if &self.key == key && self.capacity_nm <= capacity_nm {
             self.locked.iter().filter(|&&l| l).count()
+                + self.resume.iter().filter(|r| r.is_some()).count()
         } else {
             0
         }
@@ -112,11 +122,13 @@ impl CapacityReach {
         let key = reach_key(theta);
         let c = theta.get(Effect::ClutchSlip);
         let records = self.records.lock().unwrap_or_else(|e| e.into_inner());
+        // among those that serve as many windows, the highest capacity: its windows unlock
+        // latest (capacities are positive, so their bits order as they do)
         records
             .iter()
             .map(|r| (r.reaches(&key, c), r))
             .filter(|(n, _)| *n > 0)
-            .max_by_key(|(n, _)| *n)
+            .max_by_key(|(n, r)| (*n, r.capacity_nm.to_bits()))
             .map(|(_, r)| Arc::clone(r))
     }
 
@@ -126,14 +138,14 @@ impl CapacityReach {
         &self,
         theta: &Theta,
         nominal: &Theta,
-        locked: Vec<bool>,
+        (locked, resume): (Vec<bool>, Vec<Option<(usize, Resume)>>),
         vehicle_speed: &[f64],
         engine_speed: &[f64],
     ) {
         let c = theta.get(Effect::ClutchSlip);
         if self.max_records == 0
             || c.to_bits() == nominal.get(Effect::ClutchSlip).to_bits()
-            || !locked.contains(&true)
+            || (!locked.contains(&true) && resume.iter().all(Option::is_none))
         {
             return;
         }
@@ -141,6 +153,7 @@ impl CapacityReach {
             key: reach_key(theta),
             capacity_nm: c,
             locked,
+            resume,
             vehicle_speed: vehicle_speed.to_vec(),
             engine_speed: engine_speed.to_vec(),
         });
@@ -171,14 +184,14 @@ mod tests {
         reach.keep(
             &theta(1500.0, 40e3),
             &nominal,
-            vec![true, false, true],
+            (vec![true, false, true], vec![None; 3]),
             &rows,
             &rows,
         );
         reach.keep(
             &theta(2000.0, 40e3),
             &nominal,
-            vec![true, true, true],
+            (vec![true, true, true], vec![None; 3]),
             &rows,
             &rows,
         );
@@ -205,8 +218,14 @@ mod tests {
         let nominal = theta(3000.0, 40e3);
         let rows = vec![0.0; 1000];
         let reach = CapacityReach::new(1000);
-        reach.keep(&nominal, &nominal, vec![true], &rows, &rows);
-        reach.keep(&theta(2000.0, 40e3), &nominal, vec![false], &rows, &rows);
+        reach.keep(&nominal, &nominal, (vec![true], vec![None]), &rows, &rows);
+        reach.keep(
+            &theta(2000.0, 40e3),
+            &nominal,
+            (vec![false], vec![None]),
+            &rows,
+            &rows,
+        );
         assert!(reach.best_for(&theta(3500.0, 40e3)).is_none());
         // a budget of two records
         let reach = CapacityReach {
@@ -214,7 +233,13 @@ mod tests {
             records: Mutex::default(),
         };
         for c in [1000.0, 1500.0, 2000.0] {
-            reach.keep(&theta(c, 40e3), &nominal, vec![true], &rows, &rows);
+            reach.keep(
+                &theta(c, 40e3),
+                &nominal,
+                (vec![true], vec![None]),
+                &rows,
+                &rows,
+            );
         }
         assert!(reach.best_for(&theta(1200.0, 40e3)).is_none());
         assert_eq!(

@@ -31,7 +31,7 @@ use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::signal::{interp_linear, LinearResampler};
-use crate::sim::fast::FastDriveline;
+use crate::sim::fast::{FastDriveline, Resume};
 use crate::sim::hybrid::{steady_state_locked, ClutchMode};
 use crate::sim::recorded::{scenario_from_view, RecordedScenario};
 use crate::table::{DriveLog, LogView};
@@ -51,12 +51,14 @@ pub struct LongitudinalConfig {
     /// Re-initialisation window, s.
     pub window_s: f64,
     /// Integration step, s, outside the spans about the torque reversals ([`fine_spans`], at
-    /// [`FINE_STEP_S`]); [`FINE_STEP_S`] everywhere when the drive-shaft lash is non-zero. The
+    /// [`FINE_STEP_S`]), and outside the drive-shaft lash's gap and its approach
+    /// ([`FastDriveline::with_gap_substeps`]: substeps of [`FINE_STEP_S`] there). The
     /// default is 5 ms. Why not 10 ms (the recording's row spacing): the exponential integrator
     /// ([`FastDriveline`]) holds the inputs and the road force over a step and detects clutch
     /// mode switches at step ends. At 10 ms three drives without an effect of the
     /// drawn-driving proof (`fleetdyn prove --seed 1`, `--seed 1001`) are named a 2–3 % weaker
-    /// clutch or a lash of 5·10⁻⁵ rad (a lash only switches the step to 1 ms); at 5 ms none of
+    /// clutch or (with the lash integrated at 1 ms on the whole drive) a lash of 5·10⁻⁵ rad,
+    /// which the step alone made fit better; at 5 ms none of
     /// the 84 no-effect drives of seven seeds is, and 2 ms does the same on seed 1. 1 ms
     /// everywhere costs about 110 s per drive-hour on a proof drive (9.9 s against 3.9 s at
     /// 10 ms; the budget is 60 s); 5 ms costs 4 % more than 10 ms (the seven seeds' median times
@@ -473,10 +475,12 @@ impl<'a> LongitudinalModel<'a> {
         let inputs = self.read_inputs(theta, p)?;
         let sc = &inputs.rec.scenario;
         let kappa = &inputs.kappa;
-        let dt = if tm.lash_rad > 0.0 {
-            self.cfg.dt_s.min(FINE_STEP_S)
+        let dt = self.cfg.dt_s;
+        // with a lash, the steps near and in its gap are cut to the fine step
+        let gap_substeps = if tm.lash_rad > 0.0 {
+            ((dt / FINE_STEP_S).round() as usize).max(1)
         } else {
-            self.cfg.dt_s
+            1
         };
         let fine_dt = (self.cfg.fine_at_reversals && dt > FINE_STEP_S).then_some(FINE_STEP_S);
         let fine_spans: &[(f64, f64)] = if fine_dt.is_some() { &self.fine } else { &[] };
@@ -498,16 +502,19 @@ impl<'a> LongitudinalModel<'a> {
         let record = self.reach.best_for(theta);
         let reached = |w: usize| record.as_ref().is_some_and(|r| r.locked[w]);
         let skipped = |w: usize| needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true));
+        // where the record lets window `w` be taken up part-way (its piece and whole step)
+        let resumed = |w: usize| record.as_ref().and_then(|r| r.resume[w]);
         // window `w`'s samples (time; vehicle speed, engine speed), simulated by `fast` and
         // `fine` (integrators of the window's steps: each window starts from the measured
         // state, so a window's samples do not depend on which integrator ran the one before);
         // returns whether the clutch was locked at every sample of the window (a window
-        // read off the record: as the record found it; one left out: false)
+        // read off the record: as the record found it; one left out: false) and where a
+        // larger capacity could take it up
         let window = |w: usize,
                       fast: &mut FastDriveline<'_>,
                       fine: &mut Option<FastDriveline<'_>>,
                       out: &mut dyn FnMut(f64, [f64; 2])|
-         -> Result<bool, ExtendedError> {
+         -> Result<WindowRun, ExtendedError> {
             let ta = starts[w];
             let tb = starts
                 .get(w + 1)
@@ -515,7 +522,7 @@ impl<'a> LongitudinalModel<'a> {
                 .unwrap_or(sc.t_end_s)
                 .min(sc.t_end_s);
             if tb - ta < dt {
-                return Ok(false);
+                return Ok(WindowRun::default());
             }
             let v0 = interp_linear(&self.t, &self.v_meas, ta).max(0.0);
             let gear = sc.gear.eval(ta + 1e-9).round() as usize;
@@ -548,50 +555,85 @@ impl<'a> LongitudinalModel<'a> {
                 // the steady twist carries the drive torque: in contact on its side
                 y0[6] += 0.5 * tm.lash_rad * y0[6].signum();
             }
-            if skipped(w) || reached(w) {
+            let skip = skipped(w);
+            if skip || reached(w) {
                 // the sample the window's first piece would start with
                 out(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
-                return Ok(!skipped(w));
+                return Ok(WindowRun {
+                    locked: !skip,
+                    ..WindowRun::default()
+                });
             }
-            // the window piece by piece, each from the state and mode the last ended in
+            // the window piece by piece, each from the state and mode the last ended in; a
+            // window the record takes up part-way from its piece `from.0` at step `from.1`
+            // (its first sample handed over for the rows before it, which the record gives)
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
+            let from = resumed(w);
+            if from.is_some() {
+                out(ta, [p.wheel_radius_m * y0[7], y0[0] * (1.0 + slip_of(&y0))]);
+            }
             let (mut y, mut mode) = (y0, mode);
-            let mut locked = true;
+            let (mut locked, mut first_unlock, mut taken_up_at) = (true, None, None);
             for (j, &(a, b, is_fine)) in pieces.iter().enumerate() {
+                let take_up = match from {
+                    Some((jr, _)) if j < jr => continue,
+                    Some((jr, r)) if j == jr => Some(r),
+                    _ => None,
+                };
                 // a piece's last sample is the next piece's (or window's) first
                 let last = w + 1 == n_win && j + 1 == pieces.len();
                 // the engine turns faster than the vehicle's speed carries it by the slip
                 let mut sample = |t: f64, y: &[f64; crate::sim::hybrid::N_STATES]| {
                     out(t, [p.wheel_radius_m * y[7], y[0] * (1.0 + slip_of(y))]);
                 };
-                let run = match (is_fine, fine.as_mut()) {
-                    (true, Some(f)) => {
+                let run = match (is_fine, fine.as_mut(), take_up) {
+                    (true, Some(f), Some(r)) => {
+                        // the step's start time, as the integrator computes it
+                        taken_up_at = Some(a + r.step() as f64 * f.step_s());
+                        f.resume_span_states(sc, (a, b), &r, last, &mut sample)
+                    }
+                    (true, Some(f), None) => {
                         f.simulate_span_states(sc, (a, b), y, mode, last, &mut sample)
                     }
-                    _ => fast.simulate_span_states(sc, (a, b), y, mode, last, &mut sample),
+                    (_, _, Some(r)) => {
+                        taken_up_at = Some(a + r.step() as f64 * fast.step_s());
+                        fast.resume_span_states(sc, (a, b), &r, last, &mut sample)
+                    }
+                    (_, _, None) => {
+                        fast.simulate_span_states(sc, (a, b), y, mode, last, &mut sample)
+                    }
                 };
                 let end = run.map_err(|source| ExtendedError::Sim {
                     file: file.clone(),
                     source,
                 })?;
+                if locked && !end.locked_throughout {
+                    first_unlock = end.first_unlock.map(|r| (j, r));
+                }
                 (y, mode) = (end.y, end.mode);
                 locked &= end.locked_throughout;
             }
-            Ok(locked)
+            Ok(WindowRun {
+                locked,
+                first_unlock,
+                taken_up_at,
+            })
         };
         // one integrator per thread (its matrix cache carries over between windows)
         let mut sims: Vec<_> = (0..threads)
             .map(|_| {
                 (
-                    FastDriveline::new(p, self.ratios, dt).with_lash(tm.lash_rad),
+                    FastDriveline::new(p, self.ratios, dt)
+                        .with_lash(tm.lash_rad)
+                        .with_gap_substeps(gap_substeps),
                     fine_dt.map(|f| FastDriveline::new(p, self.ratios, f).with_lash(tm.lash_rad)),
                 )
             })
             .collect();
-        let mut locked = Vec::with_capacity(n_win);
+        let mut runs = Vec::with_capacity(n_win);
         if let [(fast, fine)] = sims.as_mut_slice() {
             for w in 0..n_win {
-                locked.push(window(w, fast, fine, &mut |t, y| rows.push(t, y))?);
+                runs.push(window(w, fast, fine, &mut |t, y| rows.push(t, y))?);
             }
         } else {
             // windows in parallel a batch at a time, each thread a contiguous run of them, the
@@ -600,23 +642,23 @@ impl<'a> LongitudinalModel<'a> {
             let batch = WINDOW_BATCH.max(threads);
             let all: Vec<usize> = (0..n_win).collect();
             for ws in all.chunks(batch) {
-                let samples: Vec<(Vec<Sample>, Vec<bool>)> = sims
+                let samples: Vec<(Vec<Sample>, Vec<WindowRun>)> = sims
                     .par_iter_mut()
                     .zip(ws.par_chunks(ws.len().div_ceil(threads)))
                     .map(|((fast, fine), run)| {
                         let mut got = Vec::new();
-                        let mut run_locked = Vec::with_capacity(run.len());
+                        let mut run_runs = Vec::with_capacity(run.len());
                         for &w in run {
-                            run_locked.push(window(w, fast, fine, &mut |t, y| got.push((t, y)))?);
+                            run_runs.push(window(w, fast, fine, &mut |t, y| got.push((t, y)))?);
                         }
-                        Ok((got, run_locked))
+                        Ok((got, run_runs))
                     })
                     .collect::<Result<_, ExtendedError>>()?;
-                for (got, run_locked) in samples {
+                for (got, run_runs) in samples {
                     for (t, y) in got {
                         rows.push(t, y);
                     }
-                    locked.extend(run_locked);
+                    runs.extend(run_runs);
                 }
             }
         }
@@ -626,16 +668,20 @@ impl<'a> LongitudinalModel<'a> {
             engine_speed,
         };
         // the rows of each window left out (NaN) or read off the record (a window's rows: from
-        // its start to the next one's; the first window's from the first row), found per
+        // its start to the next one's, the first window's from the first row; a window taken
+        // up part-way: to the step it was taken up at, that step's row included), found per
         // window, not per row
         let row_at = |s: f64| self.t.partition_point(|&x| x < s);
-        for w in 0..n_win {
+        for (w, run) in runs.iter().enumerate() {
             let (left_out, read) = (skipped(w), reached(w));
-            if !left_out && !read {
+            if !left_out && !read && run.taken_up_at.is_none() {
                 continue;
             }
             let lo = if w == 0 { 0 } else { row_at(starts[w]) };
-            let hi = starts.get(w + 1).map_or(self.t.len(), |&s| row_at(s));
+            let hi = match run.taken_up_at {
+                Some(t) if !left_out && !read => self.t.partition_point(|&x| x <= t),
+                _ => starts.get(w + 1).map_or(self.t.len(), |&s| row_at(s)),
+            };
             match (&record, left_out) {
                 (Some(r), false) => {
                     out.vehicle_speed[lo..hi].copy_from_slice(&r.vehicle_speed[lo..hi]);
@@ -647,13 +693,26 @@ impl<'a> LongitudinalModel<'a> {
                 }
             }
         }
+        let kept = runs.iter().map(|r| (r.locked, r.first_unlock)).unzip();
         self.reach.keep(
             theta,
             &self.nominal,
-            locked,
+            kept,
             &out.vehicle_speed,
             &out.engine_speed,
         );
         Ok(out)
     }
+}
+
+/// How one window of [`LongitudinalModel::simulate_windows_on`] ran.
+#[derive(Debug, Default, Clone, Copy)]
+struct WindowRun {
+    /// The clutch was locked at every sample (a window read off a record: as the record found
+    /// it; one left out or too short: `false`).
+    locked: bool,
+    /// Where a larger capacity can take the window up: its piece and whole step.
+    first_unlock: Option<(usize, Resume)>,
+    /// The time of the step this simulation took the window up at, from a record.
+    taken_up_at: Option<f64>,
 }

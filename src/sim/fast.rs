@@ -30,10 +30,18 @@
 //! contact the step integrates the shifted twist `φ_d − s b/2` with the nominal matrices, in the
 //! gap it uses matrices without the shaft's spring and damper (cached per gear and mode like
 //! the others). Entering contact is detected at step ends, so the shaft overshoots the contact
-//! by at most `|ω_d − ω_w| dt`; callers that need impacts resolved use a smaller step.
+//! by at most `|ω_d − ω_w| dt`; callers that need impacts resolved use a smaller step, or
+//! substeps near the gap ([`FastDriveline::with_gap_substeps`]): a step that starts and ends in
+//! contact on one side with the twist beyond the play at least what the twist rate covers in
+//! the step (`s φ_d − b/2 ≥ |ω_d − ω_w| dt` at both ends) is taken whole, every other step as
+//! `m` substeps of `dt/m` (the whole step is tried first and dropped when its end fails the
+//! test). Away from the gap the shaft is a linear spring and the step is the nominal model's;
+//! where the play is taken up or opened, the step is the fine one.
 //! `b = 0` (the default) is the nominal model, bit for bit.
 
 use super::dopri::Stats;
+pub use super::fast_span::{Resume, SpanEnd};
+use super::fast_span::{Sink, StateSink};
 use super::hybrid::{ClutchMode, EngineInput, Event, Scenario, SimError, Trajectory, N_STATES};
 use crate::model::driveline::DrivelineParams;
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -53,16 +61,19 @@ struct Key {
     integrate: bool,
     /// Drive shaft in its lash gap: no shaft spring or damper.
     gap: bool,
+    /// One of the lash's substeps ([`FastDriveline::with_gap_substeps`]), not a whole step.
+    sub: bool,
 }
 
 impl Key {
-    /// Slot of this configuration in [`FastDriveline`]'s cache: 16 per gear.
+    /// Slot of this configuration in [`FastDriveline`]'s cache: 32 per gear.
     fn slot(self) -> usize {
-        (self.gear - 1) * 16
+        (self.gear - 1) * 32
             + usize::from(self.locked)
             + 2 * usize::from(self.pi)
             + 4 * usize::from(self.integrate)
             + 8 * usize::from(self.gap)
+            + 16 * usize::from(self.sub)
     }
 }
 
@@ -86,6 +97,8 @@ pub struct FastDriveline<'a> {
     dt: f64,
     /// Total drive-shaft play b, rad (0: none).
     lash: f64,
+    /// Substeps per step near and in the lash gap (1: whole steps throughout).
+    gap_substeps: usize,
     /// Discretised matrices per configuration, at [`Key::slot`].
     cache: Vec<Option<Box<(Phi, Gamma)>>>,
 }
@@ -98,7 +111,8 @@ impl<'a> FastDriveline<'a> {
             ratios,
             dt: dt_s,
             lash: 0.0,
-            cache: vec![None; 16 * ratios.len()],
+            gap_substeps: 1,
+            cache: vec![None; 32 * ratios.len()],
         }
     }
 
@@ -112,6 +126,22 @@ impl<'a> FastDriveline<'a> {
         };
         self.cache.iter_mut().for_each(|c| *c = None);
         self
+    }
+
+    /// The same integrator taking `m` substeps of `dt / m` wherever the drive shaft is in its
+    /// lash gap or near it, whole steps elsewhere (see the module documentation; `m` ≤ 1 or
+    /// a zero lash: whole steps throughout, bit for bit [`FastDriveline::with_lash`]). A step
+    /// whose shaft stays in contact on one side and clear of the gap is the whole step; each
+    /// substep hands over a sample, so the samples are `dt / m` apart there.
+    pub fn with_gap_substeps(mut self, m: usize) -> Self {
+        self.gap_substeps = m.max(1);
+        self.cache.iter_mut().for_each(|c| *c = None);
+        self
+    }
+
+    /// The step, s (also the output period outside the lash's substeps).
+    pub fn step_s(&self) -> f64 {
+        self.dt
     }
 
     /// Contact side of the drive shaft at twist `phi_d`: `+1`/`−1` in contact, `0` in the gap
@@ -219,7 +249,11 @@ impl<'a> FastDriveline<'a> {
     }
 
     fn discrete(&mut self, k: Key) -> &(Phi, Gamma) {
-        let dt = self.dt;
+        let dt = if k.sub {
+            self.dt / self.gap_substeps as f64
+        } else {
+            self.dt
+        };
         let slot = k.slot();
         if self.cache[slot].is_none() {
             let (a, b) = self.continuous(k);
@@ -313,7 +347,7 @@ impl<'a> FastDriveline<'a> {
             events: Vec::new(),
             stats: Stats::default(),
         };
-        self.run_span(sc, t_start, t_end, y0, mode0, &mut traj)?;
+        self.run_span(sc, (t_start, t_end), Start::At(y0, mode0), &mut traj)?;
         Ok(traj)
     }
 
@@ -339,220 +373,393 @@ impl<'a> FastDriveline<'a> {
         last: bool,
         out: &mut dyn FnMut(f64, &[f64; N_STATES]),
     ) -> Result<SpanEnd, SimError> {
+        self.span_states(sc, (t_start, t_end), Start::At(y0, mode0), last, out)
+    }
+
+    /// [`FastDriveline::simulate_span_states`] of `[t_start, t_end]` taken up at the whole
+    /// step `from` of an earlier simulation of the same span
+    /// ([`SpanEnd::first_unlock`]), clutch locked: the samples from that step's start on. With
+    /// every parameter the same except a clutch capacity at least the earlier one's, the
+    /// samples are those of simulating the whole span, bit for bit: up to that step the clutch
+    /// stayed locked, where a larger capacity changes nothing (see
+    /// [`FastDriveline::simulate_span_states`]), and the steps keep their times on the span's
+    /// grid.
+    ///
+    /// # Errors
+    /// As [`FastDriveline::simulate_span`].
+    pub fn resume_span_states(
+        &mut self,
+        sc: &Scenario,
+        span: (f64, f64),
+        from: &Resume,
+        last: bool,
+        out: &mut dyn FnMut(f64, &[f64; N_STATES]),
+    ) -> Result<SpanEnd, SimError> {
+        self.span_states(sc, span, Start::Resume(*from), last, out)
+    }
+
+    fn span_states(
+        &mut self,
+        sc: &Scenario,
+        span: (f64, f64),
+        start: Start,
+        last: bool,
+        out: &mut dyn FnMut(f64, &[f64; N_STATES]),
+    ) -> Result<SpanEnd, SimError> {
+        let (y0, mode0) = match start {
+            Start::At(y, m) => (y, m),
+            Start::Resume(r) => (r.y, ClutchMode::Locked),
+        };
         let mut sink = StateSink {
             out,
             last,
             end: (y0, mode0),
             locked: true,
         };
-        self.run_span(sc, t_start, t_end, y0, mode0, &mut sink)?;
+        let first_unlock = self.run_span(sc, span, start, &mut sink)?;
         Ok(SpanEnd {
             y: sink.end.0,
             mode: sink.end.1,
             locked_throughout: sink.locked,
+            first_unlock,
         })
     }
 
-    /// The integration loop of [`FastDriveline::simulate_span`], its samples into `sink`.
+    /// The integration loop of [`FastDriveline::simulate_span`], its samples into `sink`, from
+    /// `start`; returns the span's [`SpanEnd::first_unlock`].
     fn run_span<S: Sink>(
         &mut self,
         sc: &Scenario,
-        t_start: f64,
-        t_end: f64,
-        y0: [f64; N_STATES],
-        mode0: ClutchMode,
+        (t_start, t_end): (f64, f64),
+        start: Start,
         sink: &mut S,
-    ) -> Result<(), SimError> {
-        let p = self.p;
+    ) -> Result<Option<Resume>, SimError> {
         let dt = self.dt;
         let n = ((t_end - t_start) / dt).round() as usize;
         let cur = Cursors::default();
-        let mut y = y0;
-        let mut mode = mode0;
-        // vehicle held at standstill (only with `standstill_events`)
-        let mut stuck = sc.standstill_events && y0[7] == 0.0;
-        if mode == ClutchMode::Locked {
-            y[1] = y[0];
+        let (k0, mut w) = match start {
+            Start::At(y0, mode0) => (
+                0,
+                Walk {
+                    y: y0,
+                    mode: mode0,
+                    // vehicle held at standstill (only with `standstill_events`)
+                    stuck: sc.standstill_events && y0[7] == 0.0,
+                    gear: self.gear_at(sc, &cur, t_start + 0.5 * dt)?,
+                },
+            ),
+            Start::Resume(r) => {
+                let t = t_start + r.k as f64 * dt;
+                let walk = Walk {
+                    y: r.y,
+                    mode: ClutchMode::Locked,
+                    stuck: r.stuck,
+                    gear: self.gear_at(sc, &cur, t + 0.5 * dt)?,
+                };
+                (r.k, walk)
+            }
+        };
+        if w.mode == ClutchMode::Locked {
+            w.y[1] = w.y[0];
         }
-        let gear_at = |t: f64| -> Result<usize, SimError> {
-            let g = round_to_i64(sc.gear.eval_from(&cur.gear, t));
-            if g < 1 || g as usize > self.ratios.len() {
-                return Err(SimError::Gear {
-                    gear: g,
-                    t,
-                    max: self.ratios.len(),
+        let split = self.lash > 0.0 && self.gap_substeps > 1;
+        let mut trial_events = Vec::new();
+        // the last whole step begun with the clutch locked, until it first unlocks
+        let (mut resume, mut unlocked) = (None, false);
+        for k in k0..=n {
+            let t = t_start + k as f64 * dt;
+            unlocked |= w.mode != ClutchMode::Locked;
+            if !unlocked {
+                resume = Some(Resume {
+                    k,
+                    y: w.y,
+                    stuck: w.stuck,
                 });
             }
-            Ok(g as usize)
-        };
-        let mut gear = gear_at(t_start + 0.5 * dt)?;
-        let (je, jc) = (p.j_e_kg_m2, p.j_c_kg_m2);
-        let engine_torque = |t: f64, y: &[f64; N_STATES]| -> (f64, bool, f64) {
-            // (M_e in use, PI active in the matrices, ω_ref)
-            match &sc.engine {
-                EngineInput::Torque(m) => (m.eval_from(&cur.engine, t), false, 0.0),
-                EngineInput::SpeedReference(r) => {
-                    let w_ref = r.eval_from(&cur.engine, t);
-                    let raw = p.pi_kp_nm_s_per_rad * (w_ref - y[0]) + p.pi_ki_nm_per_rad * y[8];
-                    let lim = raw
-                        .max(p.engine_min_torque_nm)
-                        .min(p.engine_max_torque(y[0]));
-                    (lim, lim == raw, w_ref)
-                }
-            }
-        };
-        for k in 0..=n {
-            let t = t_start + k as f64 * dt;
-            let (me, pi_active, _) = engine_torque(t, &y);
-            if S::TORQUES {
-                let [_, mc, mp, md] = self.torques(gear, mode, &y, me);
-                let mtr = match mode {
-                    ClutchMode::Locked => self.m_trans_locked(me, mc),
-                    ClutchMode::Slipping(s) => {
-                        s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
-                    }
-                };
-                sink.sample(t, &y, mode, gear, [me, mc, mp, md, mtr], k == n);
-            } else {
-                sink.sample(t, &y, mode, gear, [0.0; 5], k == n);
-            }
+            let (me, pi_active, _) = self.engine_torque(sc, &cur, t, &w.y);
+            self.sample(sc, &cur, &w, t, me, k == n, sink);
             if k == n {
                 break;
             }
-            let tm = t + 0.5 * dt;
-            let g = gear_at(tm)?;
-            if g != gear {
-                sink.event(Event {
-                    t,
-                    kind: format!("gear_{gear}_to_{g}"),
-                });
-                gear = g;
+            if !split {
+                self.advance(sc, &cur, &mut w, t, false, (me, pi_active), &mut |e| {
+                    sink.event(e)
+                })?;
+                sink.step();
+                continue;
             }
-            // the engine torque at the step's start, as recorded above (same t, same state)
-            let me_start = me;
-            let (me_mid, _, w_ref) = match &sc.engine {
-                EngineInput::Torque(m) => (m.eval_from(&cur.engine, tm), false, 0.0),
-                EngineInput::SpeedReference(r) => {
-                    (me_start, pi_active, r.eval_from(&cur.engine, tm))
+            // with the lash's substeps: the whole step where the shaft stays in contact on
+            // one side, clear of the gap, at both its ends; the substeps elsewhere
+            let side = self.lash_side(w.y[6]);
+            if side != 0.0 && self.clear_of_gap(&w.y, side) {
+                let mut trial = w;
+                trial_events.clear();
+                self.advance(sc, &cur, &mut trial, t, false, (me, pi_active), &mut |e| {
+                    trial_events.push(e)
+                })?;
+                if self.lash_side(trial.y[6]) == side && self.clear_of_gap(&trial.y, side) {
+                    w = trial;
+                    trial_events.drain(..).for_each(|e| sink.event(e));
+                    sink.step();
+                    continue;
                 }
-            };
-            let m_trans_in = match mode {
-                ClutchMode::Locked => 0.0,
+            }
+            let h = dt / self.gap_substeps as f64;
+            for j in 0..self.gap_substeps {
+                let ts = t + j as f64 * h;
+                let (me_j, pi_j) = if j == 0 {
+                    (me, pi_active)
+                } else {
+                    let (m, pi, _) = self.engine_torque(sc, &cur, ts, &w.y);
+                    self.sample(sc, &cur, &w, ts, m, false, sink);
+                    (m, pi)
+                };
+                self.advance(sc, &cur, &mut w, ts, true, (me_j, pi_j), &mut |e| {
+                    sink.event(e)
+                })?;
+                sink.step();
+            }
+        }
+        Ok(if unlocked { resume } else { None })
+    }
+
+    /// The drive shaft in contact on `side` (±1) is clear of the lash gap: its twist beyond the
+    /// play is at least what its twist rate covers in one whole step, `s·φ_d − b/2 ≥ |ω_d − ω_w| dt`.
+    fn clear_of_gap(&self, y: &[f64; N_STATES], side: f64) -> bool {
+        side * y[6] - 0.5 * self.lash >= (y[5] - y[7]).abs() * self.dt
+    }
+
+    /// Gear at `t` from the scenario, checked against the gearbox.
+    fn gear_at(&self, sc: &Scenario, cur: &Cursors, t: f64) -> Result<usize, SimError> {
+        let g = round_to_i64(sc.gear.eval_from(&cur.gear, t));
+        if g < 1 || g as usize > self.ratios.len() {
+            return Err(SimError::Gear {
+                gear: g,
+                t,
+                max: self.ratios.len(),
+            });
+        }
+        Ok(g as usize)
+    }
+
+    /// (M_e in use, PI active in the matrices, ω_ref) at `t` in state `y`.
+    fn engine_torque(
+        &self,
+        sc: &Scenario,
+        cur: &Cursors,
+        t: f64,
+        y: &[f64; N_STATES],
+    ) -> (f64, bool, f64) {
+        let p = self.p;
+        match &sc.engine {
+            EngineInput::Torque(m) => (m.eval_from(&cur.engine, t), false, 0.0),
+            EngineInput::SpeedReference(r) => {
+                let w_ref = r.eval_from(&cur.engine, t);
+                let raw = p.pi_kp_nm_s_per_rad * (w_ref - y[0]) + p.pi_ki_nm_per_rad * y[8];
+                let lim = raw
+                    .max(p.engine_min_torque_nm)
+                    .min(p.engine_max_torque(y[0]));
+                (lim, lim == raw, w_ref)
+            }
+        }
+    }
+
+    /// Hands the sample at `t` (engine torque `me` in use) to `sink`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn sample<S: Sink>(
+        &self,
+        sc: &Scenario,
+        cur: &Cursors,
+        w: &Walk,
+        t: f64,
+        me: f64,
+        last: bool,
+        sink: &mut S,
+    ) {
+        if S::TORQUES {
+            let [_, mc, mp, md] = self.torques(w.gear, w.mode, &w.y, me);
+            let mtr = match w.mode {
+                ClutchMode::Locked => self.m_trans_locked(me, mc),
                 ClutchMode::Slipping(s) => {
-                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, tm))
+                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
                 }
             };
-            let v_start = p.wheel_radius_m * y[7];
-            let force = if stuck {
-                // held: the ground reaction cancels the drive-shaft torque
-                let [_, _, _, md0] = self.torques(gear, mode, &y, me_start);
-                md0 / p.wheel_radius_m
-            } else {
-                self.road_force(sc, &cur, tm, v_start)
-            };
-            let side = self.lash_side(y[6]);
-            let key = Key {
-                gear,
-                locked: mode == ClutchMode::Locked,
-                pi: pi_active,
-                integrate: matches!(sc.engine, EngineInput::SpeedReference(_)),
-                gap: side == 0.0,
-            };
-            // in contact the nominal matrices act on the twist beyond the play
-            let offset = side * 0.5 * self.lash;
-            let (phi, gamma) = self.discrete(key);
-            let u = SVector::<f64, N_IN>::new(me_mid, m_trans_in, force, w_ref);
-            let mut z = SVector::<f64, N_STATES>::from_column_slice(&y);
-            z[6] -= offset;
-            let mut z1 = phi * z + gamma * u;
-            z1[6] += offset;
-            y.copy_from_slice(z1.as_slice());
-            sink.step();
-            // mode switches at the step end
-            let t1 = t + dt;
-            if sc.standstill_events {
-                let v_end = p.wheel_radius_m * y[7];
-                let crossing = v_start != 0.0 && v_start * v_end <= 0.0;
-                // the forces at the step end matter only when held or when the speed crosses 0
-                if stuck || crossing {
-                    let (me1, _, _) = engine_torque(t1, &y);
-                    let [_, _, _, md1] = self.torques(gear, mode, &y, me1);
-                    let mg = p.mass_kg * p.gravity_m_per_s2;
-                    let drive = md1 / p.wheel_radius_m
-                        - mg * crate::model::driveline::grade_sine(
-                            sc.slope.eval_from(&cur.slope, t1),
-                        );
-                    let f0 = if sc.smoothing { 0.0 } else { 1.0 };
-                    let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
-                    if stuck {
-                        if drive.abs() > cap {
-                            stuck = false;
-                            sink.event(Event {
-                                t: t1,
-                                kind: "breakaway".into(),
-                            });
-                        } else {
-                            y[7] = 0.0;
-                        }
-                    } else if drive.abs() <= cap {
-                        stuck = true;
-                        y[7] = 0.0;
-                        sink.event(Event {
+            sink.sample(t, &w.y, w.mode, w.gear, [me, mc, mp, md, mtr], last);
+        } else {
+            sink.sample(t, &w.y, w.mode, w.gear, [0.0; 5], last);
+        }
+    }
+
+    /// One step from `t` (the whole step, or with `sub` one of the lash's substeps), `w` moved
+    /// to its end; `(me_start, pi_active)` is the engine torque at `t` as sampled. Gear changes
+    /// and mode switches go to `event`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &mut self,
+        sc: &Scenario,
+        cur: &Cursors,
+        w: &mut Walk,
+        t: f64,
+        sub: bool,
+        (me_start, pi_active): (f64, bool),
+        event: &mut dyn FnMut(Event),
+    ) -> Result<(), SimError> {
+        let p = self.p;
+        let dt = if sub {
+            self.dt / self.gap_substeps as f64
+        } else {
+            self.dt
+        };
+        let (je, jc) = (p.j_e_kg_m2, p.j_c_kg_m2);
+        let tm = t + 0.5 * dt;
+        let g = self.gear_at(sc, cur, tm)?;
+        if g != w.gear {
+            event(Event {
+                t,
+                kind: format!("gear_{}_to_{g}", w.gear),
+            });
+            w.gear = g;
+        }
+        let gear = w.gear;
+        let (me_mid, _, w_ref) = match &sc.engine {
+            EngineInput::Torque(m) => (m.eval_from(&cur.engine, tm), false, 0.0),
+            EngineInput::SpeedReference(r) => (me_start, pi_active, r.eval_from(&cur.engine, tm)),
+        };
+        let m_trans_in = match w.mode {
+            ClutchMode::Locked => 0.0,
+            ClutchMode::Slipping(s) => {
+                s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, tm))
+            }
+        };
+        let v_start = p.wheel_radius_m * w.y[7];
+        let force = if w.stuck {
+            // held: the ground reaction cancels the drive-shaft torque
+            let [_, _, _, md0] = self.torques(gear, w.mode, &w.y, me_start);
+            md0 / p.wheel_radius_m
+        } else {
+            self.road_force(sc, cur, tm, v_start)
+        };
+        let side = self.lash_side(w.y[6]);
+        let key = Key {
+            gear,
+            locked: w.mode == ClutchMode::Locked,
+            pi: pi_active,
+            integrate: matches!(sc.engine, EngineInput::SpeedReference(_)),
+            gap: side == 0.0,
+            sub,
+        };
+        // in contact the nominal matrices act on the twist beyond the play
+        let offset = side * 0.5 * self.lash;
+        let (phi, gamma) = self.discrete(key);
+        let u = SVector::<f64, N_IN>::new(me_mid, m_trans_in, force, w_ref);
+        let mut z = SVector::<f64, N_STATES>::from_column_slice(&w.y);
+        z[6] -= offset;
+        let mut z1 = phi * z + gamma * u;
+        z1[6] += offset;
+        w.y.copy_from_slice(z1.as_slice());
+        // mode switches at the step end
+        let t1 = t + dt;
+        if sc.standstill_events {
+            let v_end = p.wheel_radius_m * w.y[7];
+            let crossing = v_start != 0.0 && v_start * v_end <= 0.0;
+            // the forces at the step end matter only when held or when the speed crosses 0
+            if w.stuck || crossing {
+                let (me1, _, _) = self.engine_torque(sc, cur, t1, &w.y);
+                let [_, _, _, md1] = self.torques(gear, w.mode, &w.y, me1);
+                let mg = p.mass_kg * p.gravity_m_per_s2;
+                let drive = md1 / p.wheel_radius_m
+                    - mg * crate::model::driveline::grade_sine(sc.slope.eval_from(&cur.slope, t1));
+                let f0 = if sc.smoothing { 0.0 } else { 1.0 };
+                let cap = f0 * p.c_r1 * mg + sc.brake_n.eval_from(&cur.brake, t1);
+                if w.stuck {
+                    if drive.abs() > cap {
+                        w.stuck = false;
+                        event(Event {
                             t: t1,
-                            kind: "stop".into(),
+                            kind: "breakaway".into(),
                         });
+                    } else {
+                        w.y[7] = 0.0;
                     }
+                } else if drive.abs() <= cap {
+                    w.stuck = true;
+                    w.y[7] = 0.0;
+                    event(Event {
+                        t: t1,
+                        kind: "stop".into(),
+                    });
                 }
             }
-            match mode {
-                ClutchMode::Locked => {
-                    y[1] = y[0];
-                    let (me1, _, _) = engine_torque(t1, &y);
-                    let [_, mc1, _, _] = self.torques(gear, mode, &y, me1);
+        }
+        match w.mode {
+            ClutchMode::Locked => {
+                w.y[1] = w.y[0];
+                let (me1, _, _) = self.engine_torque(sc, cur, t1, &w.y);
+                let [_, mc1, _, _] = self.torques(gear, w.mode, &w.y, me1);
+                let mt = self.m_trans_locked(me1, mc1);
+                if mt.abs()
+                    > p.clutch_static_to_kinetic
+                        * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
+                {
+                    w.mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
+                    event(Event {
+                        t: t1,
+                        kind: "unlock".into(),
+                    });
+                }
+            }
+            ClutchMode::Slipping(s) => {
+                if s * (w.y[0] - w.y[1]) <= 0.0 {
+                    let wm = (je * w.y[0] + jc * w.y[1]) / (je + jc);
+                    let mut yt = w.y;
+                    yt[0] = wm;
+                    yt[1] = wm;
+                    let (me1, _, _) = self.engine_torque(sc, cur, t1, &yt);
+                    let [_, mc1, _, _] = self.torques(gear, ClutchMode::Locked, &yt, me1);
                     let mt = self.m_trans_locked(me1, mc1);
                     if mt.abs()
-                        > p.clutch_static_to_kinetic
+                        <= p.clutch_static_to_kinetic
                             * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
                     {
-                        mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
-                        sink.event(Event {
+                        w.mode = ClutchMode::Locked;
+                        w.y = yt;
+                        event(Event {
                             t: t1,
-                            kind: "unlock".into(),
+                            kind: "lock".into(),
                         });
-                    }
-                }
-                ClutchMode::Slipping(s) => {
-                    if s * (y[0] - y[1]) <= 0.0 {
-                        let w = (je * y[0] + jc * y[1]) / (je + jc);
-                        let mut yt = y;
-                        yt[0] = w;
-                        yt[1] = w;
-                        let (me1, _, _) = engine_torque(t1, &yt);
-                        let [_, mc1, _, _] = self.torques(gear, ClutchMode::Locked, &yt, me1);
-                        let mt = self.m_trans_locked(me1, mc1);
-                        if mt.abs()
-                            <= p.clutch_static_to_kinetic
-                                * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
-                        {
-                            mode = ClutchMode::Locked;
-                            y = yt;
-                            sink.event(Event {
-                                t: t1,
-                                kind: "lock".into(),
-                            });
-                        } else {
-                            mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
-                            sink.event(Event {
-                                t: t1,
-                                kind: "slip_reversal".into(),
-                            });
-                        }
+                    } else {
+                        w.mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
+                        event(Event {
+                            t: t1,
+                            kind: "slip_reversal".into(),
+                        });
                     }
                 }
             }
         }
         Ok(())
     }
+}
+
+/// Where [`FastDriveline::run_span`] starts: a state and clutch mode at the span's start, or a
+/// whole step of an earlier simulation of the span.
+#[derive(Clone, Copy)]
+enum Start {
+    At([f64; N_STATES], ClutchMode),
+    Resume(Resume),
+}
+
+/// Where a simulation stands between steps ([`FastDriveline::run_span`]).
+#[derive(Clone, Copy)]
+struct Walk {
+    y: [f64; N_STATES],
+    mode: ClutchMode,
+    /// Vehicle held at standstill (only with `standstill_events`).
+    stuck: bool,
+    /// Gear of the last step.
+    gear: usize,
 }
 
 /// `x.round() as i64`, without the libm call for a value that is already whole (a recorded
@@ -566,95 +773,6 @@ fn round_to_i64(x: f64) -> i64 {
     } else {
         x.round() as i64
     }
-}
-
-/// Where [`FastDriveline::run_span`] puts its samples.
-trait Sink {
-    /// The sink reads the torques: they are computed for every sample.
-    const TORQUES: bool;
-    /// Sample at `t` (the last of the span when `last`); `torques` is (M_e, M_c, M_p, M_d,
-    /// M_trans) in N·m when [`Sink::TORQUES`], else zeros.
-    fn sample(
-        &mut self,
-        t: f64,
-        y: &[f64; N_STATES],
-        mode: ClutchMode,
-        gear: usize,
-        torques: [f64; 5],
-        last: bool,
-    );
-    /// A mode switch or gear change.
-    fn event(&mut self, e: Event);
-    /// One accepted step.
-    fn step(&mut self);
-}
-
-impl Sink for Trajectory {
-    const TORQUES: bool = true;
-    fn sample(
-        &mut self,
-        t: f64,
-        y: &[f64; N_STATES],
-        mode: ClutchMode,
-        gear: usize,
-        torques: [f64; 5],
-        _last: bool,
-    ) {
-        self.t.push(t);
-        self.y.push(*y);
-        self.mode.push(mode);
-        self.torques.push(torques);
-        self.gear.push(gear);
-    }
-    fn event(&mut self, e: Event) {
-        self.events.push(e);
-    }
-    fn step(&mut self) {
-        self.stats.accepted += 1;
-    }
-}
-
-/// Where a span of [`FastDriveline::simulate_span_states`] ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SpanEnd {
-    /// State at the span's end.
-    pub y: [f64; N_STATES],
-    /// Clutch mode at the span's end.
-    pub mode: ClutchMode,
-    /// The clutch was locked at every sample of the span, the first and the last included.
-    pub locked_throughout: bool,
-}
-
-/// The states alone, to a caller's closure ([`FastDriveline::simulate_span_states`]).
-struct StateSink<'o> {
-    out: &'o mut dyn FnMut(f64, &[f64; N_STATES]),
-    /// Hand over the span's last sample too.
-    last: bool,
-    /// The last sample's state and mode.
-    end: ([f64; N_STATES], ClutchMode),
-    /// Every sample so far had the clutch locked.
-    locked: bool,
-}
-
-impl Sink for StateSink<'_> {
-    const TORQUES: bool = false;
-    fn sample(
-        &mut self,
-        t: f64,
-        y: &[f64; N_STATES],
-        mode: ClutchMode,
-        _gear: usize,
-        _torques: [f64; 5],
-        last: bool,
-    ) {
-        self.end = (*y, mode);
-        self.locked &= mode == ClutchMode::Locked;
-        if !last || self.last {
-            (self.out)(t, y);
-        }
-    }
-    fn event(&mut self, _e: Event) {}
-    fn step(&mut self) {}
 }
 
 #[cfg(test)]

@@ -568,8 +568,13 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
     let record = with_records.capacity_reach().best_for(&at(0.8)).unwrap();
     let n_win = with_records.window_starts().len();
     let reached = record.locked.iter().filter(|&&l| l).count();
-    // both kinds of window: read off the record and integrated
+    let taken_up = record.resume.iter().filter(|r| r.is_some()).count();
+    // all three kinds of window: read off the record, taken up part-way, integrated whole
     assert!(reached > 5 && reached < n_win, "{reached} of {n_win}");
+    assert!(
+        taken_up > 5 && reached + taken_up < n_win,
+        "{taken_up} taken up, {reached} read, of {n_win}"
+    );
     // the first simulation, with no record to read, is a fresh model's
     let fresh = model().simulate_windows_on(&at(0.5), None, 1).unwrap();
     assert_eq!(low, fresh);
@@ -593,6 +598,28 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
     let got = with_records.simulate_windows_on(&at(0.3), None, 1).unwrap();
     let want = model().simulate_windows_on(&at(0.3), None, 1).unwrap();
     assert_eq!(bits(&got.engine_speed), bits(&want.engine_speed));
+    // with a drive-shaft lash (its substeps near the gap): the same, read off and taken up
+    let lashed = |f: f64| {
+        let mut th = at(f);
+        th.set(Effect::DrivelineBacklash, 0.02);
+        th
+    };
+    with_records
+        .simulate_windows_on(&lashed(0.5), None, 1)
+        .unwrap();
+    let record = with_records
+        .capacity_reach()
+        .best_for(&lashed(0.8))
+        .unwrap();
+    assert!(record.resume.iter().any(|r| r.is_some()));
+    for threads in [1, 2] {
+        let got = with_records
+            .simulate_windows_on(&lashed(0.8), None, threads)
+            .unwrap();
+        let want = model().simulate_windows_on(&lashed(0.8), None, 1).unwrap();
+        assert_eq!(bits(&got.vehicle_speed), bits(&want.vehicle_speed));
+        assert_eq!(bits(&got.engine_speed), bits(&want.engine_speed));
+    }
     // another parameter moved: the records do not serve it
     let mut heavier = at(0.8);
     heavier.set(Effect::VehicleMass, 1.1 * nominal.get(Effect::VehicleMass));
