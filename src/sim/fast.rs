@@ -88,6 +88,45 @@ struct Cursors {
     slope: std::cell::Cell<usize>,
     brake: std::cell::Cell<usize>,
     clutch: std::cell::Cell<usize>,
+    /// The gear, the clutch capacity and the brake force over the constant piece last read.
+    held_gear: std::cell::Cell<Held>,
+    held_capacity: std::cell::Cell<Held>,
+    held_brake: std::cell::Cell<Held>,
+}
+
+/// A value read off a piece of an input where the input is constant: the piece's span
+/// `[t0, t1)` and the value (an empty span: nothing held). On such a piece
+/// [`super::inputs::Piece::eval`] is `v0 + 0·((t − t0)/(t1 − t0)) = v0 + 0` for every `t` in
+/// the span, the same bits, so the value read once serves the whole piece.
+#[derive(Clone, Copy, Default)]
+struct Held {
+    t0: f64,
+    t1: f64,
+    value: f64,
+}
+
+/// `f` of `input` at `t`, through `held` while `t` stays on the constant piece it was read on.
+#[inline]
+fn held_value(
+    input: &super::inputs::Piecewise,
+    cursor: &std::cell::Cell<usize>,
+    held: &std::cell::Cell<Held>,
+    t: f64,
+    f: impl Fn(f64) -> f64,
+) -> f64 {
+    let h = held.get();
+    if h.t0 <= t && t < h.t1 {
+        return h.value;
+    }
+    let k = input.piece_index_from(cursor, t);
+    let value = f(input.eval_piece(k, t));
+    let (t0, t1, v0, v1) = input.piece(k);
+    held.set(if v0.to_bits() == v1.to_bits() {
+        Held { t0, t1, value }
+    } else {
+        Held::default()
+    });
+    value
 }
 
 /// The exponential integrator bound to one vehicle and step.
@@ -279,7 +318,7 @@ impl<'a> FastDriveline<'a> {
         self.p.road_force(
             v,
             sc.slope.eval_from(&cur.slope, t),
-            sc.brake_n.eval_from(&cur.brake, t),
+            held_value(&sc.brake_n, &cur.brake, &cur.held_brake, t, |b| b),
             sc.smoothing,
         )
     }
@@ -529,9 +568,17 @@ impl<'a> FastDriveline<'a> {
         side * y[6] - 0.5 * self.lash >= (y[5] - y[7]).abs() * self.dt
     }
 
+    /// Kinetic clutch capacity at `t` from the scenario's clutch position, N·m.
+    #[inline]
+    fn capacity_at(&self, sc: &Scenario, cur: &Cursors, t: f64) -> f64 {
+        held_value(&sc.clutch_x, &cur.clutch, &cur.held_capacity, t, |x| {
+            self.clutch_capacity(x)
+        })
+    }
+
     /// Gear at `t` from the scenario, checked against the gearbox.
     fn gear_at(&self, sc: &Scenario, cur: &Cursors, t: f64) -> Result<usize, SimError> {
-        let g = round_to_i64(sc.gear.eval_from(&cur.gear, t));
+        let g = round_to_i64(held_value(&sc.gear, &cur.gear, &cur.held_gear, t, |g| g));
         if g < 1 || g as usize > self.ratios.len() {
             return Err(SimError::Gear {
                 gear: g,
@@ -581,9 +628,7 @@ impl<'a> FastDriveline<'a> {
             let [_, mc, mp, md] = self.torques(w.gear, w.mode, &w.y, me);
             let mtr = match w.mode {
                 ClutchMode::Locked => self.m_trans_locked(me, mc),
-                ClutchMode::Slipping(s) => {
-                    s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t))
-                }
+                ClutchMode::Slipping(s) => s * self.capacity_at(sc, cur, t),
             };
             sink.sample(t, &w.y, w.mode, w.gear, [me, mc, mp, md, mtr], last);
         } else {
@@ -629,9 +674,7 @@ impl<'a> FastDriveline<'a> {
         };
         let m_trans_in = match w.mode {
             ClutchMode::Locked => 0.0,
-            ClutchMode::Slipping(s) => {
-                s * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, tm))
-            }
+            ClutchMode::Slipping(s) => s * self.capacity_at(sc, cur, tm),
         };
         let v_start = p.wheel_radius_m * w.y[7];
         let force = if w.stuck {
@@ -699,10 +742,7 @@ impl<'a> FastDriveline<'a> {
                 let (me1, _, _) = self.engine_torque(sc, cur, t1, &w.y);
                 let [_, mc1, _, _] = self.torques(gear, w.mode, &w.y, me1);
                 let mt = self.m_trans_locked(me1, mc1);
-                if mt.abs()
-                    > p.clutch_static_to_kinetic
-                        * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
-                {
+                if mt.abs() > p.clutch_static_to_kinetic * self.capacity_at(sc, cur, t1) {
                     w.mode = ClutchMode::Slipping(if mt > 0.0 { 1.0 } else { -1.0 });
                     event(Event {
                         t: t1,
@@ -719,10 +759,7 @@ impl<'a> FastDriveline<'a> {
                     let (me1, _, _) = self.engine_torque(sc, cur, t1, &yt);
                     let [_, mc1, _, _] = self.torques(gear, ClutchMode::Locked, &yt, me1);
                     let mt = self.m_trans_locked(me1, mc1);
-                    if mt.abs()
-                        <= p.clutch_static_to_kinetic
-                            * self.clutch_capacity(sc.clutch_x.eval_from(&cur.clutch, t1))
-                    {
+                    if mt.abs() <= p.clutch_static_to_kinetic * self.capacity_at(sc, cur, t1) {
                         w.mode = ClutchMode::Locked;
                         w.y = yt;
                         event(Event {
@@ -777,6 +814,32 @@ fn round_to_i64(x: f64) -> i64 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_held_value_is_the_inputs_value_bit_for_bit_wherever_it_is_read() {
+        use super::super::inputs::Piecewise;
+        use super::{held_value, Held};
+        use std::cell::Cell;
+        // constant, linear, constant (a negative zero too), linear pieces
+        let input = Piecewise::new(vec![
+            (0.0, 1.0, 3.0, 3.0),
+            (1.0, 2.5, 3.0, 4.0),
+            (2.5, 4.0, -0.0, -0.0),
+            (4.0, 7.0, 4.0, 4.0),
+            (7.0, 9.0, 4.0, 1.5),
+        ])
+        .unwrap();
+        let f = |x: f64| 2.0 * x - 0.1;
+        let (cursor, held) = (Cell::new(0), Cell::new(Held::default()));
+        // forward in small and odd steps, then backward, across every knot and past the end
+        let mut ts: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.00937).collect();
+        ts.extend([1.0, 2.5, 4.0, 7.0, 9.0, 9.5, 3.9, 0.5, 2.5, 8.0, 4.0]);
+        for t in ts {
+            let want = f(input.eval(t));
+            let got = held_value(&input, &cursor, &held, t, f);
+            assert_eq!(got.to_bits(), want.to_bits(), "t {t}");
+        }
+    }
+
     #[test]
     fn whole_values_round_to_themselves_and_the_others_as_round_does() {
         for x in [
