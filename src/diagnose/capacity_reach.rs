@@ -26,11 +26,12 @@
 //!
 //! # What is kept
 //! Simulations whose capacity departs from the vehicle file's are recorded (those of the
-//! capacity's fits; one with no window locked throughout is not), whatever their other
-//! parameters, within [`REACH_BUDGET_BYTES`] of rows per model, the oldest dropped first when
-//! the budget is full; none on a long drive ([`super::long_drive::is_long`]), whose memory is
-//! budgeted without them. A simulation reads the record with its other parameters that lets
-//! it skip the most windows. Whether a record exists changes the time a simulation takes, never
+//! capacity's fits; one with no window locked throughout and none to take up is not), whatever
+//! their other parameters, within [`REACH_BUDGET_BYTES`] of rows per model (plus one state per
+//! window to take up), the oldest dropped first when the budget is full; none on a long drive
+//! ([`super::long_drive::is_long`]), whose memory is budgeted without them. A simulation reads
+//! the record with its other parameters that serves the most windows, the highest capacity
+//! among equals. Whether a record exists changes the time a simulation takes, never
 //! its outputs: the rows of a window are the same whether it was integrated or read from a
 //! record, so the diagnosis's results do not depend on the order its parallel fits ran in.
 
