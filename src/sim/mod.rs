@@ -9,6 +9,7 @@ pub mod axle_summary;
 pub mod axle_validate;
 pub mod dopri;
 pub mod fast;
+pub mod fast_inputs;
 pub mod fast_span;
 pub mod hybrid;
 pub mod inputs;
