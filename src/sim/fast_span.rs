@@ -1,5 +1,5 @@
 //! Where the fast driveline integrator ([`super::fast::FastDriveline`]) hands its samples: a
-//! whole [`Trajectory`] or the states alone ([`StateSink`]), and what a span of states returns
+//! whole [`Trajectory`] or the states alone (`StateSink`), and what a span of states returns
 //! ([`SpanEnd`], with the step a simulation at a larger clutch capacity can resume from,
 //! [`Resume`]).
 
@@ -54,6 +54,8 @@ impl Sink for Trajectory {
 }
 
 /// Where a span of [`FastDriveline::simulate_span_states`] ended.
+///
+/// [`FastDriveline::simulate_span_states`]: super::fast::FastDriveline::simulate_span_states
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpanEnd {
     /// State at the span's end.
@@ -88,7 +90,8 @@ impl Resume {
     }
 }
 
-/// The states alone, to a caller's closure ([`FastDriveline::simulate_span_states`]).
+/// The states alone, to a caller's closure
+/// ([`FastDriveline::simulate_span_states`](super::fast::FastDriveline::simulate_span_states)).
 pub(super) struct StateSink<'o> {
     pub(super) out: &'o mut dyn FnMut(f64, &[f64; N_STATES]),
     /// Hand over the span's last sample too.
