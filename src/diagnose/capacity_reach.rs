@@ -133,6 +133,13 @@ impl CapacityReach {
             .map(|(_, r)| Arc::clone(r))
     }
 
+    /// Whether a simulation at `theta` would be recorded (when it has windows to serve): records
+    /// are kept and its capacity departs from `nominal`'s.
+    pub fn keeps(&self, theta: &Theta, nominal: &Theta) -> bool {
+        self.max_records > 0
+            && theta.get(Effect::ClutchSlip).to_bits() != nominal.get(Effect::ClutchSlip).to_bits()
+    }
+
     /// Records a simulation at `theta` whose capacity departs from `nominal`'s (others are not
     /// kept), the oldest record dropped when the budget is full.
     pub fn keep(
@@ -144,8 +151,7 @@ impl CapacityReach {
         engine_speed: &[f64],
     ) {
         let c = theta.get(Effect::ClutchSlip);
-        if self.max_records == 0
-            || c.to_bits() == nominal.get(Effect::ClutchSlip).to_bits()
+        if !self.keeps(theta, nominal)
             || (!locked.contains(&true) && resume.iter().all(Option::is_none))
         {
             return;

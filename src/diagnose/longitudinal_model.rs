@@ -500,6 +500,8 @@ impl<'a> LongitudinalModel<'a> {
         // a record at a lower capacity, whose locked windows this simulation reads off it
         // (`reached`), and the windows the caller leaves out (`skipped`)
         let record = self.reach.best_for(theta);
+        // whether this simulation will be recorded: only then are the first unlocks kept
+        let recorded = self.reach.keeps(theta, &self.nominal);
         let reached = |w: usize| record.as_ref().is_some_and(|r| r.locked[w]);
         let skipped = |w: usize| needed.is_some_and(|nd| !nd.get(w).copied().unwrap_or(true));
         // where the record lets window `w` be taken up part-way (its piece and whole step)
@@ -565,7 +567,7 @@ impl<'a> LongitudinalModel<'a> {
                 });
             }
             // the window piece by piece, each from the state and mode the last ended in; a
-            // window the record takes up part-way from its piece `from.0` at step `from.1`
+            // window the record takes up part-way at a whole step of one of its pieces
             // (its first sample handed over for the rows before it, which the record gives)
             let pieces = stepped_pieces(ta, tb, dt, fine_spans);
             let from = resumed(w);
@@ -625,8 +627,13 @@ impl<'a> LongitudinalModel<'a> {
                 (
                     FastDriveline::new(p, self.ratios, dt)
                         .with_lash(tm.lash_rad)
-                        .with_gap_substeps(gap_substeps),
-                    fine_dt.map(|f| FastDriveline::new(p, self.ratios, f).with_lash(tm.lash_rad)),
+                        .with_gap_substeps(gap_substeps)
+                        .tracking_first_unlock(recorded),
+                    fine_dt.map(|f| {
+                        FastDriveline::new(p, self.ratios, f)
+                            .with_lash(tm.lash_rad)
+                            .tracking_first_unlock(recorded)
+                    }),
                 )
             })
             .collect();

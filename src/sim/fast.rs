@@ -87,6 +87,9 @@ pub struct FastDriveline<'a> {
     lash: f64,
     /// Substeps per step near and in the lash gap (1: whole steps throughout).
     gap_substeps: usize,
+    /// Keep the state at each whole step's start until the clutch first unlocks
+    /// ([`SpanEnd::first_unlock`]).
+    track_unlock: bool,
     /// Discretised matrices per configuration, at [`Key::slot`].
     cache: Vec<Option<Box<(Phi, Gamma)>>>,
 }
@@ -100,6 +103,7 @@ impl<'a> FastDriveline<'a> {
             dt: dt_s,
             lash: 0.0,
             gap_substeps: 1,
+            track_unlock: false,
             cache: vec![None; 32 * ratios.len()],
         }
     }
@@ -124,6 +128,14 @@ impl<'a> FastDriveline<'a> {
     pub fn with_gap_substeps(mut self, m: usize) -> Self {
         self.gap_substeps = m.max(1);
         self.cache.iter_mut().for_each(|c| *c = None);
+        self
+    }
+
+    /// The same integrator keeping, when `on`, the state at each whole step's start until the
+    /// clutch first unlocks, for [`SpanEnd::first_unlock`] (off: `None` there, and no state is
+    /// copied per step). The samples are the same either way.
+    pub fn tracking_first_unlock(mut self, on: bool) -> Self {
+        self.track_unlock = on;
         self
     }
 
@@ -342,7 +354,9 @@ impl<'a> FastDriveline<'a> {
     /// [`FastDriveline::simulate_span`] with each sample's time and state handed to `out`
     /// instead of a [`Trajectory`] (nothing else is computed for it: no torques, modes, gears
     /// or events), the last sample only when `last` is set; returns the state and clutch mode
-    /// at `t_end` and whether the clutch was locked at every sample. The states are those of
+    /// at `t_end`, whether the clutch was locked at every sample, and (with
+    /// [`FastDriveline::tracking_first_unlock`]) the whole step a larger capacity can take the
+    /// span up at ([`SpanEnd::first_unlock`]). The states are those of
     /// [`FastDriveline::simulate_span`], bit for bit.
     ///
     /// A span whose clutch stays locked reads the clutch capacity only in the test that would
@@ -457,7 +471,7 @@ impl<'a> FastDriveline<'a> {
         for k in k0..=n {
             let t = t_start + k as f64 * dt;
             unlocked |= w.mode != ClutchMode::Locked;
-            if !unlocked {
+            if self.track_unlock && !unlocked {
                 resume = Some(Resume {
                     k,
                     y: w.y,

@@ -66,7 +66,8 @@ pub struct SpanEnd {
     pub locked_throughout: bool,
     /// Where the span can be taken up again with a larger clutch capacity: the start of the
     /// last whole step that began with the clutch locked before it first unlocked (`None`
-    /// when it never unlocked, or began slipping).
+    /// when it never unlocked, began slipping, or the integrator did not track it:
+    /// [`FastDriveline::tracking_first_unlock`](super::fast::FastDriveline::tracking_first_unlock)).
     pub first_unlock: Option<Resume>,
 }
 

@@ -606,7 +606,8 @@ fn a_span_taken_up_at_its_first_unlock_with_a_larger_capacity_is_the_whole_simul
     let states = |p: &fleetdyn::model::driveline::DrivelineParams, lash: f64, from: Option<_>| {
         let mut fast = FastDriveline::new(p, r, 5e-3)
             .with_lash(lash)
-            .with_gap_substeps(5);
+            .with_gap_substeps(5)
+            .tracking_first_unlock(true);
         let mut got: Vec<(f64, [f64; N_STATES])> = Vec::new();
         let end = match from {
             Some(from) => fast.resume_span_states(&sc, (0.0, 120.0), &from, true, &mut |t, y| {
