@@ -153,13 +153,13 @@ impl<'a> AxleModel<'a> {
         let traj = HalfTruck::new(a)
             .with_max_step(AXLE_STEP_S)
             .with_extensions(tm.axle_ext)
-            .simulate(&rec.inputs, &rec.t_s, Start::Steady);
+            .simulate_pressures(&rec.inputs, &rec.t_s, Start::Steady);
         Ok(Some(NominalRun {
             params: a.clone(),
             ext: tm.axle_ext,
             inputs: rec.inputs,
             t_s: rec.t_s,
-            pressures: traj.pressure_pa,
+            pressures: traj,
         }))
     }
 }

@@ -137,6 +137,11 @@ pub struct HalfTruck<'a> {
     st: StaticState,
     m_inv: M5,
     k: M5,
+    /// `M⁻¹ K`, and `M⁻¹ d` of the damper and bellow compression directions: the accelerations
+    /// per unit state and per unit force (the step's products, formed once).
+    m_inv_k: M5,
+    m_inv_damper_d: [V5; 3],
+    m_inv_bellow_d: [V5; 3],
     /// Constant generalised forces of the preloads (tyres, bellows) at q = 0.
     q_pre: V5,
     /// Σ m J_w (gravity normal to the road), Σ m J_u (along the road).
@@ -274,6 +279,9 @@ impl<'a> HalfTruck<'a> {
             st,
             m_inv,
             k,
+            m_inv_k: m_inv * k,
+            m_inv_damper_d: damper_d.map(|d| m_inv * d),
+            m_inv_bellow_d: bellow_d.map(|d| m_inv * d),
             q_pre,
             g_w,
             g_u,
@@ -428,15 +436,30 @@ impl<'a> HalfTruck<'a> {
         }
     }
 
-    /// Accelerations q̈ for state (q, q̇) under external forces `qe`.
+    /// Accelerations q̈ = M⁻¹ (Q_ext − K q + P(q) − Σ F_i(d_i·q̇) d_i) for state (q, q̇), with
+    /// `ae = M⁻¹ Q_ext` the external forces' part ([`HalfTruck::forced`]), P the bellows'
+    /// progression and F_i the damper tables.
     #[inline]
-    fn accel(&self, q: &V5, qd: &V5, qe: &V5) -> V5 {
-        let mut f = qe - self.k * q + self.progression(q);
+    fn accel(&self, q: &V5, qd: &V5, ae: &V5) -> V5 {
+        let mut a = ae - self.m_inv_k * q;
+        if self.ext.bellow_progression_per_m != 0.0 {
+            for i in 0..3 {
+                let c = self.bellow_d[i].dot(q);
+                let k = self.p.bellow_stiffness(Axle::ALL[i]);
+                a -= (self.bellow_spring(k, c) - k * c) * self.m_inv_bellow_d[i];
+            }
+        }
         for i in 0..3 {
             let rate = self.damper_d[i].dot(qd);
-            f -= self.dampers[i].force(rate) * self.damper_d[i];
+            a -= self.dampers[i].force(rate) * self.m_inv_damper_d[i];
         }
-        self.m_inv * f
+        a
+    }
+
+    /// `M⁻¹ Q_ext`: the accelerations the external forces at time `t` give ([`HalfTruck::external`]).
+    #[inline]
+    fn forced(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> V5 {
+        self.m_inv * self.external(&self.longitudinal_with(u, t, c))
     }
 
     /// The steady state (q̇ = 0, q̈ = 0) under constant longitudinal forces: `K q = Q_ext`.
@@ -481,8 +504,8 @@ impl<'a> HalfTruck<'a> {
     pub fn rhs(&self, u: &AxleInputs, t: f64, y: &[f64], dy: &mut [f64]) {
         let q = V5::from_column_slice(&y[..5]);
         let qd = V5::from_column_slice(&y[5..10]);
-        let qe = self.external(&self.longitudinal(u, t));
-        let qdd = self.accel(&q, &qd, &qe);
+        let ae = self.forced(u, t, &mut Cursor::default());
+        let qdd = self.accel(&q, &qd, &ae);
         dy[..5].copy_from_slice(qd.as_slice());
         dy[5..].copy_from_slice(qdd.as_slice());
     }
@@ -490,8 +513,42 @@ impl<'a> HalfTruck<'a> {
     /// Simulates from `t_out[0]` and samples the outputs at every `t_out` (increasing, s).
     pub fn simulate(&self, u: &AxleInputs, t_out: &[f64], start: Start) -> AxleTrajectory {
         let mut out = AxleTrajectory::default();
+        let n = t_out.len();
+        for v in out
+            .normal_n
+            .iter_mut()
+            .chain(out.pressure_pa.iter_mut())
+            .chain(out.travel_m.iter_mut())
+        {
+            v.reserve(n);
+        }
+        self.integrate(u, t_out, start, |q, qd, t| self.sample(q, qd, t, &mut out));
+        out
+    }
+
+    /// The bellow gauge pressures front, rear, tag at every `t_out` (increasing, s), Pa: the
+    /// [`AxleTrajectory::pressure_pa`] of [`HalfTruck::simulate`], bit for bit, without the
+    /// other outputs.
+    pub fn simulate_pressures(&self, u: &AxleInputs, t_out: &[f64], start: Start) -> [Vec<f64>; 3] {
+        let mut out: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(t_out.len()));
+        self.integrate(u, t_out, start, |q, _, _| {
+            for (i, p) in self.pressures(q).into_iter().enumerate() {
+                out[i].push(p);
+            }
+        });
+        out
+    }
+
+    /// Integrates from `t_out[0]` and hands the state (q, q̇) at every `t_out` to `at`.
+    fn integrate(
+        &self,
+        u: &AxleInputs,
+        t_out: &[f64],
+        start: Start,
+        mut at: impl FnMut(&V5, &V5, f64),
+    ) {
         let Some(&t0) = t_out.first() else {
-            return out;
+            return;
         };
         let (mut q, mut qd) = match start {
             Start::Static => (V5::zeros(), V5::zeros()),
@@ -503,24 +560,15 @@ impl<'a> HalfTruck<'a> {
         };
         let mut t = t0;
         let mut cur = Cursor::default();
-        let n = t_out.len();
-        for v in out
-            .normal_n
-            .iter_mut()
-            .chain(out.pressure_pa.iter_mut())
-            .chain(out.travel_m.iter_mut())
-        {
-            v.reserve(n);
-        }
         for &tk in t_out {
             let span = tk - t;
             if span > 0.0 {
                 let steps = (span / self.h_max).ceil().max(1.0) as usize;
                 let h = span / steps as f64;
-                let mut qe0 = self.external(&self.longitudinal_with(u, t, &mut cur));
+                let mut qe0 = self.forced(u, t, &mut cur);
                 for _ in 0..steps {
-                    let qe1 = self.external(&self.longitudinal_with(u, t + 0.5 * h, &mut cur));
-                    let qe2 = self.external(&self.longitudinal_with(u, t + h, &mut cur));
+                    let qe1 = self.forced(u, t + 0.5 * h, &mut cur);
+                    let qe2 = self.forced(u, t + h, &mut cur);
                     let k1v = self.accel(&q, &qd, &qe0);
                     let k1x = qd;
                     let k2x = qd + 0.5 * h * k1v;
@@ -536,18 +584,23 @@ impl<'a> HalfTruck<'a> {
                 }
                 t = tk;
             }
-            self.sample(&q, &qd, tk, &mut out);
+            at(&q, &qd, tk);
         }
-        out
+    }
+
+    /// Bellow gauge pressures front, rear, tag at state q, Pa (`p = F/A_eff`).
+    fn pressures(&self, q: &V5) -> [f64; 3] {
+        let b = self.bellow_forces(q);
+        [0, 1, 2].map(|i| b[i] / self.p.bellow_area(Axle::ALL[i]))
     }
 
     fn sample(&self, q: &V5, qd: &V5, t: f64, out: &mut AxleTrajectory) {
         let n = self.normal_forces(q);
-        let b = self.bellow_forces(q);
+        let p = self.pressures(q);
         out.t_s.push(t);
         for i in 0..3 {
             out.normal_n[i].push(n[i]);
-            out.pressure_pa[i].push(b[i] / self.p.bellow_area(Axle::ALL[i]));
+            out.pressure_pa[i].push(p[i]);
             out.travel_m[i].push((self.chassis_above[i] - self.axle_w[i]).dot(q));
         }
         out.pitch_rad.push(q[TH]);

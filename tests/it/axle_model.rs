@@ -5,7 +5,7 @@
 use crate::common::fixture;
 use fleetdyn::model::axle::{Axle, AxleParams};
 use fleetdyn::model::vehicle::VehicleFile;
-use fleetdyn::sim::axle::{AxleInputs, HalfTruck, Longitudinal, Start};
+use fleetdyn::sim::axle::{AxleExtensions, AxleInputs, HalfTruck, Longitudinal, Start};
 use fleetdyn::sim::inputs::Piecewise;
 
 pub fn seed_truck() -> AxleParams {
@@ -294,4 +294,20 @@ fn the_diagnosis_step_keeps_the_fixture_pressures_within_5_percent_of_the_sensor
         (ss / n as f64).sqrt()
     );
     assert!(worst <= 50.0, "largest difference {worst} Pa");
+    // the diagnosis's pressures-only simulation gives the same bits, with extensions too
+    let ext = AxleExtensions {
+        torque_reaction: 0.2,
+        bellow_progression_per_m: 4.0,
+        grade_height_offset_m: 0.3,
+    };
+    for model in [coarse.clone(), coarse.clone().with_extensions(ext)] {
+        let full = model.simulate(&rec.inputs, &rec.t_s, Start::Steady);
+        let only = model.simulate_pressures(&rec.inputs, &rec.t_s, Start::Steady);
+        for i in 0..3 {
+            assert_eq!(full.pressure_pa[i].len(), only[i].len());
+            for (x, y) in full.pressure_pa[i].iter().zip(&only[i]) {
+                assert_eq!(x.to_bits(), y.to_bits());
+            }
+        }
+    }
 }
