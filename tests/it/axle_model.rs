@@ -303,9 +303,9 @@ fn the_diagnosis_step_keeps_the_fixture_pressures_within_5_percent_of_the_sensor
     for model in [coarse.clone(), coarse.clone().with_extensions(ext)] {
         let full = model.simulate(&rec.inputs, &rec.t_s, Start::Steady);
         let only = model.simulate_pressures(&rec.inputs, &rec.t_s, Start::Steady);
-        for i in 0..3 {
-            assert_eq!(full.pressure_pa[i].len(), only[i].len());
-            for (x, y) in full.pressure_pa[i].iter().zip(&only[i]) {
+        for (a, b) in full.pressure_pa.iter().zip(&only) {
+            assert_eq!(a.len(), b.len());
+            for (x, y) in a.iter().zip(b) {
                 assert_eq!(x.to_bits(), y.to_bits());
             }
         }
