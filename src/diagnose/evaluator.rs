@@ -323,7 +323,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
     /// Weighted inner product over the train rows of the models of `active`, consistent with
     /// [`Evaluator::cost`]: `cost = ⟨r, r⟩`. `a` and `b` map (model, channel slot, row) to a
     /// value.
-    pub(super) fn inner(
+    pub fn inner(
         &self,
         active: &[bool],
         a: impl Fn(usize, usize, usize) -> f64,
@@ -363,6 +363,75 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             }
         }
         s
+    }
+
+    /// The Gram matrix `G[p][q] = ⟨f_p, f_q⟩` (upper triangle, `q ≥ p`) and `g[p] = ⟨f_p, r⟩` of
+    /// [`Evaluator::inner`] over the models of `active`: each entry is that inner product bit
+    /// for bit (every row's term and every sum in the same order), with each function read once
+    /// per row instead of once per pair. The rows are read in blocks, so the extra memory is a
+    /// block of values per function, whatever the drive's length.
+    pub fn gram(
+        &self,
+        active: &[bool],
+        fs: &[&dyn Fn(usize, usize, usize) -> f64],
+        r: &dyn Fn(usize, usize, usize) -> f64,
+    ) -> (Vec<Vec<f64>>, Vec<f64>) {
+        const BLOCK: usize = 1024;
+        let n = fs.len();
+        let ch = self.problem.channels();
+        let n_act = active.iter().filter(|x| **x).count().max(1) as f64;
+        let mut gram: Vec<Vec<f64>> = (0..n).map(|p| vec![0.0; n - p]).collect();
+        let mut g = vec![0.0; n];
+        let mut vals = vec![[0.0; BLOCK]; n];
+        let mut wr = [0.0; BLOCK];
+        let mut ws = [0.0; BLOCK];
+        for (m, v) in self.models.iter().enumerate() {
+            if !active[m] {
+                continue;
+            }
+            for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
+                let rows = ch[c].rows(Part::Train);
+                let w = 1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
+                let chan = &ch[c];
+                let mut acc: Vec<Vec<f64>> = (0..n).map(|p| vec![0.0; n - p]).collect();
+                let mut acc_g = vec![0.0; n];
+                for block in rows.chunks(BLOCK) {
+                    let b = block.len();
+                    for (j, &i) in block.iter().enumerate() {
+                        ws[j] = chan.weight(i);
+                        wr[j] = r(m, k, i);
+                    }
+                    for (f, x) in fs.iter().zip(vals.iter_mut()) {
+                        for (j, &i) in block.iter().enumerate() {
+                            x[j] = f(m, k, i);
+                        }
+                    }
+                    for p in 0..n {
+                        let xp = &vals[p][..b];
+                        let mut a = acc_g[p];
+                        for j in 0..b {
+                            a += ws[j] * xp[j] * wr[j];
+                        }
+                        acc_g[p] = a;
+                        for q in p..n {
+                            let xq = &vals[q][..b];
+                            let mut a = acc[p][q - p];
+                            for j in 0..b {
+                                a += ws[j] * xp[j] * xq[j];
+                            }
+                            acc[p][q - p] = a;
+                        }
+                    }
+                }
+                for p in 0..n {
+                    g[p] += w * acc_g[p];
+                    for (x, a) in gram[p].iter_mut().zip(&acc[p]) {
+                        *x += w * a;
+                    }
+                }
+            }
+        }
+        (gram, g)
     }
 
     /// Residual of `x` at (model, channel slot, row).

@@ -275,6 +275,16 @@ pub fn screen(
     let n_models = ev.models.len() as f64;
     let rr_all = ev.inner(&all, &r, &r);
     let mut entries = Vec::new();
+    // ⟨r, r⟩ depends on the active models and the parts alone: formed once per pair of them
+    let mut rr_of: Vec<(Active, bool, f64)> = Vec::new();
+    let mut rr_on = |active: &Active, switch: bool, parts: &[Part]| -> f64 {
+        if let Some(&(_, _, v)) = rr_of.iter().find(|(a, sw, _)| a == active && *sw == switch) {
+            return v;
+        }
+        let v = ev.inner_on(active, &r, &r, parts);
+        rr_of.push((active.clone(), switch, v));
+        v
+    };
     for &e in effects {
         let Some(probe) = probes.get(&e) else {
             continue;
@@ -291,9 +301,9 @@ pub fn screen(
         };
         let ss = ev.inner_on(active, s, s, parts);
         let sr = ev.inner_on(active, s, &r, parts);
-        let rr = ev.inner_on(active, &r, &r, parts);
+        let rr = rr_on(active, spec.switch, parts);
         let rr_all = if spec.switch {
-            ev.inner_on(&all, &r, &r, parts)
+            rr_on(&all, true, parts)
         } else {
             rr_all
         };
@@ -343,20 +353,24 @@ pub fn screen(
     let n = entries.len();
     let mut joint_reduction = 0.0;
     if n > 0 && rr_all > 0.0 {
-        let sens = |j: usize| {
-            let p = entries[j]
-                .probe
-                .as_ref()
-                .expect("entries have probes")
-                .clone();
-            move |m: usize, k: usize, i: usize| p.s(m, k, i)
-        };
+        let sens: Vec<_> = entries
+            .iter()
+            .map(|en| {
+                let p = en.probe.as_ref().expect("entries have probes");
+                move |m: usize, k: usize, i: usize| p.s(m, k, i)
+            })
+            .collect();
+        let fs: Vec<&dyn Fn(usize, usize, usize) -> f64> = sens
+            .iter()
+            .map(|f| f as &dyn Fn(usize, usize, usize) -> f64)
+            .collect();
+        let (gram, gr) = ev.gram(&all, &fs, &r);
         let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
         let mut g = nalgebra::DVector::<f64>::zeros(n);
         for p in 0..n {
-            g[p] = ev.inner(&all, sens(p), &r);
+            g[p] = gr[p];
             for q in p..n {
-                let v = ev.inner(&all, sens(p), sens(q));
+                let v = gram[p][q - p];
                 a[(p, q)] = v;
                 a[(q, p)] = v;
             }

@@ -742,3 +742,52 @@ fn a_train_only_evaluation_is_the_whole_one_on_the_train_rows() {
         assert!(nan_rows > 0, "{e:?}");
     }
 }
+
+/// The screen's Gram matrix (`Evaluator::gram`) is `Evaluator::inner` of every pair and of
+/// every function with the residual, bit for bit, over several blocks of train rows and with
+/// the clutch-actuation view's row weights.
+#[test]
+fn the_gram_matrix_is_every_pairs_inner_product_bit_for_bit() {
+    use fleetdyn::diagnose::fit::Evaluator;
+    use fleetdyn::diagnose::problem::Part;
+    let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
+    let cfg = LongitudinalConfig::default();
+    let n = d.log.len();
+    let p = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None)
+        .unwrap()
+        .with_actuation(&vec![4.0; n]);
+    let (ev, _) = Evaluator::at_nominal(&p, None);
+    let most = p
+        .channels()
+        .iter()
+        .map(|c| c.rows(Part::Train).len())
+        .max()
+        .unwrap();
+    assert!(most > 3 * 1024, "{most} train rows: several blocks");
+    let f = |p: usize| {
+        move |m: usize, k: usize, i: usize| -> f64 {
+            // magnitudes 1e-3 to 1e5 apart, so that any other order of the sums rounds apart
+            let scale = [1e-3, 1.0, 1e5][(i + p) % 3];
+            ((i * (p + 1) + 7 * m + 3 * k) as f64 * 0.37).sin() * scale
+        }
+    };
+    let fs: Vec<_> = (0..5).map(f).collect();
+    let dyns: Vec<&dyn Fn(usize, usize, usize) -> f64> = fs
+        .iter()
+        .map(|g| g as &dyn Fn(usize, usize, usize) -> f64)
+        .collect();
+    let r = |m: usize, k: usize, i: usize| ((i + m + k) as f64 * 0.11).cos();
+    let all = vec![true; ev.models.len()];
+    let some: Vec<bool> = (0..ev.models.len()).map(|m| m % 2 == 0).collect();
+    for active in [all, some] {
+        let (gram, g) = ev.gram(&active, &dyns, &r);
+        assert!(g.iter().all(|x| x.is_finite()));
+        for a in 0..fs.len() {
+            assert_eq!(g[a].to_bits(), ev.inner(&active, &fs[a], r).to_bits());
+            for b in a..fs.len() {
+                let want = ev.inner(&active, &fs[a], &fs[b]);
+                assert_eq!(gram[a][b - a].to_bits(), want.to_bits(), "{a} {b}");
+            }
+        }
+    }
+}
