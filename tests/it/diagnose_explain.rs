@@ -783,9 +783,9 @@ fn the_gram_matrix_is_every_pairs_inner_product_bit_for_bit() {
         let (gram, g) = ev.gram(&active, &dyns, &r);
         assert!(g.iter().all(|x| x.is_finite()));
         for a in 0..fs.len() {
-            assert_eq!(g[a].to_bits(), ev.inner(&active, &fs[a], r).to_bits());
+            assert_eq!(g[a].to_bits(), ev.inner(&active, fs[a], r).to_bits());
             for b in a..fs.len() {
-                let want = ev.inner(&active, &fs[a], &fs[b]);
+                let want = ev.inner(&active, fs[a], fs[b]);
                 assert_eq!(gram[a][b - a].to_bits(), want.to_bits(), "{a} {b}");
             }
         }
