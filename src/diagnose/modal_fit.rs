@@ -70,20 +70,20 @@ fn model(p: &[f64; 7], tau: f64) -> f64 {
 
 /// `∂y/∂p` of [`model`] at the times `tau` (n × 7).
 fn jacobian(tau: &[f64], p: &[f64; 7]) -> DMatrix<f64> {
-    DMatrix::from_fn(tau.len(), 7, |i, j| {
-        let t = tau[i];
+    let mut j = DMatrix::zeros(tau.len(), 7);
+    for (i, &t) in tau.iter().enumerate() {
+        // the envelope and the phase once per row, for all seven columns
         let e = (-p[6] * t).exp();
         let (s, c) = (p[5] * t).sin_cos();
-        match j {
-            0 => 1.0,
-            1 => t,
-            2 => t * t,
-            3 => e * s,
-            4 => e * c,
-            5 => e * t * (p[3] * c - p[4] * s),
-            _ => -t * e * (p[3] * s + p[4] * c),
-        }
-    })
+        j[(i, 0)] = 1.0;
+        j[(i, 1)] = t;
+        j[(i, 2)] = t * t;
+        j[(i, 3)] = e * s;
+        j[(i, 4)] = e * c;
+        j[(i, 5)] = e * t * (p[3] * c - p[4] * s);
+        j[(i, 6)] = -t * e * (p[3] * s + p[4] * c);
+    }
+    j
 }
 
 /// The seven-parameter fit as a least-squares problem (analytic Jacobian; the normal
@@ -134,16 +134,18 @@ fn linear_lsq(x: &DMatrix<f64>, y: &DVector<f64>) -> Option<(DVector<f64>, f64)>
 
 fn basis(tau: &[f64], omega: f64, sigma: f64, oscillating: bool) -> DMatrix<f64> {
     let cols = if oscillating { 5 } else { 3 };
-    DMatrix::from_fn(tau.len(), cols, |i, j| {
-        let t = tau[i];
-        match j {
-            0 => 1.0,
-            1 => t,
-            2 => t * t,
-            3 => (-sigma * t).exp() * (omega * t).sin(),
-            _ => (-sigma * t).exp() * (omega * t).cos(),
+    let mut x = DMatrix::zeros(tau.len(), cols);
+    for (i, &t) in tau.iter().enumerate() {
+        x[(i, 0)] = 1.0;
+        x[(i, 1)] = t;
+        x[(i, 2)] = t * t;
+        if oscillating {
+            let e = (-sigma * t).exp();
+            x[(i, 3)] = e * (omega * t).sin();
+            x[(i, 4)] = e * (omega * t).cos();
         }
-    })
+    }
+    x
 }
 
 /// The quadratic trend of one window projected out of its data, for the residual sum of
@@ -202,21 +204,33 @@ impl GridProjection {
     /// phases `phases` (`(sin ωτ, cos ωτ)`); `None` when the projected columns are nearly
     /// collinear ([`MIN_GRAM_CONDITION`]).
     fn rss(&self, envelope: &[f64], phases: &[(f64, f64)]) -> Option<f64> {
-        let mut s: Vec<f64> = envelope.iter().zip(phases).map(|(e, p)| e * p.0).collect();
-        let mut c: Vec<f64> = envelope.iter().zip(phases).map(|(e, p)| e * p.1).collect();
-        // one pass: the basis is orthonormal, and an error along it does not reach the inner
-        // products with `Py`, which is orthogonal to it
-        for b in &self.q {
-            project_out(&mut s, b);
-            project_out(&mut c, b);
+        // one pass over the rows: with `Q` orthonormal, `Ps·Pc = s·c − (Qᵀs)·(Qᵀc)`, and
+        // `Ps·Py = s·Py` since `Py` is orthogonal to `Q`
+        let [q0, q1, q2] = &self.q;
+        let (mut ss, mut sc, mut cc, mut g1, mut g2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut qs, mut qc) = ([0.0; 3], [0.0; 3]);
+        for j in 0..envelope.len() {
+            let (e, (sn, cs)) = (envelope[j], phases[j]);
+            let (s, c) = (e * sn, e * cs);
+            ss += s * s;
+            sc += s * c;
+            cc += c * c;
+            g1 += s * self.y_p[j];
+            g2 += c * self.y_p[j];
+            for (k, q) in [q0[j], q1[j], q2[j]].into_iter().enumerate() {
+                qs[k] += s * q;
+                qc[k] += c * q;
+            }
         }
-        let (a11, a12, a22) = (dot(&s, &s), dot(&s, &c), dot(&c, &c));
+        let along = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let a11 = ss - along(&qs, &qs);
+        let a12 = sc - along(&qs, &qc);
+        let a22 = cc - along(&qc, &qc);
         let det = a11 * a22 - a12 * a12;
         // NaN or nearly collinear: the full least squares decides
         if det.is_nan() || det <= MIN_GRAM_CONDITION * a11 * a22 {
             return None;
         }
-        let (g1, g2) = (dot(&s, &self.y_p), dot(&c, &self.y_p));
         Some(self.yy - (a22 * g1 * g1 - 2.0 * a12 * g1 * g2 + a11 * g2 * g2) / det)
     }
 }
