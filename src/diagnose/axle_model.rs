@@ -21,6 +21,7 @@ use super::extended_error::ExtendedError;
 use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::axle::{AxleExtensions, AxleParams};
+use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::sim::axle::{AxleInputs, HalfTruck, Start};
 use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
@@ -55,9 +56,25 @@ pub struct AxleModel<'a> {
 struct NominalRun {
     params: AxleParams,
     ext: AxleExtensions,
+    /// What the inputs are built from besides the recording ([`InputsFrom`]).
+    from: InputsFrom,
     inputs: AxleInputs,
     t_s: Arc<[f64]>,
     pressures: [Vec<f64>; 3],
+}
+
+/// Everything [`AxleModel`]'s inputs are built from besides the recording, the gear ratios and
+/// the record configuration (fixed per model): the parameters of the catalogue's input effects
+/// ([`INPUT_EFFECTS`], the corrected columns and the cured slope), the half-truck's mass, wheel
+/// radius and gravity, and the driveline. Equal values build equal inputs, so a parameter set
+/// with the nominal run's takes the nominal run's inputs without building them.
+#[derive(Debug, Clone, PartialEq)]
+struct InputsFrom {
+    input_effects: [f64; INPUT_EFFECTS.len()],
+    mass_kg: f64,
+    wheel_radius_m: f64,
+    gravity_m_per_s2: f64,
+    driveline: DrivelineParams,
 }
 
 impl<'a> AxleModel<'a> {
@@ -102,23 +119,46 @@ impl<'a> AxleModel<'a> {
     pub fn simulate(&self, theta: &Theta) -> Result<[Vec<f64>; 3], ExtendedError> {
         let nominal = self
             .nominal_run
-            .get_or_init(|| self.run(&self.nominal, None).ok().flatten());
-        self.run(theta, nominal.as_ref()).map(|r| match r {
-            Some(run) => run.pressures,
-            None => nominal
-                .as_ref()
-                .map(|n| n.pressures.clone())
-                .expect("a run is kept unless it matches the nominal one"),
+            .get_or_init(|| self.nominal_simulation().ok());
+        let (tm, from) = self.truth_at(theta)?;
+        let same_model =
+            |n: &NominalRun| tm.axles.as_ref() == Some(&n.params) && tm.axle_ext == n.ext;
+        if let Some(n) = nominal.as_ref().filter(|n| n.from == from) {
+            // built from the same values: the nominal run's inputs
+            return Ok(if same_model(n) {
+                n.pressures.clone()
+            } else {
+                self.simulate_on(&tm, &n.inputs, &n.t_s)
+            });
+        }
+        let (inputs, t_s) = self.inputs(theta, &tm)?;
+        if let Some(n) = nominal
+            .as_ref()
+            .filter(|n| same_model(n) && n.inputs == inputs && n.t_s == t_s)
+        {
+            return Ok(n.pressures.clone());
+        }
+        Ok(self.simulate_on(&tm, &inputs, &t_s))
+    }
+
+    /// The simulation at the nominal parameters with what it was run on.
+    fn nominal_simulation(&self) -> Result<NominalRun, ExtendedError> {
+        let (tm, from) = self.truth_at(&self.nominal)?;
+        let (inputs, t_s) = self.inputs(&self.nominal, &tm)?;
+        let pressures = self.simulate_on(&tm, &inputs, &t_s);
+        Ok(NominalRun {
+            params: tm.axles.clone().expect("checked in new"),
+            ext: tm.axle_ext,
+            from,
+            inputs,
+            t_s,
+            pressures,
         })
     }
 
-    /// Simulates at `theta`; `None` when `theta` builds exactly what `same_as` was run on (its
-    /// pressures then hold).
-    fn run(
-        &self,
-        theta: &Theta,
-        same_as: Option<&NominalRun>,
-    ) -> Result<Option<NominalRun>, ExtendedError> {
+    /// The vehicle at `theta` (the input effects aside, which correct the recording instead)
+    /// and what its inputs are built from.
+    fn truth_at(&self, theta: &Theta) -> Result<(ExtendedVehicle, InputsFrom), ExtendedError> {
         let mut tm = self.nominal_truth.clone();
         for e in theta.changed(&self.nominal) {
             if INPUT_EFFECTS.contains(&e) {
@@ -126,6 +166,23 @@ impl<'a> AxleModel<'a> {
             }
             tm.set(e, theta.get(e))?;
         }
+        let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
+        let from = InputsFrom {
+            input_effects: INPUT_EFFECTS.map(|e| theta.get(e)),
+            mass_kg: a.mass_kg(),
+            wheel_radius_m: a.wheel_radius_m,
+            gravity_m_per_s2: a.gravity_m_per_s2,
+            driveline: tm.driveline.clone(),
+        };
+        Ok((tm, from))
+    }
+
+    /// The inputs at `theta` for the vehicle `tm`, and their time axis.
+    fn inputs(
+        &self,
+        theta: &Theta,
+        tm: &ExtendedVehicle,
+    ) -> Result<(AxleInputs, Arc<[f64]>), ExtendedError> {
         let a: &AxleParams = tm.axles.as_ref().expect("checked in new");
         let d = &tm.driveline;
         let cured = cured_slope(self.log, &self.slope_grid, theta, &self.nominal);
@@ -145,21 +202,14 @@ impl<'a> AxleModel<'a> {
             None,
             &self.cfg,
         )?;
-        if same_as.is_some_and(|n| {
-            n.params == *a && n.ext == tm.axle_ext && n.inputs == rec.inputs && n.t_s == rec.t_s
-        }) {
-            return Ok(None);
-        }
-        let traj = HalfTruck::new(a)
+        Ok((rec.inputs, rec.t_s))
+    }
+
+    /// The three bellow pressures of the vehicle `tm` on `inputs`.
+    fn simulate_on(&self, tm: &ExtendedVehicle, inputs: &AxleInputs, t_s: &[f64]) -> [Vec<f64>; 3] {
+        HalfTruck::new(tm.axles.as_ref().expect("checked in new"))
             .with_max_step(AXLE_STEP_S)
             .with_extensions(tm.axle_ext)
-            .simulate_pressures(&rec.inputs, &rec.t_s, Start::Steady);
-        Ok(Some(NominalRun {
-            params: a.clone(),
-            ext: tm.axle_ext,
-            inputs: rec.inputs,
-            t_s: rec.t_s,
-            pressures: traj,
-        }))
+            .simulate_pressures(inputs, t_s, Start::Steady)
     }
 }

@@ -625,3 +625,46 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
     heavier.set(Effect::VehicleMass, 1.1 * nominal.get(Effect::VehicleMass));
     assert!(with_records.capacity_reach().best_for(&heavier).is_none());
 }
+
+/// The axle model takes its nominal run's pressures, or its nominal run's inputs, for a
+/// parameter set that builds the same ones; each gives the bits of a model built at that
+/// parameter set from scratch (whose first simulation builds its inputs from the recording):
+/// an axle effect (the nominal run's inputs, simulated again), a longitudinal effect that
+/// changes neither the inputs nor the axle model (the nominal run's pressures), and an input
+/// effect and a mass change (inputs built again).
+#[test]
+fn the_axle_model_reuses_its_nominal_run_only_where_it_gives_the_same_bits() {
+    let dir = tempfile::tempdir().unwrap();
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let ratios = vf.gearbox.ratios.clone();
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, 0.01);
+    let d = drive(&dir.path().join("clean"), None, false);
+    let shared = AxleModel::new(&d.log, &truth, &ratios, nominal).unwrap();
+    let base = shared.simulate(&nominal).unwrap();
+    let d0 = &truth.driveline;
+    for (e, v) in [
+        (Effect::CgPosition, 0.2),
+        (Effect::AeroDrag, 1.4 * d0.c_w_a_f_m2),
+        (Effect::EngineTorqueOffset, 60.0),
+        (Effect::VehicleMass, 1.1 * d0.mass_kg),
+    ] {
+        let mut theta = nominal;
+        theta.set(e, v);
+        let reused = shared.simulate(&theta).unwrap();
+        // the vehicle at theta as the nominal of a model of its own
+        let mut at = truth.clone();
+        if e != Effect::EngineTorqueOffset {
+            at.set(e, v).unwrap();
+        }
+        let fresh = AxleModel::new(&d.log, &at, &ratios, theta)
+            .unwrap()
+            .simulate(&theta)
+            .unwrap();
+        let bits =
+            |p: &[Vec<f64>; 3]| -> Vec<u64> { p.iter().flatten().map(|x| x.to_bits()).collect() };
+        assert_eq!(bits(&reused), bits(&fresh), "{e:?}");
+        let moved = bits(&reused) != bits(&base);
+        assert_eq!(moved, e != Effect::AeroDrag, "{e:?}");
+    }
+}
