@@ -516,6 +516,26 @@ fn results_do_not_depend_on_the_thread_count() {
 
 /// A nominal city-se drive of `km` (seed 2) with its gear ratios, nominal truth model and
 /// parameters; the folder lives as long as the returned guard.
+/// The diagnosis problem of a drive with the clutch-actuation view added, its rows' null
+/// variance 4 (rad/s)² throughout.
+fn actuation_problem<'a>(
+    d: &'a SynthDrive,
+    truth: &'a ExtendedVehicle,
+    ratios: &'a [f64],
+    nominal: Theta,
+) -> Problem<'a> {
+    Problem::new(
+        &d.log,
+        truth,
+        ratios,
+        nominal,
+        LongitudinalConfig::default(),
+        None,
+    )
+    .unwrap()
+    .with_actuation(&vec![4.0; d.log.len()])
+}
+
 fn nominal_city_drive(
     km: f64,
 ) -> (
@@ -689,11 +709,7 @@ fn a_train_only_evaluation_is_the_whole_one_on_the_train_rows() {
     use fleetdyn::diagnose::fit::{fit_spec, Evaluator};
     use fleetdyn::diagnose::problem::Part;
     let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
-    let cfg = LongitudinalConfig::default();
-    let n = d.log.len();
-    let p = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None)
-        .unwrap()
-        .with_actuation(&vec![4.0; n]);
+    let p = actuation_problem(&d, &truth, &ratios, nominal);
     let (ev, base) = Evaluator::at_nominal(&p, None);
     let windows = p.train_windows();
     let skipped = windows.iter().filter(|w| !**w).count();
@@ -751,11 +767,7 @@ fn the_gram_matrix_is_every_pairs_inner_product_bit_for_bit() {
     use fleetdyn::diagnose::fit::Evaluator;
     use fleetdyn::diagnose::problem::Part;
     let (_dir, d, ratios, truth, nominal) = nominal_city_drive(3.0);
-    let cfg = LongitudinalConfig::default();
-    let n = d.log.len();
-    let p = Problem::new(&d.log, &truth, &ratios, nominal, cfg, None)
-        .unwrap()
-        .with_actuation(&vec![4.0; n]);
+    let p = actuation_problem(&d, &truth, &ratios, nominal);
     let (ev, _) = Evaluator::at_nominal(&p, None);
     let most = p
         .channels()
