@@ -42,6 +42,15 @@ fn drive(dir: &Path, effect: Option<(Effect, f64)>, highway: bool) -> SynthDrive
     .unwrap()
 }
 
+/// The test vehicle's gear ratios, its nominal extended model and the nominal parameters with
+/// the slope sensor's resolution `slope_resolution` (tan α).
+fn nominal_vehicle(slope_resolution: f64) -> (Vec<f64>, ExtendedVehicle, Theta) {
+    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
+    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
+    let nominal = Theta::nominal(&truth, slope_resolution);
+    (vf.gearbox.ratios.clone(), truth, nominal)
+}
+
 fn rmse(a: &[f64], b: &[f64], keep: &[bool]) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
     for i in 0..a.len() {
@@ -110,10 +119,7 @@ fn error(
 #[test]
 fn each_effect_at_its_truth_value_restores_the_fit() {
     let dir = tempfile::tempdir().unwrap();
-    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
-    let ratios = vf.gearbox.ratios.clone();
-    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
-    let nominal = Theta::nominal(&truth, 0.01);
+    let (ratios, truth, nominal) = nominal_vehicle(0.01);
     let clean = drive(&dir.path().join("clean"), None, false);
     let floor =
         [Domain::Longitudinal, Domain::Axle].map(|d| error(&clean, &truth, &ratios, &nominal, d));
@@ -189,10 +195,7 @@ fn each_effect_at_its_truth_value_restores_the_fit() {
 fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
     // 3 km highway drive over a 0.1 % slope sensor, and the same drive over a whole-percent one
     let dir = tempfile::tempdir().unwrap();
-    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
-    let ratios = vf.gearbox.ratios.clone();
-    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
-    let nominal = Theta::nominal(&truth, 0.001);
+    let (ratios, truth, nominal) = nominal_vehicle(0.001);
     let fine = drive(&dir.path().join("fine"), None, true);
     let coarse = drive(
         &dir.path().join("coarse"),
@@ -252,10 +255,7 @@ fn slope_quantization_fingerprint_is_measured_in_the_shuffle_band() {
 #[test]
 fn a_clutch_slipping_under_full_load_is_reproduced_at_its_true_capacity() {
     let dir = tempfile::tempdir().unwrap();
-    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
-    let ratios = vf.gearbox.ratios.clone();
-    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
-    let nominal = Theta::nominal(&truth, 0.01);
+    let (ratios, truth, nominal) = nominal_vehicle(0.01);
     let worn = 2438.3;
     let hidden = HiddenEffect {
         choice: EffectChoice::Given(Effect::ClutchSlip, Some(worn)),
@@ -635,10 +635,7 @@ fn windows_read_off_a_lower_capacitys_record_are_the_integrated_ones() {
 #[test]
 fn the_axle_model_reuses_its_nominal_run_only_where_it_gives_the_same_bits() {
     let dir = tempfile::tempdir().unwrap();
-    let vf = VehicleFile::load(&fixture(VEHICLE)).unwrap();
-    let ratios = vf.gearbox.ratios.clone();
-    let truth = ExtendedVehicle::nominal(vf.driveline.as_ref().unwrap(), vf.axles.as_ref());
-    let nominal = Theta::nominal(&truth, 0.01);
+    let (ratios, truth, nominal) = nominal_vehicle(0.01);
     let d = drive(&dir.path().join("clean"), None, false);
     let shared = AxleModel::new(&d.log, &truth, &ratios, nominal).unwrap();
     let base = shared.simulate(&nominal).unwrap();
