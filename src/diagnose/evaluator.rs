@@ -76,6 +76,14 @@ pub struct Evaluator<'p, 'a> {
     pub dt_s: f64,
 }
 
+/// Weight of one channel's rows in the cost and its inner products: `1/(n σ² n_c n_m)` for `n`
+/// rows (at least 1) of a channel with noise floor `σ` (its unit), `n_c` channels in its model
+/// and `n_m` models counted, so each model's weighted mean square counts `1/n_m`.
+#[inline]
+fn channel_weight(rows: usize, sigma: f64, n_chans: usize, n_models: f64) -> f64 {
+    1.0 / (rows.max(1) as f64 * sigma * sigma * n_chans as f64 * n_models)
+}
+
 impl<'p, 'a> Evaluator<'p, 'a> {
     /// Evaluator of `problem` at `theta` with the weights of its outputs `base` (one per model
     /// in [`Problem::domains`] order) and `noise_floor` ([`Problem::sigmas`]).
@@ -351,8 +359,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
                 for &part in parts {
                     let rows = ch[c].rows(part);
-                    let w =
-                        1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
+                    let w = channel_weight(rows.len(), *sg, v.chans.len(), n_act);
                     let chan = &ch[c];
                     let mut acc = 0.0;
                     for &i in rows {
@@ -391,7 +398,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             }
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
                 let rows = ch[c].rows(Part::Train);
-                let w = 1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
+                let w = channel_weight(rows.len(), *sg, v.chans.len(), n_act);
                 let chan = &ch[c];
                 let mut acc: Vec<Vec<f64>> = (0..n).map(|p| vec![0.0; n - p]).collect();
                 let mut acc_g = vec![0.0; n];
@@ -527,7 +534,7 @@ impl<'p, 'a> Evaluator<'p, 'a> {
             }
             for (k, (&c, sg)) in v.chans.iter().zip(&v.sigmas).enumerate() {
                 let rows = ch[c].rows(Part::Train);
-                let w = 1.0 / (rows.len().max(1) as f64 * sg * sg * v.chans.len() as f64 * n_act);
+                let w = channel_weight(rows.len(), *sg, v.chans.len(), n_act);
                 for &i in rows {
                     let (ai, wi) = (a(m, k, i), w * ch[c].weight(i));
                     let ri = ch[c].measured[i] - best.outputs[m][k][i];
