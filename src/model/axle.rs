@@ -118,7 +118,11 @@ pub struct DamperTable {
     pub comp_f: Vec<f64>,
 }
 
-fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
+/// The segment of a branch table that holds `speed`: its index (0 from the origin to the first
+/// point, `k` from point `k − 1` to point `k`, the last one continued beyond the table) and its
+/// end points `(v0, f0, v1, f1)`.
+#[inline]
+fn segment(v: &[f64], f: &[f64], speed: f64) -> (usize, (f64, f64, f64, f64)) {
     // force through (0, 0) and the table; linear continuation beyond the last point
     let n = v.len();
     // the number of velocities at or below `speed` (tables hold a handful of strictly
@@ -126,18 +130,35 @@ fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
     // bisection); a NaN speed counts none, and its force is NaN
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     let k = v.iter().position(|&x| !(x <= speed)).unwrap_or(n);
-    let (v0, f0, v1, f1) = if k == 0 || n == 1 {
+    if k == 0 || n == 1 {
         // below the first point, or a one-point table: the line through (0, 0) and it
-        (0.0, 0.0, v[0], f[0])
+        (0, (0.0, 0.0, v[0], f[0]))
     } else if k >= n {
-        (v[n - 2], f[n - 2], v[n - 1], f[n - 1])
+        (n - 1, (v[n - 2], f[n - 2], v[n - 1], f[n - 1]))
     } else {
-        (v[k - 1], f[k - 1], v[k], f[k])
-    };
+        (k, (v[k - 1], f[k - 1], v[k], f[k]))
+    }
+}
+
+fn branch(v: &[f64], f: &[f64], speed: f64) -> f64 {
+    let (_, (v0, f0, v1, f1)) = segment(v, f, speed);
     if v1 == v0 {
         return f1;
     }
     f0 + (f1 - f0) * (speed - v0) / (v1 - v0)
+}
+
+/// The line `F = intercept + slope · rate` of one segment of a damper table (N, N·s/m), with
+/// the segment's identity: `+1 + k` for compression segment `k`, `−1 − k` for extension
+/// segment `k` (segments numbered from the origin outwards).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DamperSegment {
+    /// Which segment.
+    pub id: i8,
+    /// Force at zero rate of the segment's line, N.
+    pub intercept_n: f64,
+    /// Slope, N·s/m.
+    pub slope_n_s_per_m: f64,
 }
 
 impl DamperTable {
@@ -149,6 +170,42 @@ impl DamperTable {
             branch(&self.comp_v, &self.comp_f, rate)
         } else {
             -branch(&self.ext_v, &self.ext_f, -rate)
+        }
+    }
+
+    /// The identity of [`DamperTable::segment`] alone: `+1 + k` for compression segment `k`,
+    /// `−1 − k` for extension segment `k`.
+    #[inline]
+    pub fn segment_id(&self, rate: f64) -> i8 {
+        let (sign, v) = if rate >= 0.0 {
+            (1, &self.comp_v)
+        } else {
+            (-1, &self.ext_v)
+        };
+        let speed = rate.abs();
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let k = v.iter().position(|&x| !(x <= speed)).unwrap_or(v.len());
+        let k = i8::try_from(k.min(v.len() - 1).min(126)).unwrap_or(126);
+        sign * (1 + k)
+    }
+
+    /// The segment of the table that [`DamperTable::force`] reads at compression rate `rate`
+    /// (m/s, + = shortening), as a line in the rate: on it,
+    /// `force(r) = intercept + slope · r` up to rounding. A NaN rate gives a NaN line.
+    pub fn segment(&self, rate: f64) -> DamperSegment {
+        let (sign, (k, (v0, f0, v1, f1))) = if rate >= 0.0 {
+            (1.0, segment(&self.comp_v, &self.comp_f, rate))
+        } else {
+            (-1.0, segment(&self.ext_v, &self.ext_f, -rate))
+        };
+        let slope = if v1 == v0 { 0.0 } else { (f1 - f0) / (v1 - v0) };
+        // compression: F = f0 + s (r − v0); extension: F = −(f0 + s (−r − v0))
+        let base = if v1 == v0 { f1 } else { f0 - slope * v0 };
+        let k = i8::try_from(k.min(126)).unwrap_or(126);
+        DamperSegment {
+            id: if sign > 0.0 { 1 + k } else { -1 - k },
+            intercept_n: sign * base,
+            slope_n_s_per_m: if rate.is_nan() { f64::NAN } else { slope },
         }
     }
 }
@@ -584,5 +641,46 @@ mod tests {
         assert!((d.force(0.4) - 2000.0).abs() < 1e-9);
         assert!((d.force(-0.4) + 8000.0).abs() < 1e-9);
         assert!(d.force(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn a_damper_segment_is_the_line_the_force_reads_and_its_identity_alone_agrees() {
+        // every rate from −1 to 1 m/s in 1 mm/s steps, the table's points included: the force
+        // is the segment's line to rounding (1e-9 of the force, ~1e-12 N on these tables), the
+        // identity alone is the segment's, and one identity is one line
+        let d = DamperTable {
+            ext_v: vec![0.05, 0.13, 0.26, 0.52],
+            ext_f: vec![2400.0, 5400.0, 8400.0, 12800.0],
+            comp_v: vec![0.05, 0.13, 0.26, 0.52],
+            comp_f: vec![800.0, 1800.0, 2800.0, 4300.0],
+        };
+        let mut lines = std::collections::BTreeMap::new();
+        for k in -1000..=1000 {
+            let r = f64::from(k) * 1e-3;
+            let s = d.segment(r);
+            let f = s.intercept_n + s.slope_n_s_per_m * r;
+            assert!(
+                (f - d.force(r)).abs() <= 1e-9 * (1.0 + d.force(r).abs()),
+                "{r}: {f}"
+            );
+            assert_eq!(d.segment_id(r), s.id, "{r}");
+            let line = lines
+                .entry(s.id)
+                .or_insert((s.intercept_n, s.slope_n_s_per_m));
+            assert_eq!(*line, (s.intercept_n, s.slope_n_s_per_m), "{r}");
+        }
+        // four segments a side, compression + and extension −; the first ones through 0
+        assert_eq!(
+            lines.keys().copied().collect::<Vec<_>>(),
+            vec![-4, -3, -2, -1, 1, 2, 3, 4]
+        );
+        assert!(lines[&1].0 == 0.0 && (lines[&1].1 - 16_000.0).abs() < 1e-9);
+        assert!(lines[&-1].0 == 0.0 && (lines[&-1].1 - 48_000.0).abs() < 1e-9);
+        assert_eq!(
+            d.segment(0.0).id,
+            1,
+            "zero rate is compression, as the force reads it"
+        );
+        assert!(d.segment(f64::NAN).slope_n_s_per_m.is_nan());
     }
 }
