@@ -17,6 +17,8 @@
 //! linearised system with the dampers' steepest slopes) is accurate and stable; the reference
 //! test compares it with an independent derivation integrated by scipy (tests/it/axle_reference.rs).
 //! [`HalfTruck::with_max_step`] trades accuracy for speed up to the bound 0.5/ρ.
+//! [`HalfTruck::with_segment_steps`] steps the model exactly over each output interval in which
+//! no damper changes segment, and by RK4 over the others.
 //!
 //! Extensions ([`AxleExtensions`], [`HalfTruck::with_extensions`]) add physics the nominal model
 //! leaves out — the axle-load effects of the diagnosis catalogue (docs/diagnosis/catalogue.md).
@@ -29,6 +31,8 @@
 //! quarter-car, bounce-pitch and half-truck models, validated against CAN-bus bellow pressures
 //! and scale weights. The copy the model was built from names no author; it is cited in this
 //! crate as "the axle-load thesis" with its section and equation numbers (docs/models/axle.md).
+
+mod segment_steps;
 
 use super::inputs::Piecewise;
 pub use crate::model::axle::AxleExtensions;
@@ -163,6 +167,8 @@ pub struct HalfTruck<'a> {
     ext: AxleExtensions,
     /// Index of the rear arm's coordinate.
     rear_arm: usize,
+    /// Step exactly where the dampers stay on one segment ([`HalfTruck::with_segment_steps`]).
+    segment_steps: bool,
 }
 
 fn e(i: usize) -> V5 {
@@ -296,6 +302,7 @@ impl<'a> HalfTruck<'a> {
             h_mode,
             ext: AxleExtensions::default(),
             rear_arm: 3,
+            segment_steps: false,
         }
     }
 
@@ -315,6 +322,21 @@ impl<'a> HalfTruck<'a> {
         if h_s.is_finite() && h_s > 0.0 {
             self.h_max = self.h_mode.min(h_s);
         }
+        self
+    }
+
+    /// The same model stepped exactly from one output time to the next wherever no damper
+    /// changes segment over the interval, and by RK4 at the usual step elsewhere. Between the
+    /// damper tables' points the model is linear, and recorded inputs are linear or held
+    /// between their samples, so over an interval no longer than 2/ρ that holds no input
+    /// sample, with every damper on one segment at both ends, the state at its end is
+    /// `Φ x₀ + Γ₀ w(t₀) + Γ₁ w(t₁⁻)` with the first-order-hold matrices of that segment
+    /// configuration (`w` the external and damper-intercept accelerations; derivation in the
+    /// source of `sim/axle/segment_steps.rs`). A damper that leaves its segment and comes back
+    /// within one interval is stepped as if it had stayed. Without the bellows' progression
+    /// (non-linear in the travel) only; with it the model steps by RK4 throughout.
+    pub fn with_segment_steps(mut self) -> Self {
+        self.segment_steps = true;
         self
     }
 
@@ -357,25 +379,36 @@ impl<'a> HalfTruck<'a> {
 
     /// [`HalfTruck::longitudinal`] with a cursor over the input pieces, for increasing times.
     fn longitudinal_with(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> Longitudinal {
+        self.longitudinal_by(u, |i, s| c.eval(i, s, t))
+    }
+
+    /// [`HalfTruck::longitudinal`] from the inputs' values `value(i, input)` (`i` the input's
+    /// index in the order accel, slope, service brake, drive torque, auxiliary brake torque).
+    #[inline]
+    fn longitudinal_by(
+        &self,
+        u: &AxleInputs,
+        mut value: impl FnMut(usize, &Piecewise) -> f64,
+    ) -> Longitudinal {
         let p = self.p;
-        let a = c.eval(0, &u.accel_mps2, t);
+        let a = value(0, &u.accel_mps2);
         // sin α and cos α of the slope s = tan α, algebraically (no atan, sin, cos per step)
-        let s = c.eval(1, &u.slope, t);
+        let s = value(1, &u.slope);
         let cos_alpha = 1.0 / (1.0 + s * s).sqrt();
         let sin_alpha = s * cos_alpha;
         let total = self.st.mass_kg * (a + p.gravity_m_per_s2 * sin_alpha);
-        let fb = u.service_brake_n.as_ref().map_or(0.0, |s| c.eval(2, s, t));
+        let fb = u.service_brake_n.as_ref().map_or(0.0, |s| value(2, s));
         let mut f = Axle::ALL.map(|ax| -p.brake_share(ax) * fb);
         let torque = u.drive_torque_wheel_nm.is_some() || u.aux_brake_torque_wheel_nm.is_some();
         let resistance = if torque {
             let td = u
                 .drive_torque_wheel_nm
                 .as_ref()
-                .map_or(0.0, |s| c.eval(3, s, t));
+                .map_or(0.0, |s| value(3, s));
             let ta = u
                 .aux_brake_torque_wheel_nm
                 .as_ref()
-                .map_or(0.0, |s| c.eval(4, s, t));
+                .map_or(0.0, |s| value(4, s));
             f[1] += (td - ta) / p.wheel_radius_m;
             total - f.iter().sum::<f64>()
         } else {
@@ -560,12 +593,22 @@ impl<'a> HalfTruck<'a> {
         };
         let mut t = t0;
         let mut cur = Cursor::default();
+        let mut exact = (self.segment_steps && self.ext.bellow_progression_per_m == 0.0)
+            .then(|| segment_steps::SegmentSteps::new(self));
         for &tk in t_out {
             let span = tk - t;
             if span > 0.0 {
+                let mut qe0 = self.forced(u, t, &mut cur);
+                if let Some((q1, qd1)) = exact
+                    .as_mut()
+                    .and_then(|x| x.step(u, &cur, t, tk, &q, &qd, &qe0))
+                {
+                    (q, qd, t) = (q1, qd1, tk);
+                    at(&q, &qd, tk);
+                    continue;
+                }
                 let steps = (span / self.h_max).ceil().max(1.0) as usize;
                 let h = span / steps as f64;
-                let mut qe0 = self.forced(u, t, &mut cur);
                 for _ in 0..steps {
                     let qe1 = self.forced(u, t + 0.5 * h, &mut cur);
                     let qe2 = self.forced(u, t + h, &mut cur);
