@@ -3,7 +3,9 @@
 //! truck with axle loads, 50 Hz rows), one whole-drive simulation of the three bellow pressures
 //! from the recorded inputs at each step, its time (median of 3) and its largest and RMS
 //! difference from the 2 ms step's, in Pa, to set against the 1 kPa noise and 0.1 kPa resolution
-//! of a bellow-pressure sensor.
+//! of a bellow-pressure sensor. The last line is the diagnosis's simulation: exact steps over
+//! the rows on which no damper changes segment (`HalfTruck::with_segment_steps`), RK4 at the
+//! diagnosis's step over the others.
 //!
 //! Run: `cargo bench --bench axle_step` (from the repository top; not part of `cargo test`).
 
@@ -60,8 +62,15 @@ fn main() {
         rec.t_s.len(),
         1e3 * HalfTruck::new(a).step_s()
     );
-    for h in [1e-3, 5e-3, AXLE_STEP_S] {
-        let model = HalfTruck::new(a).with_max_step(h);
+    let variants = [1e-3, 5e-3, AXLE_STEP_S]
+        .map(|h| (h, false))
+        .into_iter()
+        .chain([(AXLE_STEP_S, true)]);
+    for (h, segments) in variants {
+        let mut model = HalfTruck::new(a).with_max_step(h);
+        if segments {
+            model = model.with_segment_steps();
+        }
         let (t, p) = run(&model);
         let (mut worst, mut ss, mut n) = (0.0f64, 0.0, 0.0);
         for i in 0..3 {
@@ -72,8 +81,13 @@ fn main() {
             }
         }
         println!(
-            "step at most {:.2} ms (at most {:.2} ms after the 0.5/rho bound): {t:.3} s ({:.2}x the model step's speed); \
+            "{}step at most {:.2} ms (at most {:.2} ms after the 0.5/rho bound): {t:.3} s ({:.2}x the model step's speed); \
              pressures against the model step: largest {worst:.1} Pa, RMS {:.2} Pa",
+            if segments {
+                "exact over intervals on one damper segment, elsewhere RK4 "
+            } else {
+                ""
+            },
             1e3 * h,
             1e3 * model.step_s(),
             t_fine / t,
