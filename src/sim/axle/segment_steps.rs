@@ -26,16 +26,22 @@
 //! - no input has a sample strictly inside the interval,
 //! - the interval is at most `2/ρ` long (ρ the spectral radius of [`super`], a third of the
 //!   fastest mode's period), and
-//! - every damper's segment at `t₁` is its segment at `t₀`;
+//! - every damper's segment at `t₁` is its segment at `t₀`, and so is the segment of every
+//!   extremum of the cubic through the damper's rate and the rate's slope at both ends (a
+//!   cheaper band about the chord, 4/27 of the slopes' departures from it, settles most
+//!   intervals first);
 //!
 //! otherwise the interval is integrated by RK4 as [`super`] does. A damper that leaves its
-//! segment and comes back within one interval is stepped as if it had stayed: its force is off
-//! by the slope difference times the rate's excursion past the segment's end, for part of an
-//! interval (the error against the model's own 2 ms RK4 is measured by
-//! `cargo bench --bench axle_step` and bounded by a test on the axle fixture drive).
+//! segment and comes back within one interval in a way that cubic does not show is stepped as
+//! if it had stayed: its force is off by the slope difference times the rate's excursion past
+//! the segment's end, for part of an interval (the error against the model's own 2 ms RK4 is
+//! measured by `cargo bench --bench axle_step` and bounded by a test on the axle fixture
+//! drive's inputs).
 //!
-//! The matrices `Φ`, `Γ₀`, `Γ₁` are computed once per (configuration, interval length) met in
-//! one simulation, by the matrix exponential of `nalgebra` (Padé with scaling and squaring); at
+//! The matrices `Φ`, `Γ₀`, `Γ₁` are computed once per (configuration, interval length to the
+//! nanosecond, a log's time resolution: the state moves by its rate times at most 0.5 ns less
+//! or more than the interval) met in one simulation, by the matrix exponential of `nalgebra`
+//! (Padé with scaling and squaring); at
 //! most [`MAX_KINDS`] of them, beyond which new kinds of interval are integrated by RK4 (a time
 //! axis without repeated interval lengths costs RK4's time, not an exponential per row).
 
@@ -154,15 +160,15 @@ impl<'m, 'a> SegmentSteps<'m, 'a> {
         x0.fixed_rows_mut::<5>(5).copy_from(qd);
         let x1 = d.phi * x0 + d.g0 * w0 + d.g1 * w1;
         let qd1: V5 = x1.fixed_rows::<5>(5).into_owned();
-        // each rate stays in its segment over the interval: its cubic through the values and
-        // slopes at both ends lies within 4/27 (|h ṙ0 − Δ| + |h ṙ1 − Δ|) of the chord (the
-        // Hermite form's bumps s(1−s)² and s²(1−s) peak at 4/27), and both ends of that band
-        // are in the segment
         let r1 = self.rate_of * qd1;
         let ids1 = self.segment_ids(&r1);
         if ids1 != ids {
             return None;
         }
+        // each rate stays in its segment over the interval: its cubic through the values and
+        // slopes at both ends lies within 4/27 (|h ṙ0 − Δ| + |h ṙ1 − Δ|) of the chord (the
+        // Hermite form's bumps s(1−s)² and s²(1−s) peak at 4/27), and both ends of that band
+        // are in the segment
         let rd0 = d.rate_dot * x0 + self.rate_of * w0;
         let rd1 = d.rate_dot * x1 + self.rate_of * w1;
         for i in 0..3 {
