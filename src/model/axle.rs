@@ -177,16 +177,12 @@ impl DamperTable {
     /// `−1 − k` for extension segment `k`.
     #[inline]
     pub fn segment_id(&self, rate: f64) -> i8 {
-        let (sign, v) = if rate >= 0.0 {
-            (1, &self.comp_v)
+        let (sign, (k, _)) = if rate >= 0.0 {
+            (1, segment(&self.comp_v, &self.comp_f, rate))
         } else {
-            (-1, &self.ext_v)
+            (-1, segment(&self.ext_v, &self.ext_f, -rate))
         };
-        let speed = rate.abs();
-        #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        let k = v.iter().position(|&x| !(x <= speed)).unwrap_or(v.len());
-        let k = i8::try_from(k.min(v.len() - 1).min(126)).unwrap_or(126);
-        sign * (1 + k)
+        sign * (1 + i8::try_from(k.min(126)).unwrap_or(126))
     }
 
     /// The segment of the table that [`DamperTable::force`] reads at compression rate `rate`
