@@ -329,12 +329,14 @@ impl<'a> HalfTruck<'a> {
     /// changes segment over the interval, and by RK4 at the usual step elsewhere. Between the
     /// damper tables' points the model is linear, and recorded inputs are linear or held
     /// between their samples, so over an interval no longer than 2/ρ that holds no input
-    /// sample, with every damper on one segment at both ends, the state at its end is
+    /// sample, with every damper on one segment at both ends and along the cubic through its
+    /// rate and the rate's slope at both ends, the state at its end is
     /// `Φ x₀ + Γ₀ w(t₀) + Γ₁ w(t₁⁻)` with the first-order-hold matrices of that segment
     /// configuration (`w` the external and damper-intercept accelerations; derivation in the
     /// source of `sim/axle/segment_steps.rs`). A damper that leaves its segment and comes back
-    /// within one interval is stepped as if it had stayed. Without the bellows' progression
-    /// (non-linear in the travel) only; with it the model steps by RK4 throughout.
+    /// within one interval in a way that cubic does not show is stepped as if it had stayed.
+    /// Without the bellows' progression (non-linear in the travel) only; with it the model
+    /// steps by RK4 throughout.
     pub fn with_segment_steps(mut self) -> Self {
         self.segment_steps = true;
         self
