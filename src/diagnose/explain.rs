@@ -21,7 +21,8 @@
 //!    fixed, until no candidate passes or [`MAX_FINDINGS`] (3) are accepted.
 //!
 //! Before the first round, each parameter measured outside the models
-//! ([`ExplainConfig::measured`]: the slope sensor's offset against the altitude) is set to
+//! ([`ExplainConfig::measured`]: the slope sensor's offset against the altitude, the torque
+//! channel's offset on the free engine) is set to
 //! its measured value and kept out of the screens; its effect is named when the measured
 //! interval lies outside the vehicle file's own tolerance, and reported as consistent with the
 //! file otherwise (`measured_round`).

@@ -38,7 +38,8 @@ pub struct ExplainConfig {
     /// interval lies outside its band ([`super::acceptance`], rule 4).
     pub tolerances: Tolerances,
     /// Parameters measured outside the models (the slope sensor's offset against the
-    /// altitude, [`super::altitude_offset`]): taken before the first round and not fitted.
+    /// altitude, [`super::altitude_offset`]; the torque channel's offset on the free engine,
+    /// [`super::idle_torque`]): taken before the first round and not fitted.
     pub measured: Vec<Measured>,
 }
 
@@ -52,7 +53,9 @@ pub struct Measured {
     pub effect: crate::model::catalogue::Effect,
     /// Value and 95 % interval, in the catalogue's unit.
     pub estimate: ParameterEstimate,
-    /// What it was measured against (`"altitude"`).
+    /// What it was measured on: `"altitude"` (the slope sensor's offset,
+    /// [`super::altitude_offset`]) or `"free engine"` (the torque channel's offset,
+    /// [`super::idle_torque`]).
     pub source: &'static str,
 }
 

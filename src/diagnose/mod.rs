@@ -19,6 +19,7 @@ pub mod extended_error;
 pub mod fit;
 pub mod fit_interval;
 pub mod fit_spec;
+pub mod idle_torque;
 pub mod linearised;
 pub mod linearised_mode;
 pub mod locate;

@@ -22,7 +22,8 @@
 //!    no estimate within the tolerances explains.
 //! 5. Explain ([`explain`]) with the noise floors as the signal weights, and with the slope
 //!    sensor's offset measured against the altitude where the log records one
-//!    ([`altitude_offset`]); the verdict ([`verdict`]) from the findings and step 4's
+//!    ([`altitude_offset`]) and the torque channel's offset measured on the free engine where
+//!    the log has one ([`idle_torque_offset`]); the verdict ([`verdict`]) from the findings and step 4's
 //!    significance.
 //! 6. Show (`report::diagnosis_files::write_outputs`, a layer above this module):
 //!    `diagnosis.json`, `mismatch.parquet`, `findings.parquet`,
@@ -37,6 +38,7 @@ use super::explain::{
 };
 use super::extended::{window_starts, ExtendedError, LongitudinalConfig, Theta};
 use super::fit::fit_spec;
+use super::idle_torque::{idle_torque_offset, IdleTorqueOutcome};
 use super::locate::{
     locate_inputs, recorded_inputs, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
@@ -258,6 +260,9 @@ pub struct Diagnosed {
     /// The slope sensor's offset measured against the recorded altitude, or why not
     /// ([`super::altitude_offset`]).
     pub altitude_offset: AltitudeOutcome,
+    /// The torque channel's offset measured on the free engine, or why not
+    /// ([`super::idle_torque`]).
+    pub idle_torque: IdleTorqueOutcome,
     /// Every catalogue parameter the drive informs ([`super::parameter_table`]).
     pub parameters: Vec<ParameterRow>,
     /// Per-row null variance of the engine speed on the clutch-actuated rows (rad²/s², NaN
@@ -282,10 +287,10 @@ pub struct ModelsUsed {
 }
 
 /// Columns of the canonical log that neither the diagnosis nor its outputs read: the GNSS
-/// position. A caller that owns a long drive's log may drop them before diagnosing it (the
-/// `diagnose` command does: 43 MB on a 10-hour drive at 50 Hz); the diagnosis is the same,
-/// bit for bit.
-pub const UNREAD_COLUMNS: [&str; 3] = ["latitude", "longitude", "altitude"];
+/// position (the altitude is read: [`super::altitude_offset`]). A caller that owns a long
+/// drive's log may drop them before diagnosing it (the `diagnose` command does); the diagnosis
+/// is the same, bit for bit.
+pub const UNREAD_COLUMNS: [&str; 2] = ["latitude", "longitude"];
 
 /// Diagnoses `log` against the nominal `vehicle` (module documentation).
 ///
@@ -485,6 +490,8 @@ pub fn diagnose(
     // the slope sensor's offset against the altitude, when the log records one
     let altitude = altitude_offset(log, grade.as_deref());
     drop(grade);
+    // the torque channel's offset on the free engine, when the log has one
+    let idle = idle_torque_offset(log, setup.nominal_truth.driveline.j_e_kg_m2);
     let measured = altitude
         .measured()
         .map(|a| Measured {
@@ -498,6 +505,16 @@ pub fn diagnose(
             source: "altitude",
         })
         .into_iter()
+        .chain(idle.measured().map(|m| Measured {
+            effect: Effect::EngineTorqueOffset,
+            estimate: ParameterEstimate {
+                value: m.value_nm,
+                ci_low: m.ci_low_nm,
+                ci_high: m.ci_high_nm,
+                unit: Effect::EngineTorqueOffset.unit(),
+            },
+            source: "free engine",
+        }))
         .collect();
     let explanation = explain(
         &problem,
@@ -563,6 +580,7 @@ pub fn diagnose(
         speed_consistency: consistency,
         resistance_stretch: stretch,
         altitude_offset: altitude,
+        idle_torque: idle,
         actuation_variance,
     })
 }

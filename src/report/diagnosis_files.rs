@@ -19,6 +19,7 @@ use super::diagnosis::{plot_residuals, write_report, ReportParts, ResidualSeries
 use super::sentences::statement_text;
 use crate::diagnose::altitude_offset::AltitudeOutcome;
 use crate::diagnose::explain::{Explanation, SignalMetrics};
+use crate::diagnose::idle_torque::IdleTorqueOutcome;
 use crate::diagnose::locate::Location;
 use crate::diagnose::modal::ModalComparison;
 use crate::diagnose::noise::NoiseFloors;
@@ -63,6 +64,7 @@ struct Detail<'a> {
     speed_consistency: &'a Option<SpeedConsistency>,
     resistance_stretch: &'a Option<ResistanceStretch>,
     altitude_offset: &'a AltitudeOutcome,
+    idle_torque: &'a IdleTorqueOutcome,
     explanation: &'a Explanation,
 }
 
@@ -257,6 +259,7 @@ fn write_staged(
         speed_consistency: &d.speed_consistency,
         resistance_stretch: &d.resistance_stretch,
         altitude_offset: &d.altitude_offset,
+        idle_torque: &d.idle_torque,
         explanation: &d.explanation,
     };
     let mut text = serde_json::to_string_pretty(&detail).map_err(|e| WriteError::Io {

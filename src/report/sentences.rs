@@ -62,6 +62,7 @@ pub fn consistent_sentence(c: &ConsistentEstimate) -> String {
         (None, None) => String::new(),
     };
     let how = match c.measured_by {
+        Some("free engine") => ", measured on the free engine".to_string(),
         Some(source) => format!(", measured against the {source}"),
         None => String::new(),
     };
@@ -151,9 +152,15 @@ pub fn finding_sentence(f: &Finding) -> String {
             more("faster", "slower")
         ),
         EngineTorqueOffset => format!(
-            "the reported engine torque is {:.0} N·m {} the delivered torque, {ci}: residual force ∝ gear ratio, constant in torque",
+            "the reported engine torque is {:.0} N·m {} the delivered torque, {ci}: {}",
             v.abs(),
-            if v >= 0.0 { "above" } else { "below" }
+            if v >= 0.0 { "above" } else { "below" },
+            match f.evidence.measured_by {
+                Some(_) => "measured on the free engine: declutched at a steady speed it \
+                            delivers no torque, yet the channel reports one"
+                    .to_string(),
+                None => "residual force ∝ gear ratio, constant in torque".to_string(),
+            }
         ),
         ClutchSlip => format!(
             "the clutch transmits at most {:.0} N·m, {:.0} % {} than the vehicle file says, {ci}: the engine speed runs away from the gearbox's where the clutch slips (engagements, full load)",

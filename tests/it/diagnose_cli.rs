@@ -206,6 +206,7 @@ fn diagnose_writes_the_contract_and_names_the_effect() {
         .clone();
     let named = j["findings"][0]["effect"].as_str().unwrap();
     let mut seen = BTreeSet::new();
+    let mut measured = BTreeSet::new();
     for i in 0..t.num_rows() {
         assert!(
             seen.insert(effect.value(i).to_string()),
@@ -218,11 +219,23 @@ fn diagnose_writes_the_contract_and_names_the_effect() {
             let (_, p) = p.as_object().unwrap().iter().next().unwrap();
             assert_eq!(value.value(i), p["value"].as_f64().unwrap());
             assert!(!consistent.value(i));
+        } else if method.value(i) == "measured" {
+            // measured outside the models, inside the file's own band
+            assert!(consistent.value(i));
+            measured.insert(effect.value(i).to_string());
         } else {
             assert!(["fitted", "linearised"].contains(&method.value(i)));
         }
     }
     assert!(seen.contains(named));
+    // the drive logs an altitude and idles declutched at its stops: the slope sensor's and
+    // the torque channel's offsets are measured, not fitted
+    assert_eq!(
+        measured,
+        set(&["grade_offset", "engine_torque_offset"]),
+        "{}",
+        std::fs::read_to_string(out.join("detail.json")).unwrap()
+    );
     // the report with its plots, MAE and fit %
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("**Verdict: explained**"));
