@@ -23,8 +23,8 @@
 //! 5. Explain ([`explain`]) with the noise floors as the signal weights, and with the slope
 //!    sensor's offset measured against the altitude where the log records one
 //!    ([`altitude_offset`]) and the torque channel's offset measured on the free engine where
-//!    the log has one ([`idle_torque_offset`]); the verdict ([`verdict`]) from the findings and step 4's
-//!    significance.
+//!    the log has one ([`idle_torque_offset`]); the verdict ([`verdict`]) from the findings
+//!    and step 4's significance.
 //! 6. Show (`report::diagnosis_files::write_outputs`, a layer above this module):
 //!    `diagnosis.json`, `mismatch.parquet`, `findings.parquet`,
 //!    `report.md` with one residual SVG per compared signal (before: nominal; after: with the

@@ -321,6 +321,19 @@ mod tests {
             ),
             "{s}"
         );
+        // the torque channel's offset measured on the free engine
+        let measured = ConsistentEstimate {
+            file_tolerance: Tolerance::Absolute(25.0),
+            model_form: crate::model::catalogue::ModelForm::NONE,
+            measured_by: Some("free engine"),
+            ..c("engine_torque_offset", 4.0, 0.0, "N.m")
+        };
+        let s = consistent_sentence(&measured);
+        assert!(
+            s.contains(", measured on the free engine), within the vehicle file's 0 N.m ± 25"),
+            "{s}"
+        );
+        assert!(!s.contains("model's own"), "{s}");
     }
 
     #[test]
