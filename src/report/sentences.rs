@@ -156,8 +156,8 @@ pub fn finding_sentence(f: &Finding) -> String {
             v.abs(),
             if v >= 0.0 { "above" } else { "below" },
             match f.evidence.measured_by {
-                Some(_) => "measured on the free engine: declutched at a steady speed it \
-                            delivers no torque, yet the channel reports one"
+                Some(_) => "measured on the free engine: declutched at a steady speed its net \
+                            torque is nil, yet the channel reports one"
                     .to_string(),
                 None => "residual force ∝ gear ratio, constant in torque".to_string(),
             }
