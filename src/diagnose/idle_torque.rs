@@ -227,12 +227,14 @@ pub fn idle_torque_offset(log: &DriveLog, j_e_kg_m2: f64) -> IdleTorqueOutcome {
     }
     // each episode's offset x_i, the rows' residuals about it
     let mut xs = Vec::with_capacity(episodes.len());
+    let mut means = Vec::with_capacity(episodes.len());
     let mut counts = Vec::with_capacity(episodes.len());
     let (mut sum, mut rows, mut speed_sum) = (0.0, 0usize, 0.0);
     for &(a, b) in &episodes {
         let inertia = j_e_kg_m2 * (speed[b] - speed[a]) / (t[b] - t[a]);
         let m = torque[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
         xs.push(m - inertia);
+        means.push(m);
         counts.push(b - a + 1);
         sum += (m - inertia) * (b - a + 1) as f64;
         rows += b - a + 1;
@@ -247,8 +249,7 @@ pub fn idle_torque_offset(log: &DriveLog, j_e_kg_m2: f64) -> IdleTorqueOutcome {
     }
     // Newey–West within episodes
     let (mut s, mut ss) = (0.0, 0.0);
-    for &(a, b) in &episodes {
-        let m = torque[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
+    for (&(a, b), &m) in episodes.iter().zip(&means) {
         for k in a..=b {
             let r = torque[k] - m;
             ss += r * r;
