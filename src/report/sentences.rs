@@ -337,6 +337,73 @@ mod tests {
     }
 
     #[test]
+    fn a_torque_offset_finding_says_how_it_was_found() {
+        use crate::diagnose::explanation::{Evidence, ParameterEstimate};
+        use crate::diagnose::whiteness::Whiteness;
+        use std::collections::BTreeMap;
+        let finding = |value: f64, measured_by: Option<&'static str>| {
+            let white = Whiteness {
+                q_per_n: 0.0,
+                nonwhite_power: 0.0,
+            };
+            let mut parameters = BTreeMap::new();
+            parameters.insert(
+                "engine_torque_offset_nm".to_string(),
+                ParameterEstimate {
+                    value,
+                    ci_low: value - 1.5,
+                    ci_high: value + 1.5,
+                    unit: "N.m",
+                },
+            );
+            Finding {
+                effect: "engine_torque_offset",
+                ambiguous_with: Vec::new(),
+                parameters,
+                fit: BTreeMap::new(),
+                metrics: BTreeMap::new(),
+                evidence: Evidence {
+                    round: 0,
+                    domain: Domain::Longitudinal,
+                    nominal: 0.0,
+                    start: 0.0,
+                    models: Vec::new(),
+                    heldout_gain: 0.0,
+                    explained: 0.0,
+                    whiteness_before: white,
+                    whiteness_after: white,
+                    n_eff: 0.0,
+                    deviance_threshold: 0.0,
+                    deviance_at_start: 0.0,
+                    deviance_heldout_at_start: None,
+                    ambiguity_correlation: BTreeMap::new(),
+                    evaluations: 1,
+                    measured_by,
+                },
+            }
+        };
+        // measured on the free engine: the sentence names the measurement, not a residual shape
+        let s = finding_sentence(&finding(66.2, Some("free engine")));
+        assert_eq!(
+            s,
+            "the reported engine torque is 66 N·m above the delivered torque, \
+             engine_torque_offset_nm = 66.2 N.m (95 % CI 64.7 to 67.7 N.m): measured on the \
+             free engine: declutched at a steady speed its net torque is nil, yet the channel \
+             reports one"
+        );
+        // fitted from the driving signals: the residual's shape
+        let s = finding_sentence(&finding(-143.1, None));
+        assert!(
+            s.starts_with("the reported engine torque is 143 N·m below the delivered torque"),
+            "{s}"
+        );
+        assert!(
+            s.ends_with(": residual force ∝ gear ratio, constant in torque"),
+            "{s}"
+        );
+    }
+
+    #[test]
     fn statements_read_as_words_with_their_share() {
         let st = |shape: &str, coefficient: f64| Statement {
             shape: shape.into(),
