@@ -26,10 +26,11 @@ pub fn catalogue_markdown() -> String {
             Tolerance::Absolute(x) => format!("±{} {u}", g(x)),
             Tolerance::None => "— (a switch)".to_string(),
         };
+        // allowances carry two significant figures, down to hundredths of a per cent
         let side = |t: Tolerance, sign: &str| match t {
-            Tolerance::Relative(x) => format!("{sign}{} %", pct(x)),
+            Tolerance::Relative(x) => format!("{sign}{} %", g((x * 1e4).round() / 100.0)),
             Tolerance::Absolute(x) => format!("{sign}{} {u}", g(x)),
-            Tolerance::None => format!("{sign}0"),
+            Tolerance::None => "none".to_string(),
         };
         let sides = |m: ModelForm| match (m.below, m.above) {
             (Tolerance::None, Tolerance::None) => "—".to_string(),

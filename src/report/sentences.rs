@@ -296,14 +296,14 @@ mod tests {
         let s = consistent_sentence(&c("clutch_slip", 4000.0, 3500.0, "N.m"));
         assert!(
             s.contains(
-                "within the vehicle file's 3500 N.m ± 10.0 % and the model's own + 23.0 % above:"
+                "within the vehicle file's 3500 N.m ± 10.0 % and the model's own + 7.40 % above:"
             ),
             "{s}"
         );
         // both sides measured
         let s = consistent_sentence(&c("vehicle_mass", 41_000.0, 40_000.0, "kg"));
         assert!(
-            s.contains("and the model's own − 0.810 % / + 2.90 %:"),
+            s.contains("and the model's own − 0.410 % / + 3.00 %:"),
             "{s}"
         );
         // a measured parameter says so and is judged against the file's own band

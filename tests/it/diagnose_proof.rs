@@ -37,7 +37,7 @@ use fleetdyn::proof::{run_proof, CaseScore, Driving, ProofConfig, ProofRun};
 use fleetdyn::report::contract::Verdict;
 
 /// Effects these reduced inversion checks must name. The rolling resistance is not among them:
-/// its model-form allowance (−19 % / +41 %, measured on the independent truth's healthy trucks,
+/// its model-form allowance (+44 % above, measured on the independent truth's healthy trucks,
 /// whose cold tyres and wind read as rolling resistance) puts the changes these drives hide
 /// inside the band, where they are reported as estimates consistent with the file; the proof
 /// reports this as the inversion check's cost of the allowance (docs/validation/proof.md). A
