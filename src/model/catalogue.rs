@@ -29,21 +29,21 @@
 //! finding, or an estimate within the band), which the acceptance rule judges. The sides
 //! differ because what the model lacks pushes some estimates one way: wind only adds to the
 //! mean drag force, and a clutch that never slips bounds its capacity only from below.
-//! `Tolerance::None` on a side where no miss was measured, and on both for the switch, an
-//! effect no calibration drive fitted (`signal_delay`), one whose fits all held the truck's
-//! value (`engine_torque_offset`, two fits) and the axle effects, which the truth plant does
-//! not model. The diagnosis names an effect only when its interval lies outside the file's
-//! tolerance widened by this allowance, so the model's own error is not reported as the
-//! truck's. The row's `model_form_warm_up` is the same measurement with a vehicle file that
-//! states the tyres' warm-up, whose models put the cold tyres' extra rolling resistance where
-//! it belongs instead of into the drag area and the rolling resistance; a file is judged with
-//! the one measured as its models are (`model::tolerance::Tolerances::model_form`). The
-//! slope-sensor offset's row keeps the first measurement in both: with the altitude in the
-//! calibration drives it is measured, not fitted, so the second calibration has no fit of it.
-//! The row's `linearised_form` is the same measurement on the first round's
-//! linearised estimates of the same drives, whose intervals are a linear approximation and miss
-//! by more; a vehicle's pooled estimate pools estimates of both kinds and is judged with the
-//! wider of the two on each side (`fleet::evidence::pooled_band`).
+//! `Tolerance::None` on a side where no miss was measured, and on both for the switch, an effect no
+//! calibration drive fitted (`signal_delay`) and the axle effects, which the truth plant does not
+//! model. The diagnosis names an effect only when its interval lies outside the file's tolerance
+//! widened by this allowance, so the model's own error is not reported as the truck's. The row's
+//! `model_form_warm_up` is the same measurement with a vehicle file that states the tyres' warm-up,
+//! whose models put the cold tyres' extra rolling resistance where it belongs instead of into the
+//! drag area and the rolling resistance; a file is judged with the one measured as its models are
+//! (`model::tolerance::Tolerances::model_form`). The calibration drives log an altitude and idle
+//! declutched, so the two offsets are measured on them (`diagnose::altitude_offset`,
+//! `diagnose::idle_torque`), not fitted, as on the proof's drives; their rows' allowances, which
+//! apply only to logs the measurements cannot serve, are those of the same seeds diagnosed with the
+//! offset fitted instead. The row's `linearised_form` is the same measurement on the first round's
+//! linearised estimates of the same drives, whose intervals are a linear approximation and miss by
+//! more; a vehicle's pooled estimate pools estimates of both kinds and is judged with the wider of
+//! the two on each side (`fleet::evidence::pooled_band`).
 //!
 //! θ₀ is the vehicle file's value of the parameter (or the effect's "absent" value, 0 for the
 //! offsets, lash, delay and axle extensions, 1 for the tyre-stiffness factor).
