@@ -38,10 +38,10 @@ use fleetdyn::report::contract::Verdict;
 
 /// Effects these reduced inversion checks must name. The rolling resistance is not among them:
 /// its model-form allowance (+44 % above, measured on the independent truth's healthy trucks,
-/// whose cold tyres and wind read as rolling resistance) puts the changes these drives hide
-/// inside the band, where they are reported as estimates consistent with the file; the proof
-/// reports this as the inversion check's cost of the allowance (docs/validation/proof.md). A
-/// rolling-resistance drive must still carry no wrong name.
+/// whose cold tyres and wind read as rolling resistance) puts an increase of the size these
+/// drives hide inside the band, where it is reported as an estimate consistent with the file;
+/// the proof reports this as the inversion check's cost of the allowance
+/// (docs/validation/proof.md). A rolling-resistance drive must still carry no wrong name.
 const IDENTIFIED: [&str; 12] = [
     "vehicle_mass",
     "grade_offset",
