@@ -15,6 +15,10 @@ pub fn catalogue_markdown() -> String {
     fn pct(x: f64) -> String {
         g((x * 1000.0).round() / 10.0)
     }
+    // an allowance carries two significant figures, down to hundredths of a per cent
+    fn allowance_pct(x: f64) -> String {
+        g((x * 1e4).round() / 100.0)
+    }
     let mut out = String::from(
         "| id | domain | parameter (unit) | default tolerance | model-form allowance (full fit) | (full fit, warm-up stated) | (linearised estimate) | proof draw | fit step | fit domain | fingerprint |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
@@ -26,9 +30,8 @@ pub fn catalogue_markdown() -> String {
             Tolerance::Absolute(x) => format!("±{} {u}", g(x)),
             Tolerance::None => "— (a switch)".to_string(),
         };
-        // allowances carry two significant figures, down to hundredths of a per cent
         let side = |t: Tolerance, sign: &str| match t {
-            Tolerance::Relative(x) => format!("{sign}{} %", g((x * 1e4).round() / 100.0)),
+            Tolerance::Relative(x) => format!("{sign}{} %", allowance_pct(x)),
             Tolerance::Absolute(x) => format!("{sign}{} {u}", g(x)),
             Tolerance::None => "none".to_string(),
         };
