@@ -6,6 +6,7 @@
 
 use super::axle_plot::PlotError;
 use super::contract::{signal_unit, Diagnosis};
+use super::plot_points::m4_points;
 use crate::diagnose::explain::{BeforeAfter, SignalMetrics};
 use crate::io::AtomicFile;
 use plotters::prelude::*;
@@ -37,8 +38,13 @@ fn display(signal: &str) -> (f64, &'static str) {
     }
 }
 
+/// Size of a residual plot, pixels (width, height).
+const PLOT_SIZE: (u32, u32) = (1000, 420);
+
 /// Plots the residual before and after of one signal with the mismatch stretches `[start_s,
-/// end_s]` shaded, into `path` (SVG).
+/// end_s]` shaded, into `path` (SVG). Each line holds the points an M4 aggregation over twice
+/// the plot's width in columns keeps ([`m4_points`]): the same drawing at up to twice the size,
+/// at most 8 000 points a line whatever the drive's length.
 ///
 /// # Errors
 /// [`PlotError`] when nothing is finite, drawing fails or the file cannot be written.
@@ -80,9 +86,14 @@ pub fn plot_residuals(
     let pad = (0.05 * (y1 - y0)).max(1e-9);
     let (y0, y1) = (y0 - pad, y1 + pad);
     let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+    let columns = 2 * PLOT_SIZE.0 as usize;
+    let (b, a) = (
+        m4_points(b, (x0, x1), columns),
+        m4_points(a, (x0, x1), columns),
+    );
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (1000, 420)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw(e.to_string()))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 18))
@@ -302,6 +313,46 @@ pub fn write_report(path: &Path, d: &Diagnosis, parts: &ReportParts<'_>) -> std:
 mod tests {
     use super::*;
     use crate::report::contract::{MismatchEntry, Verdict};
+    #[test]
+    fn a_ten_hour_residual_plot_holds_its_extremes_in_a_bounded_file() {
+        // 10 h at 50 Hz: 1.8 million rows, a spike of 9 km/h at one row
+        let dir = tempfile::tempdir().unwrap();
+        let n = 1_800_000;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.02).collect();
+        let mut before: Vec<f64> = t.iter().map(|x| 0.1 * (x * 0.05).sin()).collect();
+        before[1_234_567] = 2.5;
+        let after: Vec<f64> = before.iter().map(|x| 0.5 * x).collect();
+        let svg = dir.path().join("residual_vehicle_speed.svg");
+        plot_residuals(
+            &svg,
+            "vehicle speed",
+            &ResidualSeries {
+                signal: "vehicle_speed",
+                t_s: &t,
+                before: &before,
+                after: &after,
+            },
+            &[],
+        )
+        .unwrap();
+        let bytes = std::fs::metadata(&svg).unwrap().len();
+        // two lines of at most 8 000 points, about 12 bytes each, and the axes: under 250 kB
+        // (every row drawn: about 40 MB)
+        assert!(bytes < 250_000, "{bytes} bytes");
+        // the spike is drawn: the lines' topmost vertex lies within the top fifth of the
+        // 420-pixel plot (the rest of the residual stays within ±0.36 km/h of zero, below the
+        // middle of an axis that reaches 9 km/h)
+        let text = std::fs::read_to_string(&svg).unwrap();
+        let top = text
+            .split("points=\"")
+            .skip(1)
+            .filter_map(|s| s.split('"').next())
+            .flat_map(|pts| pts.split(' ').filter_map(|p| p.split(',').nth(1)))
+            .filter_map(|y| y.parse::<f64>().ok())
+            .fold(f64::INFINITY, f64::min);
+        assert!(top < 84.0, "topmost vertex at y = {top} px");
+    }
+
     #[test]
     fn report_and_plot_are_written() {
         let dir = tempfile::tempdir().unwrap();

@@ -12,6 +12,7 @@ pub mod diagnosis_files;
 pub mod fleet_files;
 pub mod fleet_html;
 pub mod ingest_summary;
+pub mod plot_points;
 pub mod road_compare;
 pub mod road_plot;
 pub mod road_spectra;
