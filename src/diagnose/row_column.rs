@@ -1,28 +1,59 @@
 //! One column of values on a recording's rows, as the explain step holds a simulated output
-//! ([`super::evaluator::Eval`]): dense (a value on every row) or sparse (values on a set of
-//! rows, one fill value on every other), and cheap to clone either way (the storage is shared).
+//! ([`super::evaluator::Eval`]): dense (a value on every row), sparse (values on a set of rows,
+//! one fill value on every other) or patched (another column's values with runs of rows of its
+//! own), and cheap to clone in every form (the storage is shared).
 //!
 //! Why: the explain step keeps a simulation of every view for each of its probes and fits, and
 //! on a long drive each full-length column is 8 bytes a row (14.4 MB for 10 hours at 50 Hz).
 //! The event views (the shuffle modes, the torque reversals) have a value on one row per
 //! engagement or reversal and the same fill on every other, and the clutch-actuation view reads
 //! the engine speed the speeds view already holds; stored sparse and shared, they cost their
-//! events and nothing. Reading a row gives the same value, bit for bit, as the dense column the
-//! simulation produced, so no result depends on the storage.
+//! events and nothing. A probe of an effect that acts only now and then (a clutch that slips
+//! only at its lowest capacities, a lash crossed only at torque reversals) leaves most windows'
+//! rows as the base simulation's, bit for bit; stored patched over the base's storage, it costs
+//! the windows it changes. Reading a row gives the same value, bit for bit, as the dense column
+//! the simulation produced, so no result depends on the storage.
 
 use std::borrow::Cow;
 use std::ops::Index;
 use std::sync::Arc;
 
-/// Values on `len` rows: dense, or sparse (sorted `rows` with their `values`, `fill` on every
-/// other row). Cloning shares the storage.
+/// Values on `len` rows in one of three forms (module doc). Cloning shares the storage.
 #[derive(Debug, Clone)]
 pub struct RowColumn {
     len: usize,
-    rows: Option<Arc<[usize]>>,
-    values: Arc<Vec<f64>>,
-    fill: f64,
+    store: Store,
 }
+
+#[derive(Debug, Clone)]
+enum Store {
+    /// A value on every row.
+    Dense(Arc<Vec<f64>>),
+    /// `values` on the sorted `rows`, `fill` on every other row.
+    Sparse {
+        rows: Arc<[usize]>,
+        values: Arc<Vec<f64>>,
+        fill: f64,
+    },
+    /// `values` on the rows of `runs` (in row order, disjoint), `base` on every other row.
+    Patched {
+        base: Arc<Vec<f64>>,
+        runs: Arc<[Run]>,
+        values: Arc<Vec<f64>>,
+    },
+}
+
+/// Rows `start..end` of a patched column, their values from `offset` on in its `values`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Run {
+    start: usize,
+    end: usize,
+    offset: usize,
+}
+
+/// Rows of equal values a run of a patched column takes in rather than ending: fewer, longer
+/// runs for a cheaper search, at 8 bytes a row taken in.
+const RUN_GAP_ROWS: usize = 64;
 
 impl RowColumn {
     /// A dense column.
@@ -34,9 +65,7 @@ impl RowColumn {
     pub fn shared(values: Arc<Vec<f64>>) -> Self {
         Self {
             len: values.len(),
-            rows: None,
-            values,
-            fill: f64::NAN,
+            store: Store::Dense(values),
         }
     }
 
@@ -52,9 +81,69 @@ impl RowColumn {
         let values = rows.iter().map(|&i| dense[i]).collect();
         Self {
             len: dense.len(),
-            rows: Some(rows),
-            values: Arc::new(values),
-            fill,
+            store: Store::Sparse {
+                rows,
+                values: Arc::new(values),
+                fill,
+            },
+        }
+    }
+
+    /// `column` stored over `base` when that takes less memory: the runs of rows where the
+    /// two differ (bit for bit; runs closer than [`RUN_GAP_ROWS`] joined) keep `column`'s
+    /// values and every other row reads `base`'s storage. Patched when the runs hold at most a
+    /// quarter of the rows (a quarter of the dense column's memory, and a short search per
+    /// read), else `column` as it is. Reading any row gives `column`'s value, bit for bit.
+    /// A column that is not dense, or of another length than `base`, is returned as it is.
+    pub fn over(column: &RowColumn, base: &Arc<Vec<f64>>) -> RowColumn {
+        let Store::Dense(own) = &column.store else {
+            return column.clone();
+        };
+        if own.len() != base.len() || Arc::ptr_eq(own, base) {
+            return column.clone();
+        }
+        let n = own.len();
+        let differs = |i: usize| own[i].to_bits() != base[i].to_bits();
+        let mut runs: Vec<Run> = Vec::new();
+        let mut stored = 0usize;
+        let mut i = 0;
+        while i < n {
+            if !differs(i) {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            let mut end = i + 1;
+            // extend over differing rows and gaps shorter than RUN_GAP_ROWS
+            let mut j = end;
+            while j < n && j - end < RUN_GAP_ROWS {
+                if differs(j) {
+                    end = j + 1;
+                }
+                j += 1;
+            }
+            stored += end - start;
+            if 4 * stored > n {
+                return column.clone();
+            }
+            runs.push(Run {
+                start,
+                end,
+                offset: stored - (end - start),
+            });
+            i = end;
+        }
+        let values: Vec<f64> = runs
+            .iter()
+            .flat_map(|r| own[r.start..r.end].iter().copied())
+            .collect();
+        RowColumn {
+            len: n,
+            store: Store::Patched {
+                base: Arc::clone(base),
+                runs: Arc::from(runs),
+                values: Arc::new(values),
+            },
         }
     }
 
@@ -68,44 +157,61 @@ impl RowColumn {
         self.len == 0
     }
 
+    /// Whether the column is stored patched over another's storage ([`RowColumn::over`]).
+    pub fn is_patched(&self) -> bool {
+        matches!(self.store, Store::Patched { .. })
+    }
+
     /// A dense column's storage, to share with other holders of the same values (`None` for a
-    /// sparse column).
+    /// sparse or patched column).
     pub fn dense_storage(&self) -> Option<&Arc<Vec<f64>>> {
-        match self.rows {
-            None => Some(&self.values),
-            Some(_) => None,
+        match &self.store {
+            Store::Dense(v) => Some(v),
+            _ => None,
         }
     }
 
-    /// The stored rows of a sparse column (`None` for a dense one).
+    /// The stored rows of a sparse column (`None` for a dense or patched one).
     pub fn stored_rows(&self) -> Option<&Arc<[usize]>> {
-        self.rows.as_ref()
+        match &self.store {
+            Store::Sparse { rows, .. } => Some(rows),
+            _ => None,
+        }
     }
 
-    /// Every row's value: borrowed from a dense column, built for a sparse one.
+    /// Every row's value: borrowed from a dense column, built for the other forms.
     pub fn values(&self) -> Cow<'_, [f64]> {
-        match &self.rows {
-            None => Cow::Borrowed(self.values.as_slice()),
-            Some(_) => Cow::Owned(self.to_vec()),
+        match &self.store {
+            Store::Dense(v) => Cow::Borrowed(v.as_slice()),
+            _ => Cow::Owned(self.to_vec()),
         }
     }
 
     /// A sparse column's stored rows, their values and the fill of every other row (`None` for
-    /// a dense column).
+    /// a dense or patched column).
     pub fn sparse_parts(&self) -> Option<(&[usize], &[f64], f64)> {
-        self.rows
-            .as_ref()
-            .map(|r| (&r[..], self.values.as_slice(), self.fill))
+        match &self.store {
+            Store::Sparse { rows, values, fill } => Some((&rows[..], values.as_slice(), *fill)),
+            _ => None,
+        }
     }
 
     /// Every row's value.
     pub fn to_vec(&self) -> Vec<f64> {
-        match &self.rows {
-            None => self.values.as_ref().clone(),
-            Some(rows) => {
-                let mut out = vec![self.fill; self.len];
-                for (&i, &v) in rows.iter().zip(self.values.iter()) {
+        match &self.store {
+            Store::Dense(v) => v.as_ref().clone(),
+            Store::Sparse { rows, values, fill } => {
+                let mut out = vec![*fill; self.len];
+                for (&i, &v) in rows.iter().zip(values.iter()) {
                     out[i] = v;
+                }
+                out
+            }
+            Store::Patched { base, runs, values } => {
+                let mut out = base.as_ref().clone();
+                for r in runs.iter() {
+                    out[r.start..r.end]
+                        .copy_from_slice(&values[r.offset..r.offset + (r.end - r.start)]);
                 }
                 out
             }
@@ -123,20 +229,26 @@ impl RowColumn {
             a.len == b.len && a.len == c.len,
             "columns of different lengths"
         );
-        if let (Some(ra), Some(rb), Some(rc)) = (&a.rows, &b.rows, &c.rows) {
+        if let (Some((ra, va, fa)), Some((rb, vb, fb)), Some((rc, vc, fc))) =
+            (a.sparse_parts(), b.sparse_parts(), c.sparse_parts())
+        {
             if ra == rb && ra == rc {
-                let values = a
-                    .values
+                let values = va
                     .iter()
-                    .zip(b.values.iter())
-                    .zip(c.values.iter())
+                    .zip(vb)
+                    .zip(vc)
                     .map(|((x, y), z)| f(*x, *y, *z))
                     .collect();
+                let Store::Sparse { rows, .. } = &a.store else {
+                    unreachable!("sparse_parts is Some for a sparse column only")
+                };
                 return Self {
                     len: a.len,
-                    rows: Some(ra.clone()),
-                    values: Arc::new(values),
-                    fill: f(a.fill, b.fill, c.fill),
+                    store: Store::Sparse {
+                        rows: rows.clone(),
+                        values: Arc::new(values),
+                        fill: f(fa, fb, fc),
+                    },
                 };
             }
         }
@@ -151,14 +263,21 @@ impl Index<usize> for RowColumn {
     type Output = f64;
 
     fn index(&self, i: usize) -> &f64 {
-        match &self.rows {
-            None => &self.values[i],
-            Some(rows) => {
+        match &self.store {
+            Store::Dense(v) => &v[i],
+            Store::Sparse { rows, values, fill } => {
                 assert!(i < self.len, "row {i} of a column of {} rows", self.len);
                 match rows.binary_search(&i) {
-                    Ok(p) => &self.values[p],
-                    Err(_) if self.fill.is_nan() => &NAN,
-                    Err(_) => &self.fill,
+                    Ok(p) => &values[p],
+                    Err(_) if fill.is_nan() => &NAN,
+                    Err(_) => fill,
+                }
+            }
+            Store::Patched { base, runs, values } => {
+                let p = runs.partition_point(|r| r.start <= i);
+                match p.checked_sub(1).map(|q| runs[q]) {
+                    Some(r) if i < r.end => &values[r.offset + i - r.start],
+                    _ => &base[i],
                 }
             }
         }
@@ -226,5 +345,63 @@ mod tests {
     fn a_sparse_column_refuses_a_row_past_its_end() {
         let s = RowColumn::sparse(&[0.0; 6], Arc::from(vec![2]), 0.0);
         let _ = s[6];
+    }
+
+    #[test]
+    fn a_patched_column_reads_every_row_as_the_dense_one_and_stores_its_runs_alone() {
+        let n = 10_000;
+        let base: Arc<Vec<f64>> = Arc::new((0..n).map(|i| (i as f64 * 0.01).sin()).collect());
+        // a column that departs on two windows, one of them with an equal row inside, and is
+        // NaN on its last row
+        let mut own = base.as_ref().clone();
+        for v in &mut own[1_000..1_500] {
+            *v += 1e-12;
+        }
+        own[1_200] = base[1_200];
+        for v in &mut own[7_000..7_010] {
+            *v = -*v;
+        }
+        own[n - 1] = f64::NAN;
+        let dense = RowColumn::dense(own.clone());
+        let p = RowColumn::over(&dense, &base);
+        assert!(p.is_patched());
+        for (i, v) in own.iter().enumerate() {
+            assert_eq!(p[i].to_bits(), v.to_bits(), "row {i}");
+        }
+        assert_eq!(
+            p.to_vec().iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            own.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        // three runs, the equal row inside the first taken in: 500 + 10 + 1 values stored
+        let Store::Patched { runs, values, .. } = &p.store else {
+            unreachable!()
+        };
+        assert_eq!(runs.len(), 3);
+        assert_eq!(values.len(), 511);
+        assert!(p.dense_storage().is_none() && p.sparse_parts().is_none());
+        // equal to the base on every row: no runs at all
+        let same = RowColumn::over(&RowColumn::dense(base.as_ref().clone()), &base);
+        assert!(same.is_patched());
+        assert_eq!(same.to_vec(), *base);
+    }
+
+    #[test]
+    fn a_column_that_differs_on_many_rows_or_is_the_base_stays_dense() {
+        let base: Arc<Vec<f64>> = Arc::new(vec![1.0; 1_000]);
+        // every row differs: patching would cost more than the column
+        let all = RowColumn::dense(vec![2.0; 1_000]);
+        let p = RowColumn::over(&all, &base);
+        assert!(!p.is_patched() && p.dense_storage().is_some());
+        // a difference every 50 rows joins into one run over the column: over a quarter
+        let mut every = base.as_ref().clone();
+        for i in (0..1_000).step_by(50) {
+            every[i] = 3.0;
+        }
+        assert!(!RowColumn::over(&RowColumn::dense(every), &base).is_patched());
+        // the base's own storage, and another length, are left as they are
+        let shared = RowColumn::shared(Arc::clone(&base));
+        assert!(RowColumn::over(&shared, &base).dense_storage().is_some());
+        let short = RowColumn::dense(vec![1.0; 10]);
+        assert!(!RowColumn::over(&short, &base).is_patched());
     }
 }

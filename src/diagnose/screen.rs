@@ -68,7 +68,8 @@ pub struct Probe {
     pub active: Active,
     /// Outputs at the base.
     pub base: Vec<Arc<Vec<RowColumn>>>,
-    /// Outputs at the base plus `h`.
+    /// Outputs at the base plus `h`, each column stored over the base's where it departs
+    /// from it on few rows ([`RowColumn::over`]; every row reads the simulated value).
     pub outputs: Vec<Arc<Vec<RowColumn>>>,
     /// Taken in the current round (then `outputs` is a simulation of the current round's
     /// parameters and starts the full fit).
@@ -168,6 +169,33 @@ impl Screen {
     }
 }
 
+/// `outputs` with each dense column stored over the base's where it differs from it on few
+/// rows ([`RowColumn::over`]): a probe is kept for the later rounds, and an effect that acts
+/// now and then leaves most rows as the base's. Every row reads the same value.
+fn patched_over(
+    outputs: &[Arc<Vec<RowColumn>>],
+    base: &[Arc<Vec<RowColumn>>],
+) -> Vec<Arc<Vec<RowColumn>>> {
+    outputs
+        .iter()
+        .zip(base)
+        .map(|(o, b)| {
+            if Arc::ptr_eq(o, b) {
+                return Arc::clone(o);
+            }
+            Arc::new(
+                o.iter()
+                    .zip(b.iter())
+                    .map(|(c, bc)| match bc.dense_storage() {
+                        Some(bs) => RowColumn::over(c, bs),
+                        None => c.clone(),
+                    })
+                    .collect(),
+            )
+        })
+        .collect()
+}
+
 /// Models `e` may change: its own, and for a longitudinal effect also the axle model (which
 /// takes the engine torque, slope and mass as inputs).
 fn may_change(ev: &Evaluator<'_, '_>, e: Effect) -> Active {
@@ -221,9 +249,9 @@ pub fn screen(
                     .collect();
                 active.iter().any(|a| *a).then(|| Probe {
                     h: p - cur,
+                    outputs: patched_over(&x.outputs, &base.outputs),
                     active,
                     base: base.outputs.clone(),
-                    outputs: x.outputs,
                     fresh: true,
                     ladder_reduction: 0.0,
                 })
