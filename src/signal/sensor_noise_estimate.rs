@@ -301,9 +301,14 @@ pub fn estimate_sensor_noise_in(
             p
         }
     };
-    // native samples: every row, or the knots with the missing ones filled in
-    let mut native: Vec<Knot> = Vec::new();
+    // native samples: every row, or the knots with the missing ones filled in. What built the
+    // period is released first (a 10-hour 50 Hz column has 1.8 million knots of 40 bytes), and
+    // a sample on every row is one allocation of the exact size
+    drop(spacings);
+    let mut native: Vec<Knot>;
     if period == 1.0 {
+        drop(knots);
+        native = Vec::with_capacity(n_finite);
         for (pi, &(a, b)) in pieces.iter().enumerate() {
             for (i, &v) in values.iter().enumerate().take(b).skip(a) {
                 native.push(Knot {
@@ -316,6 +321,7 @@ pub fn estimate_sensor_noise_in(
             }
         }
     } else {
+        native = Vec::new();
         for (pi, &(a, b)) in pieces.iter().enumerate() {
             let ks: Vec<Knot> = knots.iter().copied().filter(|k| k.piece == pi).collect();
             let push_fill = |native: &mut Vec<Knot>, from: f64, to: f64| {
@@ -382,6 +388,7 @@ pub fn estimate_sensor_noise_in(
                 p += period;
             }
         }
+        drop(knots);
     }
     let vals: Vec<f64> = native.iter().map(|k| k.val).collect();
     // the step from the recorded values: not a piece's first and last sample (an interpolated
