@@ -301,9 +301,9 @@ pub fn estimate_sensor_noise_in(
             p
         }
     };
-    // native samples: every row, or the knots with the missing ones filled in. What built the
-    // period is released first (a 10-hour 50 Hz column has 1.8 million knots of 40 bytes), and
-    // a sample on every row is one allocation of the exact size
+    // native samples: every row, or the knots with the missing ones filled in. The spacings are
+    // released once the period is known and the knots once nothing reads them (a 10-hour 50 Hz
+    // column has 1.8 million knots of 40 bytes); a sample on every row is one exact allocation
     drop(spacings);
     let mut native: Vec<Knot>;
     if period == 1.0 {
