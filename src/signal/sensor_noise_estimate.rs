@@ -119,16 +119,18 @@ fn finite_runs(x: &[f64]) -> Vec<(usize, usize)> {
 struct Knot {
     pos: f64,
     val: f64,
-    piece: usize,
+    /// Index of the finite piece (32 bits, as the rows: a drive has far fewer than 2³² rows,
+    /// and a knot takes 32 bytes instead of 40).
+    piece: u32,
     /// Event rows behind the knot (1 or 2 for a knot; 3 or more: a channel as fast as the grid).
-    rows: usize,
+    rows: u32,
     /// The value is the recorded one (false: a knot between rows whose lines do not
     /// intersect inside, given the mean of its rows).
     exact: bool,
 }
 
 /// The knots of one finite piece `[a, b)` of `x`.
-fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) -> Vec<Knot> {
+fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: u32) -> Vec<Knot> {
     let scale = x[a..b].iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
     let mut ev: Vec<usize> = Vec::new();
@@ -191,7 +193,7 @@ fn piece_knots(x: &[f64], a: usize, b: usize, kind: SampleKind, piece: usize) ->
                 pos: i as f64,
                 val: x[i],
                 piece,
-                rows: size,
+                rows: size as u32,
                 exact: true,
             },
         };
@@ -270,7 +272,7 @@ pub fn estimate_sensor_noise_in(
     let n_finite: usize = pieces.iter().map(|(a, b)| b - a).sum();
     let mut knots: Vec<Knot> = Vec::new();
     for (pi, &(a, b)) in pieces.iter().enumerate() {
-        knots.extend(piece_knots(values, a, b, kind, pi));
+        knots.extend(piece_knots(values, a, b, kind, pi as u32));
     }
     // native period, rows
     let mut spacings: Vec<f64> = knots
@@ -278,7 +280,7 @@ pub fn estimate_sensor_noise_in(
         .filter(|w| w[0].piece == w[1].piece)
         .map(|w| w[1].pos - w[0].pos)
         .collect();
-    let n_events: usize = knots.iter().map(|k| k.rows).sum();
+    let n_events: usize = knots.iter().map(|k| k.rows as usize).sum();
     let wide = knots.iter().filter(|k| k.rows >= 3).count();
     let every_row = n_events * 2 > n_finite
         || wide * 10 > knots.len()
@@ -303,7 +305,7 @@ pub fn estimate_sensor_noise_in(
     };
     // native samples: every row, or the knots with the missing ones filled in. The spacings are
     // released once the period is known and the knots once nothing reads them (a 10-hour 50 Hz
-    // column has 1.8 million knots of 40 bytes); a sample on every row is one exact allocation
+    // column has 1.8 million knots of 32 bytes); a sample on every row is one exact allocation
     drop(spacings);
     let mut native: Vec<Knot>;
     if period == 1.0 {
@@ -314,7 +316,7 @@ pub fn estimate_sensor_noise_in(
                 native.push(Knot {
                     pos: i as f64,
                     val: v,
-                    piece: pi,
+                    piece: pi as u32,
                     rows: 1,
                     exact: true,
                 });
@@ -323,7 +325,11 @@ pub fn estimate_sensor_noise_in(
     } else {
         native = Vec::new();
         for (pi, &(a, b)) in pieces.iter().enumerate() {
-            let ks: Vec<Knot> = knots.iter().copied().filter(|k| k.piece == pi).collect();
+            let ks: Vec<Knot> = knots
+                .iter()
+                .copied()
+                .filter(|k| k.piece as usize == pi)
+                .collect();
             let push_fill = |native: &mut Vec<Knot>, from: f64, to: f64| {
                 // evenly spaced samples strictly between `from` and `to`
                 let gap = to - from;
@@ -333,7 +339,7 @@ pub fn estimate_sensor_noise_in(
                     native.push(Knot {
                         pos: p,
                         val: grid_value(values, a, b, p, kind),
-                        piece: pi,
+                        piece: pi as u32,
                         rows: 0,
                         exact: false,
                     });
@@ -345,7 +351,7 @@ pub fn estimate_sensor_noise_in(
                     native.push(Knot {
                         pos: p,
                         val: grid_value(values, a, b, p, kind),
-                        piece: pi,
+                        piece: pi as u32,
                         rows: 0,
                         exact: false,
                     });
@@ -360,7 +366,7 @@ pub fn estimate_sensor_noise_in(
                 head.push(Knot {
                     pos: p,
                     val: grid_value(values, a, b, p, kind),
-                    piece: pi,
+                    piece: pi as u32,
                     rows: 0,
                     exact: false,
                 });
@@ -381,7 +387,7 @@ pub fn estimate_sensor_noise_in(
                 native.push(Knot {
                     pos: p,
                     val: grid_value(values, a, b, p, kind),
-                    piece: pi,
+                    piece: pi as u32,
                     rows: 0,
                     exact: false,
                 });
@@ -490,7 +496,7 @@ pub fn estimate_sensor_noise_in(
     // runs of equal recorded level
     let mut run = Vec::with_capacity(native.len());
     let mut run_level = Vec::new();
-    let mut last: Option<(usize, f64)> = None;
+    let mut last: Option<(u32, f64)> = None;
     let mut id = 0usize;
     for (k, &l) in native.iter().zip(&level) {
         match last {
