@@ -10,7 +10,9 @@ use super::spec::Plan;
 use super::spec_sections::{LongitudinalSpec, MissingPolicy, PipelineStage, SlopeInput};
 use super::vehicles::LoadedVehicle;
 use crate::diagnose::extended::ExtendedError;
+use crate::diagnose::long_drive::is_long;
 use crate::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError, Diagnosed};
+use crate::heap::release_free_memory;
 use crate::road::slope_filter::{filter_slope, SlopeFiltered};
 use crate::road::study::{slope_spectrum, RoadSpectrum, StudyError};
 use crate::schema::{drive_log, Stage};
@@ -275,6 +277,15 @@ pub(super) fn compute(
         let mut n = Vec::new();
         (run_diagnose(plan, &log, v, &mut n), n)
     });
+    // between the stages of a long drive, the pages its last stage freed go back to the
+    // operating system before the next allocates its own (crate::heap)
+    let long = is_long(log.len());
+    let release = || {
+        if long {
+            release_free_memory();
+        }
+    };
+    release();
     let dist = if plan.has(PipelineStage::Resample) {
         let d = resample_to_distance(&log, &plan.spec.resample)
             .map_err(|e| fail(PipelineStage::Resample, e))?;
@@ -291,6 +302,7 @@ pub(super) fn compute(
         }
         _ => None,
     };
+    release();
     // the simulations' log: the filtered slope added as a column when a simulation takes it
     let wants_filtered = [
         plan.shuffle.as_ref().map(|s| s.slope),
@@ -330,6 +342,7 @@ pub(super) fn compute(
         f.zero_phase_time = s.values;
     }
     let (shuffle, axle) = (shuffle?, axle?);
+    release();
     notes.extend(sh_notes);
     notes.extend(ax_notes);
     let spectrum = match &dist {
