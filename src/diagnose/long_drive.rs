@@ -28,6 +28,15 @@ pub fn is_long(rows: usize) -> bool {
     rows >= LONG_DRIVE_MIN_ROWS
 }
 
+/// Between two steps of a drive of `rows` rows: on a long drive ([`is_long`]), the allocator's
+/// free pages go back to the operating system ([`crate::heap::release_free_memory`]; module
+/// documentation); on a drive of ordinary length, nothing.
+pub fn release_between_steps(rows: usize) {
+    if is_long(rows) {
+        crate::heap::release_free_memory();
+    }
+}
+
 /// `f` over `items`, results in `items`' order: one after the other on this thread when
 /// `one_at_a_time` (each simulation then parallel inside), in parallel otherwise.
 pub fn map_in_order<T, R, F>(one_at_a_time: bool, items: &[T], f: F) -> Vec<R>

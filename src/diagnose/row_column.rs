@@ -229,25 +229,37 @@ impl RowColumn {
             a.len == b.len && a.len == c.len,
             "columns of different lengths"
         );
-        if let (Some((ra, va, fa)), Some((rb, vb, fb)), Some((rc, vc, fc))) =
-            (a.sparse_parts(), b.sparse_parts(), c.sparse_parts())
+        if let (
+            Store::Sparse {
+                rows: ra,
+                values: va,
+                fill: fa,
+            },
+            Store::Sparse {
+                rows: rb,
+                values: vb,
+                fill: fb,
+            },
+            Store::Sparse {
+                rows: rc,
+                values: vc,
+                fill: fc,
+            },
+        ) = (&a.store, &b.store, &c.store)
         {
             if ra == rb && ra == rc {
                 let values = va
                     .iter()
-                    .zip(vb)
-                    .zip(vc)
+                    .zip(vb.iter())
+                    .zip(vc.iter())
                     .map(|((x, y), z)| f(*x, *y, *z))
                     .collect();
-                let Store::Sparse { rows, .. } = &a.store else {
-                    unreachable!("sparse_parts is Some for a sparse column only")
-                };
                 return Self {
                     len: a.len,
                     store: Store::Sparse {
-                        rows: rows.clone(),
+                        rows: Arc::clone(ra),
                         values: Arc::new(values),
-                        fill: f(fa, fb, fc),
+                        fill: f(*fa, *fb, *fc),
                     },
                 };
             }

@@ -42,7 +42,7 @@ use super::idle_torque::{idle_torque_offset, IdleTorqueOutcome};
 use super::locate::{
     locate_inputs, recorded_inputs, shuffle_band_hz, LocateConfig, LocateError, Location,
 };
-use super::long_drive::{is_long, map_in_order};
+use super::long_drive::{is_long, map_in_order, release_between_steps};
 use super::modal::{compare_modes, tolerance_shift, ModalComparison, ModalConfig, Reference};
 use super::noise::{noise_floors, ModelSet, NoiseConfig, NoiseError, NoiseFloors};
 use super::parameter_table::{EstimateMethod, ParameterRow};
@@ -57,7 +57,6 @@ use super::speed_consistency::{speed_consistency, ConsistencyConfig, SpeedConsis
 use super::tyre_slip::{self, tyre_slip_variance};
 use crate::diagnose::compare::{share_storage, Comparison, Conditions};
 use crate::diagnose::rows::ACTUATION_CHANNEL;
-use crate::heap::release_free_memory;
 use crate::model::catalogue::Effect;
 use crate::model::resonance::{vehicle_speed_at, OPERATING_ENGINE_SPEED_RAD_S};
 use crate::model::tolerance::Tolerances;
@@ -303,11 +302,7 @@ pub fn diagnose(
 ) -> Result<Diagnosed, DiagnoseError> {
     // between steps, a long drive's freed columns go back to the operating system
     // (super::long_drive)
-    let release = || {
-        if is_long(log.len()) {
-            release_free_memory();
-        }
-    };
+    let release = || release_between_steps(log.len());
     let setup = Setup::new(log, vehicle)?;
     let models = ModelSet {
         actuation: true,

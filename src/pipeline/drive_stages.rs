@@ -10,9 +10,8 @@ use super::spec::Plan;
 use super::spec_sections::{LongitudinalSpec, MissingPolicy, PipelineStage, SlopeInput};
 use super::vehicles::LoadedVehicle;
 use crate::diagnose::extended::ExtendedError;
-use crate::diagnose::long_drive::is_long;
+use crate::diagnose::long_drive::release_between_steps;
 use crate::diagnose::run::{diagnose, DiagnoseConfig, DiagnoseError, Diagnosed};
-use crate::heap::release_free_memory;
 use crate::road::slope_filter::{filter_slope, SlopeFiltered};
 use crate::road::study::{slope_spectrum, RoadSpectrum, StudyError};
 use crate::schema::{drive_log, Stage};
@@ -278,13 +277,9 @@ pub(super) fn compute(
         (run_diagnose(plan, &log, v, &mut n), n)
     });
     // between the stages of a long drive, the pages its last stage freed go back to the
-    // operating system before the next allocates its own (crate::heap)
-    let long = is_long(log.len());
-    let release = || {
-        if long {
-            release_free_memory();
-        }
-    };
+    // operating system before the next allocates its own
+    let rows = log.len();
+    let release = || release_between_steps(rows);
     release();
     let dist = if plan.has(PipelineStage::Resample) {
         let d = resample_to_distance(&log, &plan.spec.resample)

@@ -271,8 +271,8 @@ pub fn estimate_sensor_noise_in(
     }
     let n_finite: usize = pieces.iter().map(|(a, b)| b - a).sum();
     let mut knots: Vec<Knot> = Vec::new();
-    for (pi, &(a, b)) in pieces.iter().enumerate() {
-        knots.extend(piece_knots(values, a, b, kind, pi as u32));
+    for (piece, &(a, b)) in (0u32..).zip(&pieces) {
+        knots.extend(piece_knots(values, a, b, kind, piece));
     }
     // native period, rows
     let mut spacings: Vec<f64> = knots
@@ -311,12 +311,12 @@ pub fn estimate_sensor_noise_in(
     if period == 1.0 {
         drop(knots);
         native = Vec::with_capacity(n_finite);
-        for (pi, &(a, b)) in pieces.iter().enumerate() {
+        for (piece, &(a, b)) in (0u32..).zip(&pieces) {
             for (i, &v) in values.iter().enumerate().take(b).skip(a) {
                 native.push(Knot {
                     pos: i as f64,
                     val: v,
-                    piece: pi as u32,
+                    piece,
                     rows: 1,
                     exact: true,
                 });
@@ -324,12 +324,8 @@ pub fn estimate_sensor_noise_in(
         }
     } else {
         native = Vec::new();
-        for (pi, &(a, b)) in pieces.iter().enumerate() {
-            let ks: Vec<Knot> = knots
-                .iter()
-                .copied()
-                .filter(|k| k.piece as usize == pi)
-                .collect();
+        for (piece, &(a, b)) in (0u32..).zip(&pieces) {
+            let ks: Vec<Knot> = knots.iter().copied().filter(|k| k.piece == piece).collect();
             let push_fill = |native: &mut Vec<Knot>, from: f64, to: f64| {
                 // evenly spaced samples strictly between `from` and `to`
                 let gap = to - from;
@@ -339,7 +335,7 @@ pub fn estimate_sensor_noise_in(
                     native.push(Knot {
                         pos: p,
                         val: grid_value(values, a, b, p, kind),
-                        piece: pi as u32,
+                        piece,
                         rows: 0,
                         exact: false,
                     });
@@ -351,7 +347,7 @@ pub fn estimate_sensor_noise_in(
                     native.push(Knot {
                         pos: p,
                         val: grid_value(values, a, b, p, kind),
-                        piece: pi as u32,
+                        piece,
                         rows: 0,
                         exact: false,
                     });
@@ -366,7 +362,7 @@ pub fn estimate_sensor_noise_in(
                 head.push(Knot {
                     pos: p,
                     val: grid_value(values, a, b, p, kind),
-                    piece: pi as u32,
+                    piece,
                     rows: 0,
                     exact: false,
                 });
@@ -387,7 +383,7 @@ pub fn estimate_sensor_noise_in(
                 native.push(Knot {
                     pos: p,
                     val: grid_value(values, a, b, p, kind),
-                    piece: pi as u32,
+                    piece,
                     rows: 0,
                     exact: false,
                 });
