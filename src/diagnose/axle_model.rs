@@ -23,13 +23,13 @@
 
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
+use super::kept::Kept;
 use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
 use super::slope_grid::{cured_slope, SlopeGrid};
 use crate::model::axle::{AxleExtensions, AxleParams};
-use crate::model::driveline::DrivelineParams;
 use crate::model::extended_vehicle::ExtendedVehicle;
 use crate::sim::axle::{AxleInputs, HalfTruck, Start};
-use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig};
+use crate::sim::axle_recorded::{axle_inputs_from_log, AxleRecordConfig, InverseDynamicsParams};
 use crate::table::{DriveLog, LogView};
 use std::sync::{Arc, OnceLock};
 
@@ -38,7 +38,7 @@ pub const AXLE_STEP_S: f64 = 0.01;
 
 /// The axle-load model of one recording, extended by the catalogue's axle effects (and by the
 /// longitudinal ones that change its inputs or masses).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct AxleModel<'a> {
     log: &'a DriveLog,
     nominal_truth: &'a ExtendedVehicle,
@@ -48,38 +48,49 @@ pub struct AxleModel<'a> {
     slope_grid: OnceLock<Option<SlopeGrid>>,
     cfg: AxleRecordConfig,
     /// The simulation at the nominal parameters with what it was run on, made by the first
-    /// simulation ([`NominalRun`]); `None` when it failed.
-    nominal_run: OnceLock<Option<NominalRun>>,
+    /// simulation ([`Run`]); `None` when it failed.
+    nominal_run: OnceLock<Option<Run>>,
+    /// Other simulations kept for parameter sets that build the same model and inputs
+    /// ([`Kept`]).
+    kept: Kept<Run>,
 }
 
 /// A simulation of the axle model with everything it depends on: the half-truck's parameters
 /// and extensions, its inputs and their time axis. The simulation is a function of these
 /// alone, so a parameter set that builds the same ones (most longitudinal effects change
 /// neither the axle model's masses nor its inputs) has the same pressures, taken from here
-/// instead of simulated again.
+/// instead of simulated again; one that builds the same inputs for another model is simulated
+/// on these inputs without building them.
 #[derive(Debug, Clone)]
-struct NominalRun {
+struct Run {
     params: AxleParams,
     ext: AxleExtensions,
     /// What the inputs are built from besides the recording ([`InputsFrom`]).
     from: InputsFrom,
-    inputs: AxleInputs,
+    inputs: Arc<AxleInputs>,
     t_s: Arc<[f64]>,
-    pressures: [Vec<f64>; 3],
+    pressures: Arc<[Vec<f64>; 3]>,
+}
+
+impl Run {
+    fn same_model(&self, tm: &ExtendedVehicle) -> bool {
+        tm.axles.as_ref() == Some(&self.params) && tm.axle_ext == self.ext
+    }
 }
 
 /// Everything [`AxleModel`]'s inputs are built from besides the recording, the gear ratios and
 /// the record configuration (fixed per model): the parameters of the catalogue's input effects
 /// ([`INPUT_EFFECTS`], the corrected columns and the cured slope), the half-truck's mass, wheel
-/// radius and gravity, and the driveline. Equal values build equal inputs, so a parameter set
-/// with the nominal run's takes the nominal run's inputs without building them.
+/// radius and gravity, and the driveline's inverse-dynamics parameters. Equal values build
+/// equal inputs, so a parameter set with a kept run's takes that run's inputs without building
+/// them.
 #[derive(Debug, Clone, PartialEq)]
 struct InputsFrom {
     input_effects: [f64; INPUT_EFFECTS.len()],
     mass_kg: f64,
     wheel_radius_m: f64,
     gravity_m_per_s2: f64,
-    driveline: DrivelineParams,
+    driveline: InverseDynamicsParams,
 }
 
 impl<'a> AxleModel<'a> {
@@ -114,6 +125,7 @@ impl<'a> AxleModel<'a> {
             slope_grid: OnceLock::new(),
             cfg: AxleRecordConfig::default(),
             nominal_run: OnceLock::new(),
+            kept: Kept::for_rows(log.timestamp_ns.len()),
         })
     }
 
@@ -126,38 +138,62 @@ impl<'a> AxleModel<'a> {
             .nominal_run
             .get_or_init(|| self.nominal_simulation().ok());
         let (tm, from) = self.truth_at(theta)?;
-        let same_model =
-            |n: &NominalRun| tm.axles.as_ref() == Some(&n.params) && tm.axle_ext == n.ext;
+        // a kept run of the same model on the same inputs, or the inputs of one
+        let mut inputs_of = None;
         if let Some(n) = nominal.as_ref().filter(|n| n.from == from) {
-            // built from the same values: the nominal run's inputs
-            return Ok(if same_model(n) {
-                n.pressures.clone()
-            } else {
-                self.simulate_on(&tm, &n.inputs, &n.t_s)
-            });
+            if n.same_model(&tm) {
+                return Ok((*n.pressures).clone());
+            }
+            inputs_of = Some((n.inputs.clone(), n.t_s.clone()));
         }
-        let (inputs, t_s) = self.inputs(theta, &tm)?;
-        if let Some(n) = nominal
-            .as_ref()
-            .filter(|n| same_model(n) && n.inputs == inputs && n.t_s == t_s)
+        if let Some(p) = self
+            .kept
+            .find(|r| (r.from == from && r.same_model(&tm)).then(|| r.pressures.clone()))
         {
-            return Ok(n.pressures.clone());
+            return Ok((*p).clone());
         }
-        Ok(self.simulate_on(&tm, &inputs, &t_s))
-    }
-
-    /// The simulation at the nominal parameters with what it was run on.
-    fn nominal_simulation(&self) -> Result<NominalRun, ExtendedError> {
-        let (tm, from) = self.truth_at(&self.nominal)?;
-        let (inputs, t_s) = self.inputs(&self.nominal, &tm)?;
+        if inputs_of.is_none() {
+            inputs_of = self
+                .kept
+                .find(|r| (r.from == from).then(|| (r.inputs.clone(), r.t_s.clone())));
+        }
+        let (inputs, t_s) = match inputs_of {
+            Some(it) => it,
+            None => {
+                let (inputs, t_s) = self.inputs(theta, &tm)?;
+                if let Some(n) = nominal
+                    .as_ref()
+                    .filter(|n| n.same_model(&tm) && *n.inputs == inputs && n.t_s == t_s)
+                {
+                    return Ok((*n.pressures).clone());
+                }
+                (Arc::new(inputs), t_s)
+            }
+        };
         let pressures = self.simulate_on(&tm, &inputs, &t_s);
-        Ok(NominalRun {
+        self.kept.keep(Run {
             params: tm.axles.clone().expect("checked in new"),
             ext: tm.axle_ext,
             from,
             inputs,
             t_s,
-            pressures,
+            pressures: Arc::new(pressures.clone()),
+        });
+        Ok(pressures)
+    }
+
+    /// The simulation at the nominal parameters with what it was run on.
+    fn nominal_simulation(&self) -> Result<Run, ExtendedError> {
+        let (tm, from) = self.truth_at(&self.nominal)?;
+        let (inputs, t_s) = self.inputs(&self.nominal, &tm)?;
+        let pressures = self.simulate_on(&tm, &inputs, &t_s);
+        Ok(Run {
+            params: tm.axles.clone().expect("checked in new"),
+            ext: tm.axle_ext,
+            from,
+            inputs: Arc::new(inputs),
+            t_s,
+            pressures: Arc::new(pressures),
         })
     }
 
@@ -177,7 +213,7 @@ impl<'a> AxleModel<'a> {
             mass_kg: a.mass_kg(),
             wheel_radius_m: a.wheel_radius_m,
             gravity_m_per_s2: a.gravity_m_per_s2,
-            driveline: tm.driveline.clone(),
+            driveline: InverseDynamicsParams::from(&tm.driveline),
         };
         Ok((tm, from))
     }

@@ -25,6 +25,7 @@
 use super::capacity_reach::CapacityReach;
 use super::effect_parameters::Theta;
 use super::extended_error::ExtendedError;
+use super::kept::Kept;
 use super::model_inputs::{corrected_columns, filled, INPUT_EFFECTS};
 use super::simulation_windows::{fine_spans, stepped_pieces, window_starts, FINE_STEP_S};
 use super::slope_grid::{cured_slope, SlopeGrid};
@@ -136,6 +137,10 @@ pub struct LongitudinalModel<'a> {
     /// that reads them ([`ReadInputs`]); `None` when building them failed (each
     /// simulation then builds its own and reports the error).
     nominal_inputs: OnceLock<Option<Arc<ReadInputs>>>,
+    /// Inputs read at other sensor parameters, with those parameters' bits ([`Kept`]): the
+    /// explain step's base departs from the nominal ones by the fitted sensor effects, and its
+    /// probes of the other effects read what it reads.
+    sensor_inputs: Kept<([u64; INPUT_EFFECTS.len()], Arc<ReadInputs>)>,
     /// Simulations at other clutch capacities, whose locked windows later ones reuse
     /// ([`CapacityReach`]).
     reach: CapacityReach,
@@ -221,30 +226,40 @@ impl<'a> LongitudinalModel<'a> {
             slip,
             cfg,
             nominal_inputs: OnceLock::new(),
+            sensor_inputs: Kept::for_rows(log.len()),
             reach: CapacityReach::new(log.len()),
         })
     }
 
     /// The scenario and tyre slip `theta` reads ([`ReadInputs`]), with the plant's
-    /// driveline `p`: built for `theta` when a sensor effect departs from the nominal
-    /// parameters, else the nominal ones, built once.
+    /// driveline `p`: the nominal ones, built once, at the nominal sensor parameters; at others
+    /// the ones kept for the same sensor parameters and driveline key ([`inputs_key`]), else
+    /// built for `theta` (and kept).
     fn read_inputs(
         &self,
         theta: &Theta,
         p: &DrivelineParams,
     ) -> Result<Arc<ReadInputs>, ExtendedError> {
-        let nominal_sensors = INPUT_EFFECTS
-            .iter()
-            .all(|&e| theta.get(e).to_bits() == self.nominal.get(e).to_bits());
-        if nominal_sensors {
+        let sensors = INPUT_EFFECTS.map(|e| theta.get(e).to_bits());
+        let key = inputs_key(p);
+        if sensors == INPUT_EFFECTS.map(|e| self.nominal.get(e).to_bits()) {
             let cached = self
                 .nominal_inputs
                 .get_or_init(|| self.build_inputs(&self.nominal, p).ok().map(Arc::new));
-            if let Some(c) = cached.as_ref().filter(|c| c.key == inputs_key(p)) {
+            if let Some(c) = cached.as_ref().filter(|c| c.key == key) {
                 return Ok(Arc::clone(c));
             }
+        } else if let Some(c) = self
+            .sensor_inputs
+            .find(|(bits, c)| (*bits == sensors && c.key == key).then(|| Arc::clone(c)))
+        {
+            return Ok(c);
         }
-        self.build_inputs(theta, p).map(Arc::new)
+        let built = Arc::new(self.build_inputs(theta, p)?);
+        if sensors != INPUT_EFFECTS.map(|e| self.nominal.get(e).to_bits()) {
+            self.sensor_inputs.keep((sensors, Arc::clone(&built)));
+        }
+        Ok(built)
     }
 
     /// The scenario and tyre slip of the recording with `theta`'s sensor effects undone.

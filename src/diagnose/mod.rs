@@ -20,6 +20,7 @@ pub mod fit;
 pub mod fit_interval;
 pub mod fit_spec;
 pub mod idle_torque;
+pub mod kept;
 pub mod linearised;
 pub mod linearised_mode;
 pub mod locate;

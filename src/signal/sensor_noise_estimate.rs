@@ -56,7 +56,7 @@
 
 use super::quantization::estimate_quantization;
 use super::sensor_noise::{SampleKind, SensorNoise, SensorNoiseError};
-use super::stats::median;
+use super::stats::{median, median_unordered};
 use std::collections::BTreeMap;
 
 /// Minimum knots needed to estimate a native period.
@@ -76,7 +76,7 @@ const MIN_KNOTS: usize = 8;
 /// coarse-step estimate is used instead. `NaN` when `dev` is empty.
 fn grouped_median_abs(dev: &[f64], q: f64) -> f64 {
     if dev.is_empty() || !(q.is_finite() && q > 0.0) {
-        return median(&mut dev.to_vec());
+        return median_unordered(&mut dev.to_vec());
     }
     let mut counts: BTreeMap<u64, usize> = BTreeMap::new();
     for d in dev {
@@ -421,7 +421,7 @@ pub fn estimate_sensor_noise_in(
                 .filter(|k| k.piece == native[j].piece)
                 .map(|k| k.val)
                 .collect();
-            median(&mut w)
+            median_unordered(&mut w)
         })
         .collect();
     let inside = |v: f64| v > range.0 && v < range.1;
@@ -433,11 +433,11 @@ pub fn estimate_sensor_noise_in(
     let sigma_mad = if d2.is_empty() {
         0.0
     } else {
-        let m = median(&mut d2.clone());
+        let m = median_unordered(&mut d2.clone());
         let mut dev: Vec<f64> = d2.iter_mut().map(|d| (*d - m).abs()).collect();
         let mad = match q {
             Some(q) => grouped_median_abs(&dev, q),
-            None => median(&mut dev),
+            None => median_unordered(&mut dev),
         };
         1.4826 * mad / 6f64.sqrt()
     };

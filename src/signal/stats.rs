@@ -21,6 +21,28 @@ pub fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// [`median`] by selection instead of a sort: the same value to the bit (the elements of rank
+/// `⌊n/2⌋` and, for an even count, `n/2 − 1` in `f64::total_cmp` order), in linear time; `v` is
+/// left partly ordered, not sorted. For the many short windows of a running median.
+pub fn median_unordered(v: &mut [f64]) -> f64 {
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let (lower, mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
+    let mid = *mid;
+    if n % 2 == 1 {
+        mid
+    } else {
+        let below = lower
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .expect("an even count of at least 2");
+        0.5 * (below + mid)
+    }
+}
+
 /// Contiguous runs `[a, b)` of `true` rows of `ok`, in order.
 pub fn runs(ok: &[bool]) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
@@ -164,6 +186,40 @@ mod tests {
         assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
         assert!(median(&mut []).is_nan());
+    }
+
+    #[test]
+    fn the_median_by_selection_is_the_sorted_median_to_the_bit() {
+        // odd and even counts, repeated values, signed zeros and infinities, and pseudo-random
+        // windows like a running median's
+        let mut cases: Vec<Vec<f64>> = vec![
+            vec![3.0, 1.0, 2.0],
+            vec![4.0, 1.0, 3.0, 2.0],
+            vec![0.0, -0.0, 0.0, -0.0],
+            vec![-0.0, 0.0],
+            vec![f64::INFINITY, 1.0, f64::NEG_INFINITY, 2.0],
+            vec![5.0; 6],
+            vec![1.0],
+        ];
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for n in 2..60 {
+            cases.push(
+                (0..n)
+                    .map(|_| {
+                        x ^= x << 13;
+                        x ^= x >> 7;
+                        x ^= x << 17;
+                        ((x % 2001) as f64 - 1000.0) * 0.01
+                    })
+                    .collect(),
+            );
+        }
+        for c in cases {
+            let sorted = median(&mut c.clone());
+            let selected = median_unordered(&mut c.clone());
+            assert_eq!(sorted.to_bits(), selected.to_bits(), "{c:?}");
+        }
+        assert!(median_unordered(&mut []).is_nan());
     }
 
     #[test]

@@ -216,6 +216,58 @@ pub(crate) fn centred_mean(t: &[f64], v: &[f64], half: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The driveline parameters the axle inputs are built from (module doc): the inertias, losses,
+/// final drive and wheel radius of the inverse dynamics, the clutch's open position and the
+/// engine's torque lag. [`axle_inputs_from_log`] reads nothing else of a [`DrivelineParams`], so
+/// two drivelines with equal `InverseDynamicsParams` build equal inputs from one recording (a
+/// clutch capacity, a shaft stiffness or a drag area does not change them).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InverseDynamicsParams {
+    /// Wheel radius `r_w`, m.
+    pub wheel_radius_m: f64,
+    /// Final drive ratio `i_f`.
+    pub final_drive_ratio: f64,
+    /// Engine inertia `J_e`, kg·m².
+    pub j_e_kg_m2: f64,
+    /// Clutch-disc inertia `J_c`, kg·m².
+    pub j_c_kg_m2: f64,
+    /// Gearbox inertia `J_t` per gear, kg·m².
+    pub j_t_kg_m2: Vec<f64>,
+    /// Gearbox viscous loss `b_t`, N·m·s/rad.
+    pub b_t_nm_s_per_rad: f64,
+    /// Propeller-shaft inertia `J_p`, kg·m².
+    pub j_p_kg_m2: f64,
+    /// Final-drive inertia `J_f`, kg·m².
+    pub j_f_kg_m2: f64,
+    /// Final-drive viscous loss `b_f`, N·m·s/rad.
+    pub b_f_nm_s_per_rad: f64,
+    /// Drive-shaft inertia `J_d`, kg·m².
+    pub j_d_kg_m2: f64,
+    /// Normalised clutch position `L_u` from which the clutch passes no torque.
+    pub clutch_l_upper: f64,
+    /// Lag of the produced engine torque behind the reported one, s.
+    pub engine_torque_lag_s: f64,
+}
+
+impl From<&DrivelineParams> for InverseDynamicsParams {
+    fn from(d: &DrivelineParams) -> Self {
+        Self {
+            wheel_radius_m: d.wheel_radius_m,
+            final_drive_ratio: d.final_drive_ratio,
+            j_e_kg_m2: d.j_e_kg_m2,
+            j_c_kg_m2: d.j_c_kg_m2,
+            j_t_kg_m2: d.j_t_kg_m2.clone(),
+            b_t_nm_s_per_rad: d.b_t_nm_s_per_rad,
+            j_p_kg_m2: d.j_p_kg_m2,
+            j_f_kg_m2: d.j_f_kg_m2,
+            b_f_nm_s_per_rad: d.b_f_nm_s_per_rad,
+            j_d_kg_m2: d.j_d_kg_m2,
+            clutch_l_upper: d.clutch_l_upper,
+            engine_torque_lag_s: d.engine_torque_lag_s,
+        }
+    }
+}
+
 /// Drive-shaft torque `M_d` at the driven wheels by inverse dynamics of the driveline (module doc,
 /// docs/models/driveline.md), N·m (+ driving), per row. `m_e` engine torque (N·m), `w_e` engine
 /// speed (rad/s; `None`: locked clutch assumed), `gear` (rounded; below 1 = no gear engaged;
@@ -224,7 +276,7 @@ pub(crate) fn centred_mean(t: &[f64], v: &[f64], half: f64) -> Vec<f64> {
 /// times `t` (s).
 #[allow(clippy::too_many_arguments)]
 fn drive_torque_inverse_dynamics(
-    p: &DrivelineParams,
+    p: &InverseDynamicsParams,
     ratios: &[f64],
     t: &[f64],
     m_e: &[f64],
@@ -286,6 +338,9 @@ pub fn axle_inputs_from_log(
     slope_column: Option<&str>,
     cfg: &AxleRecordConfig,
 ) -> Result<RecordedAxleInputs, RecordedError> {
+    // the driveline's parameters the inputs are built from, and no others
+    let driveline = driveline.map(InverseDynamicsParams::from);
+    let driveline = driveline.as_ref();
     let file = log.log.meta.source_file.clone();
     let t = relative_times(log.log)?;
     let column =
@@ -562,7 +617,7 @@ mod tests {
         let w_e: Vec<f64> = v.iter().map(|x| big_g * x / r).collect();
         let acc = centred_derivative(&t, &v, 0.05);
         let md = drive_torque_inverse_dynamics(
-            &p,
+            &(&p).into(),
             &ratios,
             &t,
             &vec![m_e; t.len()],
@@ -610,7 +665,7 @@ mod tests {
             / p.wheel_radius_m;
         for clutch in [Some(vec![1.0; t.len()]), None] {
             let md = drive_torque_inverse_dynamics(
-                &p,
+                &(&p).into(),
                 &ratios,
                 &t,
                 &m_e,
@@ -631,7 +686,7 @@ mod tests {
         let v: Vec<f64> = t.iter().map(|x| 2.0 + 0.7 * x).collect();
         let acc = centred_derivative(&t, &v, 0.05);
         let md = drive_torque_inverse_dynamics(
-            &p,
+            &(&p).into(),
             &ratios,
             &t,
             &vec![0.0; t.len()],
