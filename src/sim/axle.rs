@@ -380,13 +380,14 @@ impl<'a> HalfTruck<'a> {
     }
 
     /// [`HalfTruck::longitudinal`] with a cursor over the input pieces, for increasing times.
+    #[inline(always)]
     fn longitudinal_with(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> Longitudinal {
         self.longitudinal_by(u, |i, s| c.eval(i, s, t))
     }
 
     /// [`HalfTruck::longitudinal`] from the inputs' values `value(i, input)` (`i` the input's
     /// index in the order accel, slope, service brake, drive torque, auxiliary brake torque).
-    #[inline]
+    #[inline(always)]
     fn longitudinal_by(
         &self,
         u: &AxleInputs,
@@ -427,6 +428,7 @@ impl<'a> HalfTruck<'a> {
     }
 
     /// Generalised forces that do not depend on the state.
+    #[inline(always)]
     fn external(&self, l: &Longitudinal) -> V5 {
         let g = self.p.gravity_m_per_s2;
         let mut q =
@@ -474,7 +476,7 @@ impl<'a> HalfTruck<'a> {
     /// Accelerations q̈ = M⁻¹ (Q_ext − K q + P(q) − Σ F_i(d_i·q̇) d_i) for state (q, q̇), with
     /// `ae = M⁻¹ Q_ext` the external forces' part ([`HalfTruck::forced`]), P the bellows'
     /// progression and F_i the damper tables.
-    #[inline]
+    #[inline(always)]
     fn accel(&self, q: &V5, qd: &V5, ae: &V5) -> V5 {
         let mut a = ae - self.m_inv_k * q;
         if self.ext.bellow_progression_per_m != 0.0 {
@@ -492,7 +494,7 @@ impl<'a> HalfTruck<'a> {
     }
 
     /// `M⁻¹ Q_ext`: the accelerations the external forces at time `t` give ([`HalfTruck::external`]).
-    #[inline]
+    #[inline(always)]
     fn forced(&self, u: &AxleInputs, t: f64, c: &mut Cursor) -> V5 {
         self.m_inv * self.external(&self.longitudinal_with(u, t, c))
     }
@@ -575,7 +577,41 @@ impl<'a> HalfTruck<'a> {
     }
 
     /// Integrates from `t_out[0]` and hands the state (q, q̇) at every `t_out` to `at`.
+    ///
+    /// On x86-64 CPUs with AVX (checked at run time) the loop is compiled with 256-bit
+    /// registers; the operations and their order are the same (no fused multiply-adds), so
+    /// every CPU gives the same bits.
     fn integrate(
+        &self,
+        u: &AxleInputs,
+        t_out: &[f64],
+        start: Start,
+        at: impl FnMut(&V5, &V5, f64),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: `integrate_avx` only requires AVX, which the CPU was just found to have.
+            return unsafe { self.integrate_avx(u, t_out, start, at) };
+        }
+        self.integrate_on(u, t_out, start, at);
+    }
+
+    /// [`HalfTruck::integrate_on`] compiled with AVX enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn integrate_avx(
+        &self,
+        u: &AxleInputs,
+        t_out: &[f64],
+        start: Start,
+        at: impl FnMut(&V5, &V5, f64),
+    ) {
+        self.integrate_on(u, t_out, start, at);
+    }
+
+    /// The integration loop of [`HalfTruck::integrate`].
+    #[inline(always)]
+    fn integrate_on(
         &self,
         u: &AxleInputs,
         t_out: &[f64],
@@ -601,10 +637,12 @@ impl<'a> HalfTruck<'a> {
             let span = tk - t;
             if span > 0.0 {
                 let mut qe0 = self.forced(u, t, &mut cur);
-                if let Some((q1, qd1)) = exact
-                    .as_mut()
-                    .and_then(|x| x.step(u, &cur, t, tk, &q, &qd, &qe0))
-                {
+                // a match, not a closure: the step is compiled into this loop (AVX)
+                let stepped = match exact.as_mut() {
+                    Some(x) => x.step(u, &cur, t, tk, &q, &qd, &qe0),
+                    None => None,
+                };
+                if let Some((q1, qd1)) = stepped {
                     (q, qd, t) = (q1, qd1, tk);
                     at(&q, &qd, tk);
                     continue;

@@ -275,6 +275,7 @@ impl<'a> FastDriveline<'a> {
         self.p.clutch_capacity(x)
     }
 
+    #[inline(always)]
     fn road_force(&self, sc: &Scenario, cur: &Cursors, t: f64, v: f64) -> f64 {
         self.p.road_force(
             v,
@@ -429,7 +430,41 @@ impl<'a> FastDriveline<'a> {
 
     /// The integration loop of [`FastDriveline::simulate_span`], its samples into `sink`, from
     /// `start`; returns the span's [`SpanEnd::first_unlock`].
+    ///
+    /// On x86-64 CPUs with AVX (checked at run time) the loop is compiled with 256-bit
+    /// registers; the operations and their order are the same (no fused multiply-adds), so
+    /// every CPU gives the same bits.
     fn run_span<S: Sink>(
+        &mut self,
+        sc: &Scenario,
+        span: (f64, f64),
+        start: Start,
+        sink: &mut S,
+    ) -> Result<Option<Resume>, SimError> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: `run_span_avx` only requires AVX, which the CPU was just found to have.
+            return unsafe { self.run_span_avx(sc, span, start, sink) };
+        }
+        self.run_span_on(sc, span, start, sink)
+    }
+
+    /// [`FastDriveline::run_span_on`] compiled with AVX enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn run_span_avx<S: Sink>(
+        &mut self,
+        sc: &Scenario,
+        span: (f64, f64),
+        start: Start,
+        sink: &mut S,
+    ) -> Result<Option<Resume>, SimError> {
+        self.run_span_on(sc, span, start, sink)
+    }
+
+    /// The loop of [`FastDriveline::run_span`].
+    #[inline(always)]
+    fn run_span_on<S: Sink>(
         &mut self,
         sc: &Scenario,
         (t_start, t_end): (f64, f64),
@@ -553,6 +588,7 @@ impl<'a> FastDriveline<'a> {
     }
 
     /// (M_e in use, PI active in the matrices, ω_ref) at `t` in state `y`.
+    #[inline(always)]
     fn engine_torque(
         &self,
         sc: &Scenario,
@@ -602,7 +638,7 @@ impl<'a> FastDriveline<'a> {
     /// One step from `t` (the whole step, or with `sub` one of the lash's substeps), `w` moved
     /// to its end; `(me_start, pi_active)` is the engine torque at `t` as sampled. Gear changes
     /// and mode switches go to `event`.
-    #[inline]
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn advance(
         &mut self,
@@ -777,6 +813,59 @@ fn round_to_i64(x: f64) -> i64 {
 
 #[cfg(test)]
 mod tests {
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_loop_compiled_with_avx_gives_the_bits_of_the_plain_one() {
+        // a mixed-gear drive (every gear up and down, clutch launches and shifts) of the 40 t
+        // truck, with and without lash (the lash's substeps); both loops must give every
+        // sample's state and torques, the modes, gears and events, to the bit
+        if !std::arch::is_x86_feature_detected!("avx") {
+            return;
+        }
+        use super::*;
+        let veh = crate::model::vehicle::VehicleFile::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("fixtures/vehicles/truck-40t.toml"),
+        )
+        .unwrap();
+        let p = veh.driveline.as_ref().unwrap();
+        let r = &veh.gearbox.ratios;
+        let (sc, y0, mode0) = crate::sim::scenarios::mixed_gear_drive(p, r, 240.0);
+        for lash in [0.0, 0.05] {
+            let run = |avx: bool| {
+                let mut fast = FastDriveline::new(p, r, 0.01)
+                    .with_lash(lash)
+                    .with_gap_substeps(4);
+                let mut traj = Trajectory::default();
+                let span = (0.0, sc.t_end_s);
+                let start = Start::At(y0, mode0);
+                if avx {
+                    // SAFETY: the CPU was found to have AVX above.
+                    unsafe { fast.run_span_avx(&sc, span, start, &mut traj) }.unwrap();
+                } else {
+                    fast.run_span_on(&sc, span, start, &mut traj).unwrap();
+                }
+                traj
+            };
+            let (plain, avx) = (run(false), run(true));
+            let bits = |t: &Trajectory| {
+                let mut v: Vec<u64> = t.t.iter().map(|x| x.to_bits()).collect();
+                v.extend(t.y.iter().flatten().map(|x| x.to_bits()));
+                v.extend(t.torques.iter().flatten().map(|x| x.to_bits()));
+                v
+            };
+            assert!(plain.t.len() > 20_000, "{}", plain.t.len());
+            assert!(bits(&plain) == bits(&avx), "lash {lash}");
+            assert_eq!(plain.mode, avx.mode);
+            assert_eq!(plain.gear, avx.gear);
+            assert_eq!(
+                format!("{:?}", plain.events),
+                format!("{:?}", avx.events),
+                "lash {lash}"
+            );
+        }
+    }
+
     #[test]
     fn whole_values_round_to_themselves_and_the_others_as_round_does() {
         for x in [

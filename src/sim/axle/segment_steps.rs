@@ -107,6 +107,7 @@ impl<'m, 'a> SegmentSteps<'m, 'a> {
     /// RK4 (module doc). `cur` holds the inputs' pieces at `t0` and `ae0` is `M⁻¹ Q_ext(t0)`.
     /// Called for consecutive intervals of one simulation.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(super) fn step(
         &mut self,
         u: &AxleInputs,
@@ -287,27 +288,20 @@ mod tests {
     use crate::sim::inputs::Between;
     use std::sync::Arc;
 
-    #[test]
-    fn an_interval_on_one_segment_per_damper_is_stepped_as_a_fine_rk4_integrates_it() {
-        // the thesis truck over 60 s of 50 Hz recorded-like inputs (acceleration and drive
-        // torque linear between samples, the slope held in 0.1 % steps); the reference is the
-        // model's RK4 at 0.1 ms. On every row along which the reference's dampers all stay on
-        // one segment (checked at each 0.1 ms sample), the exact step from the reference's
-        // state at the row's start must land on the reference's state at its end. Tolerance:
-        // 1e-9 of each coordinate's largest magnitude over the run, where RK4's own error at
-        // 0.1 ms (hρ = 0.005) is far below it. On a row that ends where the held slope steps,
-        // the reference's last stage reads the next slope (RK4 evaluates the inputs at the
-        // step's end, which is the next sample's piece): an error of the reference of order
-        // (h/6)·Δa over one 0.1 ms step, ~1e-6 of the range for a 0.1 % slope step, so those
-        // rows are held to 1e-5.
-        let file = VehicleFile::load(
+    /// The axle-load thesis truck's axle parameters.
+    fn thesis_truck() -> crate::model::axle::AxleParams {
+        VehicleFile::load(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("fixtures/vehicles/seed002-6x2.toml"),
         )
-        .unwrap();
-        let p = file.axles.unwrap();
-        let model = HalfTruck::new(&p);
-        let n = 3000;
+        .unwrap()
+        .axles
+        .unwrap()
+    }
+
+    /// `n` rows of 50 Hz recorded-like inputs: acceleration and drive torque linear between
+    /// samples, the slope held in 0.1 % steps; the times, the slope samples and the inputs.
+    fn recorded_like(n: usize) -> (Arc<[f64]>, Vec<f64>, AxleInputs) {
         let t: Arc<[f64]> = (0..=n).map(|k| k as f64 * 0.02).collect();
         let accel: Vec<f64> = t
             .iter()
@@ -326,6 +320,63 @@ mod tests {
             aux_brake_torque_wheel_nm: None,
             service_brake_n: None,
         };
+        (t, slope, u)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_loop_compiled_with_avx_gives_the_bits_of_the_plain_one() {
+        // 60 s of recorded-like inputs through the exact steps with RK4 between them, RK4
+        // alone, and RK4 with the bellows' progression (no exact steps): both loops must hand
+        // out the same states, to the bit
+        if !std::arch::is_x86_feature_detected!("avx") {
+            return;
+        }
+        let p = thesis_truck();
+        let (t, _, u) = recorded_like(3000);
+        let ext = crate::model::axle::AxleExtensions {
+            bellow_progression_per_m: 2.0,
+            ..Default::default()
+        };
+        let models = [
+            HalfTruck::new(&p).with_max_step(0.01).with_segment_steps(),
+            HalfTruck::new(&p).with_max_step(0.01),
+            HalfTruck::new(&p).with_max_step(0.01).with_extensions(ext),
+        ];
+        for (k, model) in models.iter().enumerate() {
+            let mut plain = Vec::new();
+            model.integrate_on(&u, &t, Start::Steady, |q, qd, _| {
+                plain.extend(q.iter().chain(qd.iter()).map(|x| x.to_bits()))
+            });
+            let mut avx = Vec::new();
+            // SAFETY: the CPU was found to have AVX above.
+            unsafe {
+                model.integrate_avx(&u, &t, Start::Steady, |q, qd, _| {
+                    avx.extend(q.iter().chain(qd.iter()).map(|x| x.to_bits()))
+                })
+            };
+            assert_eq!(plain.len(), 10 * t.len());
+            assert!(plain == avx, "model {k}");
+        }
+    }
+
+    #[test]
+    fn an_interval_on_one_segment_per_damper_is_stepped_as_a_fine_rk4_integrates_it() {
+        // the thesis truck over 60 s of 50 Hz recorded-like inputs (acceleration and drive
+        // torque linear between samples, the slope held in 0.1 % steps); the reference is the
+        // model's RK4 at 0.1 ms. On every row along which the reference's dampers all stay on
+        // one segment (checked at each 0.1 ms sample), the exact step from the reference's
+        // state at the row's start must land on the reference's state at its end. Tolerance:
+        // 1e-9 of each coordinate's largest magnitude over the run, where RK4's own error at
+        // 0.1 ms (hρ = 0.005) is far below it. On a row that ends where the held slope steps,
+        // the reference's last stage reads the next slope (RK4 evaluates the inputs at the
+        // step's end, which is the next sample's piece): an error of the reference of order
+        // (h/6)·Δa over one 0.1 ms step, ~1e-6 of the range for a 0.1 % slope step, so those
+        // rows are held to 1e-5.
+        let p = thesis_truck();
+        let model = HalfTruck::new(&p);
+        let n = 3000;
+        let (t, slope, u) = recorded_like(n);
         // the reference at 0.1 ms, its state at every 0.1 ms sample
         let fine_t: Vec<f64> = (0..=n * 200).map(|k| k as f64 * 1e-4).collect();
         let fine = model.clone().with_max_step(1e-4);
