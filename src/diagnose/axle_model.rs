@@ -125,7 +125,7 @@ impl<'a> AxleModel<'a> {
             slope_grid: OnceLock::new(),
             cfg: AxleRecordConfig::default(),
             nominal_run: OnceLock::new(),
-            kept: Kept::for_rows(log.timestamp_ns.len()),
+            kept: Kept::for_rows(log.len()),
         })
     }
 
@@ -171,14 +171,16 @@ impl<'a> AxleModel<'a> {
             }
         };
         let pressures = self.simulate_on(&tm, &inputs, &t_s);
-        self.kept.keep(Run {
-            params: tm.axles.clone().expect("checked in new"),
-            ext: tm.axle_ext,
-            from,
-            inputs,
-            t_s,
-            pressures: Arc::new(pressures.clone()),
-        });
+        if self.kept.keeps() {
+            self.kept.keep(Run {
+                params: tm.axles.clone().expect("checked in new"),
+                ext: tm.axle_ext,
+                from,
+                inputs,
+                t_s,
+                pressures: Arc::new(pressures.clone()),
+            });
+        }
         Ok(pressures)
     }
 

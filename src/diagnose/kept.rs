@@ -38,6 +38,12 @@ impl<T> Kept<T> {
         }
     }
 
+    /// Whether an item can be kept at all (not on a long drive): a caller builds what it would
+    /// keep only then.
+    pub fn keeps(&self) -> bool {
+        self.capacity > 0
+    }
+
     /// `take` of the first item (oldest first) for which it gives something; that item counts
     /// one more reuse.
     pub fn find<R>(&self, mut take: impl FnMut(&T) -> Option<R>) -> Option<R> {
@@ -92,6 +98,7 @@ mod tests {
     #[test]
     fn nothing_is_kept_on_a_long_drive() {
         let kept = Kept::for_rows(crate::diagnose::long_drive::LONG_DRIVE_MIN_ROWS);
+        assert!(!kept.keeps());
         kept.keep(1);
         assert_eq!(kept.find(|x| Some(*x)), None);
         let kept = Kept::for_rows(1000);

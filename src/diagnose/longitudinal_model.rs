@@ -241,8 +241,9 @@ impl<'a> LongitudinalModel<'a> {
         p: &DrivelineParams,
     ) -> Result<Arc<ReadInputs>, ExtendedError> {
         let sensors = INPUT_EFFECTS.map(|e| theta.get(e).to_bits());
+        let nominal_sensors = sensors == INPUT_EFFECTS.map(|e| self.nominal.get(e).to_bits());
         let key = inputs_key(p);
-        if sensors == INPUT_EFFECTS.map(|e| self.nominal.get(e).to_bits()) {
+        if nominal_sensors {
             let cached = self
                 .nominal_inputs
                 .get_or_init(|| self.build_inputs(&self.nominal, p).ok().map(Arc::new));
@@ -256,7 +257,7 @@ impl<'a> LongitudinalModel<'a> {
             return Ok(c);
         }
         let built = Arc::new(self.build_inputs(theta, p)?);
-        if sensors != INPUT_EFFECTS.map(|e| self.nominal.get(e).to_bits()) {
+        if !nominal_sensors {
             self.sensor_inputs.keep((sensors, Arc::clone(&built)));
         }
         Ok(built)
