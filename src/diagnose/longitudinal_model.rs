@@ -154,7 +154,8 @@ pub struct LongitudinalModel<'a> {
 /// states a tyre warm-up, the cold tyres' extra rolling resistance, which follows the mass and
 /// the rolling-resistance coefficients ([`crate::sim::recorded`]); so every simulation at the
 /// nominal sensor parameters and that plant — most of a diagnosis's — reads the same ones, built
-/// once ([`LongitudinalModel::read_inputs`]).
+/// once, and every simulation at the explain step's base sensor parameters reads the base's, kept
+/// ([`LongitudinalModel::read_inputs`], [`super::kept::Kept`]).
 #[derive(Debug)]
 struct ReadInputs {
     rec: RecordedScenario,
