@@ -90,7 +90,7 @@ impl RowColumn {
     }
 
     /// `column` stored over `base` when that takes less memory: the runs of rows where the
-    /// two differ (bit for bit; runs closer than [`RUN_GAP_ROWS`] joined) keep `column`'s
+    /// two differ (bit for bit; runs closer than `RUN_GAP_ROWS` (64) joined) keep `column`'s
     /// values and every other row reads `base`'s storage. Patched when the runs hold at most a
     /// quarter of the rows (a quarter of the dense column's memory, and a short search per
     /// read), else `column` as it is. Reading any row gives `column`'s value, bit for bit.
